@@ -1,0 +1,9 @@
+"""CBM: context-based matching for cooperative-perception pose calibration (Song et al., RA-L 2024).
+
+    from cbm import CBMParams, match
+    result = match(ego_boxes, cav_boxes, init=T_tilde, params=CBMParams())
+"""
+from .params import CBMParams
+from .result import MatchResult
+
+__all__ = ["CBMParams", "MatchResult", "match"]

@@ -1,0 +1,47 @@
+"""CBM's parameters, with their defaults in one place."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal
+
+HeadingMode = Literal["fold", "align"]
+
+
+@dataclass(frozen=True)
+class CBMParams:
+    """Thresholds of CBM (Song et al., RA-L 2024, sec. III-B) and of the pose estimate (sec. III-C).
+
+    Angles are in degrees here, at the interface; the algorithm uses radians (``sigma1_rad``).
+    Defaults are those of the authors' released code, except ``heading`` (see ``cbm.context``).
+    """
+
+    sigma1: float = 10.0
+    """Degrees. Largest angle between two context vectors that still match (eq. 7, first term)."""
+    sigma2: float = 3.0
+    """Metres. Largest L1 distance between two context vectors that still match (eq. 7, second term)."""
+    sigma3: float = 1.0
+    """Metres. Stricter L1 distance for the voting sets of the global consensus (released code)."""
+    distance_limit: float = 20.0
+    """Metres. An anchor whose pairs are on average farther apart than this after ``init`` is rejected."""
+    consensus: bool = True
+    """Global consensus (eq. 9-10) on or off (off is the paper's ablation)."""
+    heading: HeadingMode = "align"
+    """``fold``: fold every heading into (-pi/2, pi/2] (released code). ``align``: turn each CAV
+    object's heading by pi where that brings it closer to the ego object it is compared with."""
+    welsch_floor: float = 0.3
+    """Metres. Smallest Welsch scale nu of the robust pose estimate (about the detection noise)."""
+
+    def __post_init__(self) -> None:
+        for name in ("sigma1", "sigma2", "sigma3", "distance_limit", "welsch_floor"):
+            value = getattr(self, name)
+            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
+                raise ValueError(f"CBMParams.{name} must be a positive finite number, got {value!r}")
+        if self.sigma1 > 90:
+            raise ValueError(f"CBMParams.sigma1 is in degrees and must be at most 90, got {self.sigma1!r}")
+        if self.heading not in ("fold", "align"):
+            raise ValueError(f"CBMParams.heading must be 'fold' or 'align', got {self.heading!r}")
+
+    @property
+    def sigma1_rad(self) -> float:
+        return math.radians(self.sigma1)

@@ -1,0 +1,44 @@
+"""What ``cbm.match`` returns."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import se2
+
+
+@dataclass(frozen=True)
+class MatchResult:
+    """The matched pairs, the refined pose, and what the app needs to explain them."""
+
+    pairs: np.ndarray
+    """(K, 2) int: (ego index, CAV index), one-to-one, sorted by ego index."""
+    transform: np.ndarray
+    """(3, 3) refined CAV->ego transform (= correction @ init); equals ``init`` when not ``estimated``."""
+    init: np.ndarray
+    """(3, 3) the CAV->ego transform CBM started from."""
+    estimated: bool
+    """False when fewer than 2 pairs were matched: no pose estimate was made."""
+    anchor: tuple[int, int] | None
+    """The winning anchor pair (ego index, CAV index), or None when no anchor had a set."""
+    candidate_count: int
+    """Size of the winning anchor's candidate set L_ij before consensus (eq. 8)."""
+    consensus_count: int
+    """Size of the winning set after consensus and the one-to-one rule (eq. 11-12)."""
+    runner_up_count: int
+    """Largest set of an anchor that shares no pair with the winner (0 when there is none)."""
+    residuals: np.ndarray
+    """(K,) metres: distance of each pair's centres after ``transform``."""
+    timings: dict[str, float] = field(default_factory=dict)
+    """Seconds per stage."""
+
+    @property
+    def margin(self) -> int:
+        """Consensus margin: how many more pairs the winner holds than its strongest rival."""
+        return self.consensus_count - self.runner_up_count
+
+    @property
+    def correction(self) -> np.ndarray:
+        """The ego-frame correction (R*, t*) of eq. 15: ``transform = correction @ init``."""
+        return self.transform @ se2.inverse(self.init)
