@@ -1,0 +1,162 @@
+"""Per-trial metrics of a matching result and their micro-averaged aggregates (DESIGN.md, "Metrics").
+
+Pairs are ``(K, 2)`` int arrays of (ego index, CAV index), one row per distinct pair. A metric that
+has nothing to measure is NaN, never 0, so that it cannot pass for a real score.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import numpy as np
+
+from . import se2
+from .scenario import Trial
+
+
+def _as_pairs(pairs: np.ndarray) -> np.ndarray:
+    return np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+
+
+def count_correct(pairs: np.ndarray, gt_pairs: np.ndarray) -> int:
+    """|M_hat n M|: how many output pairs are true pairs."""
+    pairs, gt_pairs = _as_pairs(pairs), _as_pairs(gt_pairs)
+    if len(pairs) == 0 or len(gt_pairs) == 0:
+        return 0
+    width = int(max(pairs[:, 1].max(), gt_pairs[:, 1].max())) + 1
+    return int(np.isin(pairs[:, 0] * width + pairs[:, 1], gt_pairs[:, 0] * width + gt_pairs[:, 1]).sum())
+
+
+def precision(pairs: np.ndarray, gt_pairs: np.ndarray) -> float:
+    """precision = |M_hat n M| / |M_hat| (paper sec. IV-A, V-B); NaN when nothing was matched."""
+    n_matched = len(_as_pairs(pairs))
+    return count_correct(pairs, gt_pairs) / n_matched if n_matched else math.nan
+
+
+def recall(pairs: np.ndarray, gt_pairs: np.ndarray) -> float:
+    """recall = |M_hat n M| / |M| (paper sec. V-B); NaN when there are no true pairs."""
+    n_true = len(_as_pairs(gt_pairs))
+    return count_correct(pairs, gt_pairs) / n_true if n_true else math.nan
+
+
+def average_distance(pairs: np.ndarray, ego_true_xy: np.ndarray, cav_true_xy: np.ndarray) -> float:
+    """AD (paper sec. V-B): d = 1/|M_hat| sum_{(i,j) in M_hat} ||p_i - p_j||_2.
+
+    ``p_i``, ``p_j`` are the true (noise-free) centres of the two objects of a pair, both in the ego
+    frame, so a correct pair scores 0 and a wrong one scores how far apart the objects really are.
+    NaN when no pairs.
+    """
+    pairs = _as_pairs(pairs)
+    if len(pairs) == 0:
+        return math.nan
+    gaps = np.asarray(ego_true_xy)[pairs[:, 0]] - np.asarray(cav_true_xy)[pairs[:, 1]]
+    return float(np.linalg.norm(gaps, axis=1).mean())
+
+
+def rre(T_est: np.ndarray, T_true: np.ndarray) -> float:
+    """Relative rotation error in degrees: RRE = |wrap(yaw(T_est) - yaw(T_true))|, wrapped to [-pi, pi)."""
+    return math.degrees(abs(float(se2.wrap_angle(se2.yaw_of(T_est) - se2.yaw_of(T_true)))))
+
+
+def rte(T_est: np.ndarray, T_true: np.ndarray) -> float:
+    """Relative translation error in metres: RTE = ||t_est - t_true||_2."""
+    return float(np.linalg.norm(se2.translation_of(T_est) - se2.translation_of(T_true)))
+
+
+@dataclass(frozen=True)
+class TrialMetrics:
+    """The metrics of one result on one trial. ``rre``/``rte`` are NaN when no estimate was made."""
+
+    n_ego: int
+    n_cav: int
+    n_true: int
+    """Co-visible (ground-truth) pairs."""
+    n_matched: int
+    n_correct: int
+    precision: float
+    recall: float
+    ad: float
+    """Metres, paper sec. V-B."""
+    rre: float
+    """Degrees."""
+    rte: float
+    """Metres."""
+    runtime_s: float
+    """``result.timings["total"]``; NaN when the result has no timing."""
+    margin: float
+    """Consensus margin of CBM; NaN for results without one."""
+    estimated: bool
+
+
+def evaluate(result: Any, trial: Trial) -> TrialMetrics:
+    """Score a result on a trial.
+
+    Duck-typed: ``result`` needs ``pairs``, ``transform`` and ``estimated`` (as ``cbm.MatchResult``);
+    ``margin`` and ``timings`` (with a ``"total"`` key, seconds) are read when present.
+    """
+    pairs = _as_pairs(result.pairs)
+    estimated = bool(result.estimated)
+    return TrialMetrics(
+        n_ego=len(trial.ego_boxes),
+        n_cav=len(trial.cav_boxes),
+        n_true=len(trial.gt_pairs),
+        n_matched=len(pairs),
+        n_correct=count_correct(pairs, trial.gt_pairs),
+        precision=precision(pairs, trial.gt_pairs),
+        recall=recall(pairs, trial.gt_pairs),
+        ad=average_distance(pairs, trial.ego_true_xy, trial.cav_true_xy),
+        rre=rre(result.transform, trial.T_true) if estimated else math.nan,
+        rte=rte(result.transform, trial.T_true) if estimated else math.nan,
+        runtime_s=float(getattr(result, "timings", {}).get("total", math.nan)),
+        margin=float(getattr(result, "margin", math.nan)),
+        estimated=estimated,
+    )
+
+
+def is_success(m: TrialMetrics, *, rte_max: float = 1.0, rre_max: float = 1.0) -> bool:
+    """A trial succeeds when a pose was estimated with RTE < rte_max (m) and RRE < rre_max (deg)."""
+    return m.estimated and m.rte < rte_max and m.rre < rre_max
+
+
+def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max: float = 1.0) -> dict[str, float]:
+    """Micro-averaged aggregates over trials: every pair weighs the same, whatever its trial.
+
+    precision = sum n_correct / sum n_matched; recall = sum n_correct / sum n_true;
+    ad = sum(ad * n_matched) / sum n_matched; rre/rte mean and median over the trials with an
+    estimate; success_rate = share of all trials that pass ``is_success``; median runtime.
+    Ratios with a zero denominator are NaN.
+    """
+    matched = sum(m.n_matched for m in metrics)
+    correct = sum(m.n_correct for m in metrics)
+    true = sum(m.n_true for m in metrics)
+    ad_weighted = sum(m.ad * m.n_matched for m in metrics if m.n_matched)
+    estimated = [m for m in metrics if m.estimated]
+    rres = np.array([m.rre for m in estimated])
+    rtes = np.array([m.rte for m in estimated])
+    runtimes = np.array([m.runtime_s for m in metrics if not math.isnan(m.runtime_s)])
+    return {
+        "n_trials": float(len(metrics)),
+        "n_estimated": float(len(estimated)),
+        "precision": _ratio(correct, matched),
+        "recall": _ratio(correct, true),
+        "ad": _ratio(ad_weighted, matched),
+        "rre_mean": _mean(rres),
+        "rre_median": _median(rres),
+        "rte_mean": _mean(rtes),
+        "rte_median": _median(rtes),
+        "success_rate": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in metrics), len(metrics)),
+        "runtime_median_s": _median(runtimes),
+    }
+
+
+def _ratio(numerator: float, denominator: float) -> float:
+    return float(numerator) / float(denominator) if denominator else math.nan
+
+
+def _mean(values: np.ndarray) -> float:
+    return float(values.mean()) if len(values) else math.nan
+
+
+def _median(values: np.ndarray) -> float:
+    return float(np.median(values)) if len(values) else math.nan

@@ -1,0 +1,284 @@
+"""Scenarios: turn a world-frame object set into one ego/CAV trial (DESIGN.md, "Scenarios").
+
+Protocols: ``sind`` (paper sec. IV-A), ``opv2v`` (sec. V-A) and ``range`` (ours, for data recorded
+from one car). Every trial makes all of its random draws, whatever the protocol and parameters, in
+this order from one ``numpy.random.Generator``:
+
+1. ``rng.permutation(N)`` -- the order in which the sind protocol deals the objects out;
+2. ``rng.standard_normal(3)`` -- the localization error (x, y, yaw), scaled by ``loc_*`` when
+   ``localization="gaussian"`` (unused when ``"fixed"``);
+3. ``rng.standard_normal((N, 3))`` then ``rng.random(N)`` -- the ego's detection noise (x, y, yaw)
+   and heading-flip draw, row ``n`` for input object ``n``;
+4. the same for the CAV.
+
+So the same (inputs, params, rng) give the same trial bit for bit, and moving one parameter (a
+noise level, ``eta``, the protocol) rescales or re-deals the same draws instead of drawing anew.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Literal, Mapping
+
+import numpy as np
+
+from . import se2
+
+Protocol = Literal["sind", "opv2v", "range"]
+Localization = Literal["fixed", "gaussian"]
+
+
+@dataclass(frozen=True)
+class ScenarioParams:
+    """How a trial is made from a scene. Angles in degrees here; radians via the ``*_rad`` properties."""
+
+    protocol: Protocol = "sind"
+    eta: float = 0.5
+    """Co-visibility rate (sind): ``round(eta * N)`` objects (Python rounding, half to even) are seen by both agents."""
+    sigma_p: float = 0.0
+    """Metres. Std-dev of the Gaussian detection position noise, on x and on y (sec. IV-A)."""
+    sigma_theta: float = 0.0
+    """Degrees. Std-dev of the Gaussian detection heading noise (sec. IV-A)."""
+    flip_prob: float = 0.5
+    """Probability that a detection's heading is turned by pi (sec. IV-A uses 0.5)."""
+    localization: Localization = "fixed"
+    """``fixed``: the CAV pose is off by exactly (loc_x, loc_y, loc_yaw) (sec. IV-A).
+    ``gaussian``: off by zero-mean Gaussians with those std-devs (sec. V-A, OpenCOOD's pose noise)."""
+    loc_x: float = 3.0
+    """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world x."""
+    loc_y: float = 3.0
+    """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world y."""
+    loc_yaw: float = 5.0
+    """Degrees. Offset (fixed) or std-dev (gaussian) of the CAV's world yaw."""
+    sensor_range: float = 50.0
+    """Metres (range protocol): an agent sees the objects whose centre is at most this far from it."""
+    seed: int = 0
+    """Seed of the generator ``make_trial`` uses when it is given none."""
+
+    def __post_init__(self) -> None:
+        if self.protocol not in ("sind", "opv2v", "range"):
+            raise ValueError(f"ScenarioParams.protocol must be 'sind', 'opv2v' or 'range', got {self.protocol!r}")
+        if self.localization not in ("fixed", "gaussian"):
+            raise ValueError(f"ScenarioParams.localization must be 'fixed' or 'gaussian', got {self.localization!r}")
+        for name in ("eta", "flip_prob"):
+            _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
+        for name in ("sigma_p", "sigma_theta"):
+            _require(name, _finite(self, name) >= 0.0, "a finite number >= 0")
+        for name in ("loc_x", "loc_y", "loc_yaw"):
+            is_valid = _finite(self, name) >= 0.0 or self.localization == "fixed"
+            _require(name, is_valid, "a finite number >= 0 (a std-dev, as localization='gaussian')")
+        _require("sensor_range", _finite(self, "sensor_range") > 0.0, "a finite number > 0")
+        is_seed = isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool) and self.seed >= 0
+        _require("seed", is_seed, "an integer >= 0")
+
+    @property
+    def sigma_theta_rad(self) -> float:
+        return math.radians(self.sigma_theta)
+
+    @property
+    def loc_yaw_rad(self) -> float:
+        return math.radians(self.loc_yaw)
+
+
+def _finite(params: ScenarioParams, name: str) -> float:
+    value = getattr(params, name)
+    _require(name, isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+             and math.isfinite(value), "a finite number")
+    return float(value)
+
+
+def _require(name: str, ok: bool, expected: str) -> None:
+    if not ok:
+        raise ValueError(f"ScenarioParams.{name} must be {expected}")
+
+
+@dataclass(frozen=True)
+class Trial:
+    """One ego/CAV trial. Both detection lists keep the input order of the objects they contain."""
+
+    ego_boxes: np.ndarray
+    """(Ne, 7) noisy detections in the ego frame."""
+    cav_boxes: np.ndarray
+    """(Nc, 7) noisy detections in the CAV frame."""
+    ego_ids: np.ndarray
+    """(Ne,) object ids of the ego's detections (dtype of the given ids)."""
+    cav_ids: np.ndarray
+    """(Nc,) object ids of the CAV's detections."""
+    T_true: np.ndarray
+    """(3, 3) true CAV->ego transform."""
+    init: np.ndarray
+    """(3, 3) wrong CAV->ego transform, from the perturbed CAV pose."""
+    gt_pairs: np.ndarray
+    """(K, 2) int: (ego index, CAV index) of each co-visible object, sorted by ego index."""
+    ego_true_xy: np.ndarray
+    """(Ne, 2) noise-free centres of the ego's objects, ego frame."""
+    cav_true_xy: np.ndarray
+    """(Nc, 2) noise-free centres of the CAV's objects, in the ego frame (via ``T_true``)."""
+    ego_pose: np.ndarray
+    """(3, 3) ego->world."""
+    cav_pose: np.ndarray
+    """(3, 3) true CAV->world."""
+
+
+def trial_rng(seed: int, frame_index: int) -> np.random.Generator:
+    """The generator of frame ``frame_index`` under ``seed``: the app and the evaluation share it."""
+    return np.random.default_rng([seed, frame_index])
+
+
+def make_trial(
+    boxes: np.ndarray,
+    ids: np.ndarray,
+    params: ScenarioParams,
+    *,
+    ego_pose: np.ndarray | None = None,
+    cav_pose: np.ndarray | None = None,
+    cav_id: object | None = None,
+    ego_id: object | None = None,
+    visibility: Mapping[str, np.ndarray] | None = None,
+    rng: np.random.Generator | None = None,
+) -> Trial:
+    """Make one trial from ``(N, 7)`` world-frame ``boxes`` with unique ``ids``.
+
+    sind: missing poses default to the objects' centroid with yaw 0. opv2v: both poses and
+    ``visibility`` (``{"ego": ids, "cav": ids}``) are required. range: both poses are required.
+    ``visibility`` is read by opv2v only. In every protocol an agent whose id is given never
+    detects itself (removed after the deal, so sind counts hold for objects other than the agents).
+    ``rng`` defaults to ``np.random.default_rng(params.seed)``; the draw order is in the module docstring.
+    """
+    boxes, ids = _checked_objects(boxes, ids)
+    rng = np.random.default_rng(params.seed) if rng is None else rng
+    ego_pose, cav_pose = _poses(boxes, params.protocol, ego_pose, cav_pose)
+
+    n = len(boxes)
+    order = rng.permutation(n)
+    loc_draw = rng.standard_normal(3)
+    ego_noise = (rng.standard_normal((n, 3)), rng.random(n))
+    cav_noise = (rng.standard_normal((n, 3)), rng.random(n))
+
+    ego_sees, cav_sees = _visibility(boxes, ids, params, order, ego_pose, cav_pose, visibility)
+    if ego_id is not None:
+        ego_sees &= ids != ego_id
+    if cav_id is not None:
+        cav_sees &= ids != cav_id
+
+    T_true = se2.inverse(ego_pose) @ cav_pose
+    init = se2.inverse(ego_pose) @ perturbed_pose(cav_pose, localization_error(params, loc_draw))
+    ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
+    cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
+    return Trial(
+        ego_boxes=_detect(ego_frame_boxes, ego_noise[0][ego_sees], ego_noise[1][ego_sees], params),
+        cav_boxes=_detect(cav_frame_boxes, cav_noise[0][cav_sees], cav_noise[1][cav_sees], params),
+        ego_ids=ids[ego_sees],
+        cav_ids=ids[cav_sees],
+        T_true=T_true,
+        init=init,
+        gt_pairs=co_visible_pairs(ego_sees, cav_sees),
+        ego_true_xy=ego_frame_boxes[:, :2].copy(),
+        cav_true_xy=se2.apply_points(T_true, cav_frame_boxes[:, :2]),
+        ego_pose=ego_pose,
+        cav_pose=cav_pose,
+    )
+
+
+def _checked_objects(boxes: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    boxes = np.asarray(boxes, dtype=float)
+    ids = np.asarray(ids)
+    if boxes.size == 0:
+        boxes = boxes.reshape(0, 7)
+    if boxes.ndim != 2 or boxes.shape[1] != 7:
+        raise ValueError(f"boxes must be an (N, 7) array, got shape {boxes.shape}")
+    if ids.shape != (len(boxes),):
+        raise ValueError(f"ids must have shape ({len(boxes)},) like boxes, got {ids.shape}")
+    if len(np.unique(ids)) != len(ids):
+        raise ValueError("ids must be unique: they identify the objects of the ground-truth pairs")
+    return boxes, ids
+
+
+def _poses(
+    boxes: np.ndarray, protocol: Protocol, ego_pose: np.ndarray | None, cav_pose: np.ndarray | None
+) -> tuple[np.ndarray, np.ndarray]:
+    if protocol == "sind":
+        centre = boxes[:, :2].mean(axis=0) if len(boxes) else np.zeros(2)
+        default = se2.make(centre[0], centre[1], 0.0)
+        ego_pose = default if ego_pose is None else ego_pose
+        cav_pose = default if cav_pose is None else cav_pose
+    elif ego_pose is None or cav_pose is None:
+        raise ValueError(f"the {protocol} protocol needs both ego_pose and cav_pose (agent->world)")
+    return _checked_pose("ego_pose", ego_pose), _checked_pose("cav_pose", cav_pose)
+
+
+def _checked_pose(name: str, pose: np.ndarray) -> np.ndarray:
+    pose = np.asarray(pose, dtype=float)
+    if pose.shape != (3, 3):
+        raise ValueError(f"{name} must be a (3, 3) SE(2) matrix, got shape {pose.shape}")
+    return pose.copy()
+
+
+def _visibility(
+    boxes: np.ndarray,
+    ids: np.ndarray,
+    params: ScenarioParams,
+    order: np.ndarray,
+    ego_pose: np.ndarray,
+    cav_pose: np.ndarray,
+    visibility: Mapping[str, np.ndarray] | None,
+) -> tuple[np.ndarray, np.ndarray]:
+    if params.protocol == "sind":
+        return sind_split(order, params.eta)
+    if params.protocol == "range":
+        return in_range(boxes, ego_pose, params.sensor_range), in_range(boxes, cav_pose, params.sensor_range)
+    if visibility is None or "ego" not in visibility or "cav" not in visibility:
+        raise ValueError('the opv2v protocol needs visibility={"ego": ids, "cav": ids} (ids each agent sees)')
+    return np.isin(ids, np.asarray(visibility["ego"])), np.isin(ids, np.asarray(visibility["cav"]))
+
+
+def sind_split(order: np.ndarray, eta: float) -> tuple[np.ndarray, np.ndarray]:
+    """SIND protocol (sec. IV-A): masks of what the ego and the CAV see.
+
+    The first ``round(eta * N)`` objects of the random ``order`` form the co-visible set M; the rest
+    are dealt alternately, ego first, so I_X u I_Y = I and I_X n I_Y = M. An odd remainder's extra
+    object goes to the ego.
+    """
+    n = len(order)
+    k = int(round(eta * n))
+    ego_sees = np.zeros(n, dtype=bool)
+    cav_sees = np.zeros(n, dtype=bool)
+    ego_sees[order[:k]] = True
+    cav_sees[order[:k]] = True
+    ego_sees[order[k::2]] = True
+    cav_sees[order[k + 1 :: 2]] = True
+    return ego_sees, cav_sees
+
+
+def in_range(boxes: np.ndarray, pose: np.ndarray, sensor_range: float) -> np.ndarray:
+    """Range protocol: mask of the objects whose centre is within ``sensor_range`` of the agent."""
+    return np.linalg.norm(boxes[:, :2] - se2.translation_of(pose), axis=1) <= sensor_range
+
+
+def localization_error(params: ScenarioParams, draw: np.ndarray) -> np.ndarray:
+    """(dx, dy, dyaw[rad]) added to the CAV's world pose: fixed (sec. IV-A) or ``draw`` scaled (sec. V-A)."""
+    size = np.array([params.loc_x, params.loc_y, params.loc_yaw_rad])
+    return size if params.localization == "fixed" else size * draw
+
+
+def perturbed_pose(pose: np.ndarray, error: np.ndarray) -> np.ndarray:
+    """The pose whose world (x, y, yaw) is ``pose``'s plus ``error`` (OpenCOOD-style additive pose noise)."""
+    x, y = se2.translation_of(pose) + error[:2]
+    return se2.make(x, y, se2.yaw_of(pose) + error[2])
+
+
+def _detect(boxes: np.ndarray, gauss: np.ndarray, uniform: np.ndarray, params: ScenarioParams) -> np.ndarray:
+    """Detection noise (sec. IV-A): N(0, sigma_p) on x and y, N(0, sigma_theta) on yaw, a pi flip with flip_prob."""
+    noisy = boxes.copy()
+    noisy[:, :2] += params.sigma_p * gauss[:, :2]
+    flips = np.pi * (uniform < params.flip_prob)
+    noisy[:, 6] = se2.wrap_angle(noisy[:, 6] + params.sigma_theta_rad * gauss[:, 2] + flips)
+    return noisy
+
+
+def co_visible_pairs(ego_sees: np.ndarray, cav_sees: np.ndarray) -> np.ndarray:
+    """(K, 2) (ego index, CAV index) of the objects both agents see, sorted by ego index."""
+    both = ego_sees & cav_sees
+    ego_index = np.cumsum(ego_sees) - 1
+    cav_index = np.cumsum(cav_sees) - 1
+    return np.stack([ego_index[both], cav_index[both]], axis=1).astype(np.int64)
