@@ -1,0 +1,42 @@
+"""The paper's baselines (Song et al., RA-L 2024, sec. IV): ICP, RICP and VIPS, each with the interface
+of ``cbm.match``: ``method(ego_boxes, cav_boxes, init, params=None, **kw) -> MatchResult``.
+
+    from cbm.baselines import run
+    result = run("vips", ego_boxes, cav_boxes, init, ego_labels=labels_e, cav_labels=labels_c)
+"""
+from __future__ import annotations
+
+from typing import Any, Callable
+
+import numpy as np
+
+from ..result import MatchResult
+from .icp import ICPParams, match_icp
+from .ricp import RICPParams, match_ricp
+from .vips import VIPSParams, match_vips
+
+Method = Callable[..., MatchResult]
+
+
+def build_registry() -> tuple[dict[str, Method], dict[str, type]]:
+    """The methods by name and their parameter classes. ("cbm" and "cbm-no-consensus" belong here
+    once ``cbm.match`` exists.)"""
+    methods: dict[str, Method] = {"icp": match_icp, "ricp": match_ricp, "vips": match_vips}
+    params: dict[str, type] = {"icp": ICPParams, "ricp": RICPParams, "vips": VIPSParams}
+    return methods, params
+
+
+METHODS, PARAMS = build_registry()
+"""``METHODS[name]`` runs a method; ``PARAMS[name]()`` are its default parameters."""
+
+
+def run(name: str, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None,
+        **kw: Any) -> MatchResult:
+    """Run the method ``name`` (a key of ``METHODS``); ``kw`` goes to the method (e.g. VIPS's labels)."""
+    if name not in METHODS:
+        raise ValueError(f"name must be one of {sorted(METHODS)}, got {name!r}")
+    return METHODS[name](ego_boxes, cav_boxes, init, params, **kw)
+
+
+__all__ = ["ICPParams", "METHODS", "PARAMS", "RICPParams", "VIPSParams", "match_icp", "match_ricp",
+           "match_vips", "run"]
