@@ -1,0 +1,59 @@
+"""``loaders.open``: a dataset by name or path, with the loader picked from what is there."""
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+from . import argoverse2, synthetic
+from .errors import LoaderError, existing_path
+from .scene import Sequence
+
+REPOSITORY_DATA = Path(__file__).resolve().parents[1] / "data"
+SYNTHETIC_NAME = re.compile(r"^synthetic(?::(?P<count>\d+))?(?::seed=(?P<seed>-?\d+))?$")
+
+
+def repository_data(name: str) -> Path:
+    """The folder of a scene shipped in the repository's ``data/`` (e.g. ``"argoverse2"``)."""
+    return REPOSITORY_DATA / name
+
+
+def open(path_or_name: str | Path) -> Sequence:
+    """Load a dataset.
+
+    ``"argoverse2"`` is the shipped default scene; ``"synthetic"``, ``"synthetic:<count>"`` and
+    ``"synthetic:<count>:seed=<seed>"`` generate a scene (count 0 to 1000); anything else is a
+    path to a dataset file or folder, whose loader is picked from the files found there.
+    Raises :class:`LoaderError` when the name or path cannot be loaded.
+    """
+    if isinstance(path_or_name, str):
+        match = SYNTHETIC_NAME.match(path_or_name.strip())
+        if match:
+            count = int(match["count"]) if match["count"] else 200
+            return synthetic.generate(n_objects=count, seed=int(match["seed"] or 0))
+        if path_or_name.startswith("synthetic"):
+            raise LoaderError(f"{path_or_name!r}: expected synthetic, synthetic:<count> or "
+                              f"synthetic:<count>:seed=<seed>")
+        if path_or_name == "argoverse2":
+            return argoverse2.load(existing_path(repository_data("argoverse2"), "shipped scene"))
+    path = existing_path(path_or_name)
+    return _loader_for(path)(path)
+
+
+def _loader_for(path: Path):
+    """The ``load`` function of the dataset module that recognises ``path``."""
+    for module in _modules():
+        if module.recognises(path):
+            return module.load
+    raise LoaderError(f"{path}: nothing recognisable; expected {_EXPECTED}")
+
+
+def _modules() -> list:
+    return [argoverse2]
+
+
+_EXPECTED = (
+    "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
+    "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
+    "V2XSet / V2V4Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
+    "folder (cooperative/data_info.json), or a generic table (.csv / .parquet with a frame column)"
+)
