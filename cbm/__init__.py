@@ -3,6 +3,7 @@
     from cbm import CBMParams, match
     result = match(ego_boxes, cav_boxes, init=T_tilde, params=CBMParams())
 """
+from .pipeline import match
 from .params import CBMParams
 from .result import MatchResult
 
