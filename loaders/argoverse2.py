@@ -97,6 +97,7 @@ def load(path: str | Path) -> Sequence:
         timestamps=(sweeps - sweeps[0]) * 1e-9,
         agents=_ego_agent(ego_rotation, ego_translation),
         map=_read_map(log) if has_city else None,
+        ego="ego",
         dropped_rows=dropped,
     )
 

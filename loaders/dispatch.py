@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from . import argoverse2, synthetic
+from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table
 from .errors import LoaderError, existing_path
 from .scene import Sequence
 
@@ -48,7 +48,7 @@ def _loader_for(path: Path):
 
 
 def _modules() -> list:
-    return [argoverse2]
+    return [argoverse2, sind, interaction, dair_v2x, opv2v, table]
 
 
 _EXPECTED = (

@@ -97,7 +97,9 @@ class Sequence:
     Build it from long tables that carry an integer ``frame`` column (0-based frame index):
     ``objects`` with :data:`OBJECT_COLUMNS`, ``agents`` with :data:`AGENT_COLUMNS`,
     ``visibility`` with ``agent_id, track_id`` (one row per object an agent sees).
-    ``dropped_rows`` counts input rows skipped for missing, NaN or infinite values.
+    ``ego`` names the agent the dataset itself treats as the ego (e.g. Argoverse's recording car,
+    OpenCOOD's ego CAV), if any. ``dropped_rows`` counts input rows skipped for missing, NaN or
+    infinite values.
     """
 
     def __init__(
@@ -109,9 +111,11 @@ class Sequence:
         agents: pl.DataFrame | None = None,
         visibility: pl.DataFrame | None = None,
         map: MapGeometry | None = None,
+        ego: str | None = None,
         dropped_rows: int = 0,
     ) -> None:
         self.name = name
+        self.ego = ego
         self.frame_ids = list(frame_ids)
         self.timestamps = np.asarray(timestamps, dtype=np.float64)
         if len(self.timestamps) != len(self.frame_ids):

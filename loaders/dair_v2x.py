@@ -1,0 +1,185 @@
+"""DAIR-V2X cooperative (DAIR-V2X-C): a vehicle and a roadside infrastructure unit.
+
+Open the ``cooperative-vehicle-infrastructure`` folder (or its ``cooperative/data_info.json``).
+Each entry of ``cooperative/data_info.json`` pairs a vehicle frame with an infrastructure frame
+(frame ids: the stems of ``vehicle_pointcloud_path`` / ``infrastructure_pointcloud_path``, or of
+the image paths) and is one frame here; frame id = the vehicle frame id; timestamps are
+index / 10 (the pairs are samples, not a continuous recording).
+
+Per frame, read:
+
+- ``vehicle-side/label/lidar/<id>.json`` and ``infrastructure-side/label/virtuallidar/<id>.json``:
+  lists of ``{type, 3d_dimensions: {h, w, l}, 3d_location: {x, y, z}, rotation}`` (box centre in
+  the vehicle LiDAR / infrastructure virtual-LiDAR frame; ``rotation`` the yaw in radians about z);
+- ``vehicle-side/calib/lidar_to_novatel/<id>.json`` (``transform: {rotation, translation}``) and
+  ``vehicle-side/calib/novatel_to_world/<id>.json`` (``rotation``, ``translation``): vehicle
+  LiDAR -> world is their product;
+- ``infrastructure-side/calib/virtuallidar_to_world/<id>.json``: infrastructure -> world, with the
+  pair's ``system_error_offset {delta_x, delta_y}`` added to its translation (as the DAIR-V2X
+  and CoAlign code do).
+
+World frame: DAIR-V2X's world frame. Agents ``"vehicle"`` (the ego; typical car size) and
+``"infrastructure"`` (a 0.6 x 0.6 x 5 m pole), at their LiDAR poses; each sees its own labels.
+The two label sets carry no shared ids, so the same object is associated across them by an
+optimal one-to-one assignment of box centres in the world frame within
+:data:`ASSOCIATION_RADIUS` metres (derived, not ground truth). Associated objects get the
+vehicle's track id and box; track ids are ``v<i>`` / ``i<j>`` (label index in their file).
+"""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+from scipy.optimize import linear_sum_assignment
+
+from .errors import LoaderError
+from .scene import Sequence
+from .structured import field, matrix, number, read_json
+
+ASSOCIATION_RADIUS = 2.0
+FRAME_RATE = 10.0
+VEHICLE_SIZE = (4.9, 2.0, 1.6)
+INFRASTRUCTURE_SIZE = (0.6, 0.6, 5.0)
+DATA_INFO = Path("cooperative") / "data_info.json"
+
+
+def recognises(path: Path) -> bool:
+    if path.is_file():
+        return path.name == "data_info.json" and path.parent.name == "cooperative"
+    return (path / DATA_INFO).is_file()
+
+
+def load(path: str | Path) -> Sequence:
+    """Load a DAIR-V2X cooperative folder."""
+    path = Path(path)
+    root = path.parent.parent if path.is_file() else path
+    info_file = root / DATA_INFO
+    pairs = read_json(info_file)
+    if not isinstance(pairs, list) or not pairs:
+        raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
+    objects, agents, seen, frame_ids = [], [], [], []
+    for k, pair in enumerate(pairs):
+        where = f"[{k}]"
+        vehicle_id = _frame_id(info_file, pair, "vehicle", where)
+        infra_id = _frame_id(info_file, pair, "infrastructure", where)
+        offset = pair.get("system_error_offset") or {"delta_x": 0.0, "delta_y": 0.0}
+        vehicle_pose = _vehicle_to_world(root, vehicle_id)
+        infra_pose = _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset")
+        vehicle_boxes = _labels(root / "vehicle-side" / "label" / "lidar" / f"{vehicle_id}.json", vehicle_pose)
+        infra_boxes = _labels(root / "infrastructure-side" / "label" / "virtuallidar" / f"{infra_id}.json", infra_pose)
+        infra_tracks = _associate(vehicle_boxes, infra_boxes)
+        for i, box in enumerate(vehicle_boxes):
+            objects.append({"frame": k, "track_id": f"v{i}", **box})
+            seen.append({"frame": k, "agent_id": "vehicle", "track_id": f"v{i}"})
+        for j, box in enumerate(infra_boxes):
+            if infra_tracks[j].startswith("i"):
+                objects.append({"frame": k, "track_id": infra_tracks[j], **box})
+            seen.append({"frame": k, "agent_id": "infrastructure", "track_id": infra_tracks[j]})
+        agents.append(_agent(k, "vehicle", vehicle_pose, VEHICLE_SIZE))
+        agents.append(_agent(k, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE))
+        frame_ids.append(vehicle_id)
+    return Sequence(
+        name=f"dair-v2x/{root.name}",
+        objects=_frame_table(objects, ["track_id", "category"], ["x", "y", "z", "length", "width", "height", "yaw"]),
+        frame_ids=frame_ids,
+        timestamps=np.arange(len(frame_ids)) / FRAME_RATE,
+        agents=_frame_table(agents, ["agent_id"], ["x", "y", "z", "yaw", "length", "width", "height"]),
+        visibility=_frame_table(seen, ["agent_id", "track_id"], []),
+        ego="vehicle",
+    )
+
+
+def _frame_table(rows: list[dict], text: list[str], floats: list[str]) -> pl.DataFrame:
+    schema = {"frame": pl.Int64, **{c: pl.Utf8 for c in text}, **{c: pl.Float64 for c in floats}}
+    return pl.DataFrame(rows, schema=schema, orient="row") if rows else pl.DataFrame(schema=schema)
+
+
+def _frame_id(path: Path, pair, side: str, where: str) -> str:
+    for key in (f"{side}_pointcloud_path", f"{side}_image_path"):
+        value = pair.get(key) if isinstance(pair, dict) else None
+        if isinstance(value, str) and value:
+            stem = Path(value).stem
+            if stem and all(c.isalnum() or c in "-_" for c in stem):
+                return stem
+    raise LoaderError(f"{path}: {where}: expected {side}_pointcloud_path or {side}_image_path "
+                      f"naming the {side} frame")
+
+
+def _rigid(path: Path, calib, where: str = "") -> np.ndarray:
+    """4x4 transform from ``{rotation: 3x3, translation: 3x1}``."""
+    out = np.eye(4)
+    out[:3, :3] = matrix(path, field(path, calib, "rotation", where), f"{where}.rotation".lstrip("."), 3, 3)
+    translation = np.array(matrix(path, field(path, calib, "translation", where),
+                                  f"{where}.translation".lstrip("."), 3, 1))
+    out[:3, 3] = translation[:, 0]
+    return out
+
+
+def _vehicle_to_world(root: Path, frame_id: str) -> np.ndarray:
+    calib = root / "vehicle-side" / "calib"
+    to_novatel_file = calib / "lidar_to_novatel" / f"{frame_id}.json"
+    to_world_file = calib / "novatel_to_world" / f"{frame_id}.json"
+    to_novatel = _rigid(to_novatel_file, field(to_novatel_file, _read(to_novatel_file), "transform"), "transform")
+    return _rigid(to_world_file, _read(to_world_file)) @ to_novatel
+
+
+def _infrastructure_to_world(root: Path, frame_id: str, info_file: Path, offset, where: str) -> np.ndarray:
+    calib_file = root / "infrastructure-side" / "calib" / "virtuallidar_to_world" / f"{frame_id}.json"
+    pose = _rigid(calib_file, _read(calib_file))
+    pose[0, 3] += number(info_file, field(info_file, offset, "delta_x", where), f"{where}.delta_x")
+    pose[1, 3] += number(info_file, field(info_file, offset, "delta_y", where), f"{where}.delta_y")
+    return pose
+
+
+def _read(path: Path):
+    if not path.is_file():
+        raise LoaderError(f"{path}: missing (named by cooperative/data_info.json)")
+    return read_json(path)
+
+
+def _yaw(pose: np.ndarray, yaw: float = 0.0) -> float:
+    heading = pose[:3, :3] @ np.array([np.cos(yaw), np.sin(yaw), 0.0])
+    return float(np.arctan2(heading[1], heading[0]))
+
+
+def _labels(path: Path, pose: np.ndarray) -> list[dict]:
+    """The label file's boxes mapped to the world frame."""
+    labels = _read(path)
+    if not isinstance(labels, list):
+        raise LoaderError(f"{path}: expected a list of labelled objects")
+    boxes = []
+    for i, label in enumerate(labels):
+        where = f"[{i}]"
+        size = field(path, label, "3d_dimensions", where)
+        location = field(path, label, "3d_location", where)
+        centre = np.array([number(path, field(path, location, a, f"{where}.3d_location"), f"{where}.3d_location.{a}")
+                           for a in "xyz"] + [1.0])
+        length, width, height = (number(path, field(path, size, a, f"{where}.3d_dimensions"), f"{where}.3d_dimensions.{a}")
+                                 for a in "lwh")
+        yaw = number(path, field(path, label, "rotation", where), f"{where}.rotation")
+        x, y, z, _ = pose @ centre
+        boxes.append({"category": str(field(path, label, "type", where)), "x": float(x), "y": float(y),
+                      "z": float(z), "length": length, "width": width, "height": height,
+                      "yaw": _yaw(pose, yaw)})
+    return boxes
+
+
+def _associate(vehicle: list[dict], infrastructure: list[dict]) -> list[str]:
+    """Track id of each infrastructure box: the vehicle's ``v<i>`` when associated, else ``i<j>``."""
+    tracks = [f"i{j}" for j in range(len(infrastructure))]
+    if not vehicle or not infrastructure:
+        return tracks
+    a = np.array([[b["x"], b["y"]] for b in vehicle])
+    b = np.array([[b["x"], b["y"]] for b in infrastructure])
+    cost = np.linalg.norm(a[:, None, :] - b[None, :, :], axis=2)
+    rows, cols = linear_sum_assignment(cost)
+    for i, j in zip(rows, cols):
+        if cost[i, j] <= ASSOCIATION_RADIUS:
+            tracks[j] = f"v{i}"
+    return tracks
+
+
+def _agent(frame: int, agent_id: str, pose: np.ndarray, size: tuple[float, float, float]) -> dict:
+    return {"frame": frame, "agent_id": agent_id, "x": float(pose[0, 3]), "y": float(pose[1, 3]),
+            "z": float(pose[2, 3]), "yaw": _yaw(pose), "length": size[0], "width": size[1], "height": size[2]}
