@@ -61,35 +61,44 @@ def _group_by(keys, n_keys):
     return order, start
 
 
-def sets_within(quads: Quadruples, tolerance: float, n_pairs: int) -> PairSets:
-    """The sets of all anchors at an L1 tolerance, each with its anchor pair once non-empty (eq. 8)."""
+def sets_within(quads: Quadruples, tolerance: float, n_pairs: int, by_member: bool = False) -> PairSets:
+    """The sets of all anchors at an L1 tolerance, each with its anchor pair once non-empty (eq. 8).
+
+    ``by_member`` transposes them: row m lists the anchors whose set holds pair m.
+    """
     inside = quads.l1 <= tolerance
     anchor, member = quads.anchor[inside], quads.member[inside]
     nonempty = np.flatnonzero(np.bincount(anchor, minlength=n_pairs))
     anchor, member = np.concatenate([anchor, nonempty]), np.concatenate([member, nonempty])
+    if by_member:
+        anchor, member = member, anchor
     order, start = _group_by(anchor, n_pairs)
     return PairSets(start=start, member=member[order])
 
 
 @numba.njit(cache=True)
-def _votes(start, member, is_voter, vote_start, vote_member, n_pairs):
-    """For every row of the sets: how many voters of the same set hold its pair in their voting set."""
-    position = np.full(n_pairs, -1, np.int64)
-    votes = np.zeros(len(member), np.int64)
+def _has_votes(start, member, is_voter, voted_start, voted_by, needed):
+    """For every row of the sets: do at least ``needed`` voters of the same set hold its pair in
+    their voting set? ``voted_by[voted_start[m]:voted_start[m + 1]]`` lists the pairs whose voting
+    set holds pair m; the scan stops at the ``needed``-th vote."""
+    n_pairs = len(voted_start) - 1
+    voter_here = np.zeros(n_pairs, np.bool_)
+    enough = np.zeros(len(member), np.bool_)
     for anchor in range(len(start) - 1):
         for row in range(start[anchor], start[anchor + 1]):
-            position[member[row]] = row
+            voter_here[member[row]] = is_voter[row]
         for row in range(start[anchor], start[anchor + 1]):
-            if not is_voter[row]:
-                continue
-            voter = member[row]
-            for k in range(vote_start[voter], vote_start[voter + 1]):
-                target = position[vote_member[k]]
-                if target >= 0:
-                    votes[target] += 1
+            count = 0
+            m = member[row]
+            for k in range(voted_start[m], voted_start[m + 1]):
+                if voter_here[voted_by[k]]:
+                    count += 1
+                    if count >= needed:
+                        enough[row] = True
+                        break
         for row in range(start[anchor], start[anchor + 1]):
-            position[member[row]] = -1
-    return votes
+            voter_here[member[row]] = False
+    return enough
 
 
 @numba.njit(cache=True)
@@ -113,16 +122,16 @@ def _alone(start, member, kept, n_ego, n_cav):
     return alone
 
 
-def paper_consensus(L: PairSets, V: PairSets, n_ego: int, n_cav: int) -> np.ndarray:
+def paper_consensus(L: PairSets, voted_by: PairSets, n_ego: int, n_cav: int) -> np.ndarray:
     """Eq. 9-10: keep (i', j') of L_ij when the members of L_ij cast more than one vote for it."""
     everyone = np.ones(len(L.member), dtype=bool)
-    return _votes(L.start, L.member, everyone, V.start, V.member, len(L.start) - 1) > 1
+    return _has_votes(L.start, L.member, everyone, voted_by.start, voted_by.member, 2)
 
 
-def released_consensus(L: PairSets, V: PairSets, n_ego: int, n_cav: int) -> np.ndarray:
+def released_consensus(L: PairSets, voted_by: PairSets, n_ego: int, n_cav: int) -> np.ndarray:
     """Released code: keep lone members, and the others that a lone member's voting set contains."""
     lone = _alone(L.start, L.member, np.ones(len(L.member), dtype=bool), n_ego, n_cav)
-    return lone | (_votes(L.start, L.member, lone, V.start, V.member, len(L.start) - 1) >= 1)
+    return lone | _has_votes(L.start, L.member, lone, voted_by.start, voted_by.member, 1)
 
 
 CONSENSUS_RULES = {"paper": paper_consensus, "released": released_consensus}
@@ -136,6 +145,7 @@ def filter_sets(quads: Quadruples, sigma2: float, sigma3: float, rule: str | Non
     L = sets_within(quads, sigma2, n_pairs)
     kept = np.ones(len(L.member), dtype=bool)
     if rule is not None:
-        kept = CONSENSUS_RULES[rule](L, sets_within(quads, sigma3, n_pairs), n_ego, n_cav)
+        voted_by = sets_within(quads, sigma3, n_pairs, by_member=True)
+        kept = CONSENSUS_RULES[rule](L, voted_by, n_ego, n_cav)
     kept &= _alone(L.start, L.member, kept, n_ego, n_cav)
     return FilteredSets(anchor=L.anchors()[kept], member=L.member[kept], candidate_count=np.diff(L.start))

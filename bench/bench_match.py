@@ -1,0 +1,84 @@
+"""Benchmark of cbm.match under the SIND protocol on synthetic intersections.
+
+Per size (objects per agent) prints the median time of ``match``, the peak resident memory of a
+fresh process running it, and micro-averaged precision and recall. Each size runs in its own
+process so that the memory peak belongs to that size alone.
+
+    python bench/bench_match.py [--sizes 20 50 100 200 300 500] [--trials 7] [--markdown]
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import resource
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT))
+
+ETA = 0.5
+SCENARIO = dict(protocol="sind", eta=ETA, sigma_p=0.3, sigma_theta=3.0, flip_prob=0.5)
+
+
+def trials_for(size: int, count: int, heading: str):
+    import loaders
+    from cbm.scenario import ScenarioParams, make_trial
+
+    n_world = int(round(2 * size / (1 + ETA)))
+    scene = loaders.synthetic.generate(n_objects=n_world, n_frames=1, seed=size)
+    frame = scene[0]
+    boxes, ids = frame.boxes(), frame.track_ids
+    return [make_trial(boxes, ids, ScenarioParams(**SCENARIO, seed=seed)) for seed in range(count)]
+
+
+def measure(size: int, count: int, heading: str) -> dict:
+    from cbm import CBMParams, match
+    from cbm.metrics import aggregate, evaluate
+
+    params = CBMParams(heading=heading)
+    trials = trials_for(size, count, heading)
+    match(trials[0].ego_boxes[:10], trials[0].cav_boxes[:10], trials[0].init, params)
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    seconds, metrics = [], []
+    for trial in trials:
+        started = time.perf_counter()
+        result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+        seconds.append(time.perf_counter() - started)
+        metrics.append(evaluate(result, trial))
+    summary = aggregate(metrics)
+    return dict(size=size, n_ego=float(np.mean([len(t.ego_boxes) for t in trials])),
+                median_ms=1000 * float(np.median(seconds)), worst_ms=1000 * float(np.max(seconds)),
+                peak_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, base_mb=before / 1024,
+                precision=summary["precision"], recall=summary["recall"], success=summary["success_rate"])
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--sizes", type=int, nargs="+", default=[20, 50, 100, 200, 300, 500])
+    parser.add_argument("--trials", type=int, default=7)
+    parser.add_argument("--heading", choices=["fold", "align"], default="align")
+    parser.add_argument("--one", type=int, help=argparse.SUPPRESS)
+    args = parser.parse_args()
+    if args.one is not None:
+        print(json.dumps(measure(args.one, args.trials if args.one < 500 else max(3, args.trials // 2), args.heading)))
+        return
+    print(f"cbm.match, SIND protocol (eta={ETA}, sigma_p=0.3 m, sigma_theta=3 deg, flip 0.5, 3 m/3 m/5 deg), "
+          f"heading={args.heading}, {args.trials} trials per size, one process per size")
+    print("| objects per agent | median ms | worst ms | peak memory MB (process) | precision | recall | success |")
+    print("|---:|---:|---:|---:|---:|---:|---:|")
+    for size in args.sizes:
+        out = subprocess.run([sys.executable, __file__, "--one", str(size), "--trials", str(args.trials),
+                              "--heading", args.heading], capture_output=True, text=True, check=True)
+        r = json.loads(out.stdout.strip().splitlines()[-1])
+        print(f"| {r['n_ego']:.0f} | {r['median_ms']:.1f} | {r['worst_ms']:.1f} | {r['peak_mb']:.0f} "
+              f"(+{r['peak_mb'] - r['base_mb']:.0f}) | {r['precision']:.3f} | {r['recall']:.3f} | {r['success']:.2f} |",
+              flush=True)
+
+
+if __name__ == "__main__":
+    main()
