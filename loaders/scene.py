@@ -210,7 +210,8 @@ class Frame:
 
     @property
     def visibility(self) -> dict[str, np.ndarray] | None:
-        """``agent_id -> track ids that agent sees``, or ``None`` if the dataset does not say."""
+        """``agent_id -> track ids that agent sees``, or ``None`` if the dataset does not say.
+        Agents present in the frame that see nothing map to an empty array."""
         seq = self.sequence
         if seq.visibility is None:
             return None
@@ -218,7 +219,9 @@ class Frame:
         agents, tracks = seq._seen_by[rows], seq._seen_tracks[rows]
         starts = np.flatnonzero(np.r_[True, agents[1:] != agents[:-1]]) if len(agents) else []
         bounds = [*starts, len(agents)]
-        return {str(agents[a]): tracks[a:b] for a, b in zip(bounds[:-1], bounds[1:])}
+        seen = {str(agents[a]): tracks[a:b] for a, b in zip(bounds[:-1], bounds[1:])}
+        present = seq._agent_ids[self._rows(seq._agent_offsets)] if seq.agents is not None else []
+        return {**{str(a): tracks[:0] for a in present}, **seen}
 
     def agent_pose(self, agent_id: str) -> np.ndarray:
         """``(3, 3)`` SE(2) pose of an agent in the world frame (maps agent-frame points to world)."""

@@ -16,7 +16,7 @@ import numpy as np
 import polars as pl
 
 from .scene import AGENT_COLUMNS, OBJECT_COLUMNS, Sequence
-from .tables import csv_header, drop_unusable, read_arrow, read_csv, require_rows
+from .tables import drop_unusable, read_arrow, read_csv, require_rows
 
 SUFFIXES = (".csv", ".parquet", ".pq", ".feather", ".arrow", ".ipc")
 REQUIRED = {"frame": pl.Int64, "track_id": pl.Utf8, "x": pl.Float64, "y": pl.Float64,
@@ -28,15 +28,8 @@ DEFAULT_RATE = 10.0
 
 
 def recognises(path: Path) -> bool:
-    """A table file with a ``frame`` column (CSV header or Arrow schema)."""
-    if not path.is_file() or path.suffix.lower() not in SUFFIXES:
-        return False
-    if path.suffix.lower() == ".csv":
-        try:
-            return "frame" in csv_header(path)
-        except ValueError:
-            return False
-    return True
+    """Any CSV / Parquet / Arrow file (tried after the dataset-specific loaders)."""
+    return path.is_file() and path.suffix.lower() in SUFFIXES
 
 
 def load(path: str | Path) -> Sequence:
