@@ -4,6 +4,7 @@ from __future__ import annotations
 from pathlib import Path
 
 import polars as pl
+import pyarrow as pa
 
 
 class LoaderError(ValueError):
@@ -14,6 +15,7 @@ class LoaderError(ValueError):
 READ_ERRORS = (
     pl.exceptions.PolarsError,
     pl.exceptions.PanicException,
+    pa.ArrowException,
     OSError,
     UnicodeDecodeError,
     ValueError,

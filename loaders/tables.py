@@ -16,6 +16,8 @@ import warnings
 from pathlib import Path
 
 import polars as pl
+import pyarrow.feather
+import pyarrow.parquet
 
 from .errors import READ_ERRORS, LoaderError, nonempty_file
 
@@ -51,13 +53,16 @@ def read_csv(path: Path, types: dict[str, pl.DataType], optional: tuple[str, ...
 
 
 def read_arrow(path: Path, types: dict[str, pl.DataType], optional: tuple[str, ...] = ()) -> pl.DataFrame:
-    """The columns ``types`` of a Parquet or Arrow IPC (Feather) file, cast to their types."""
+    """The columns ``types`` of a Parquet or Arrow IPC (Feather) file, cast to their types.
+    Read with pyarrow and fully validated first, so corrupt bytes become a clear error."""
     nonempty_file(path)
     try:
-        if path.suffix.lower() == ".parquet":
-            frame = pl.read_parquet(path)
+        if path.suffix.lower() in (".parquet", ".pq"):
+            arrow = pyarrow.parquet.read_table(path)
         else:
-            frame = pl.read_ipc(path)
+            arrow = pyarrow.feather.read_table(path, memory_map=False)
+        arrow.validate(full=True)
+        frame = pl.from_arrow(arrow)
     except READ_ERRORS as exc:
         raise LoaderError(f"{path}: not a readable {path.suffix} table ({_short(exc)})") from exc
     require_columns(path, frame.columns, [c for c in types if c not in optional])
