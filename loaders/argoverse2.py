@@ -120,11 +120,13 @@ def _ego_poses(pose_file: Path, sweeps: np.ndarray) -> tuple[Rotation, np.ndarra
 
 
 def _rotations(path: Path, wxyz: np.ndarray) -> Rotation:
-    norms = np.linalg.norm(wxyz, axis=1)
-    if (norms < 1e-9).any():
-        raise LoaderError(f"{path}: row {int(np.argmax(norms < 1e-9)) + 1}: quaternion "
-                          f"qw, qx, qy, qz is zero; expected a rotation")
-    return Rotation.from_quat(wxyz[:, [1, 2, 3, 0]])
+    with np.errstate(over="ignore", invalid="ignore"):
+        norms = np.linalg.norm(wxyz, axis=1)
+    bad = ~np.isfinite(norms) | (norms < 1e-9)
+    if bad.any():
+        raise LoaderError(f"{path}: row {int(np.argmax(bad)) + 1}: quaternion qw, qx, qy, qz "
+                          f"{wxyz[np.argmax(bad)].tolist()} is not a rotation (expected unit length)")
+    return Rotation.from_quat(wxyz[:, [1, 2, 3, 0]] / norms[:, None])
 
 
 def _heading(rotation: Rotation) -> np.ndarray:

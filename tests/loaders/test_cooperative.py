@@ -83,3 +83,32 @@ def test_opv2v_missing_key_names_it(copy_fixture):
     path.write_text(path.read_text().replace("extent: [2.4, 1.0, 0.8]", "size: [2.4, 1.0, 0.8]"))
     with pytest.raises(loaders.LoaderError, match=r"650.000068.yaml: missing key vehicles\[641\]\.extent"):
         loaders.open(scenario)
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("location: [15, 22, 0]", "location: [.nan, 22, 0]", r"vehicles\[700\]\.location\[0\]: expected a finite number"),
+    ("location: [15, 22, 0]", "location: [fifteen, 22, 0]", r"vehicles\[700\]\.location\[0\]: expected a number"),
+    ("lidar_pose: [10, 20, 1.9, 0, 90, 0]", "lidar_pose: [10, 20]", "lidar_pose: expected a list of 6 numbers"),
+    ("vehicles:", "vehicles: [", "not valid YAML"),
+])
+def test_opv2v_bad_values(copy_fixture, old, new, message):
+    scenario = copy_fixture("opv2v/scenario")
+    path = scenario / "641" / "000068.yaml"
+    path.write_text(path.read_text().replace(old, new, 1))
+    with pytest.raises(loaders.LoaderError, match=message):
+        loaders.open(scenario)
+
+
+def test_empty_yaml_is_refused(copy_fixture):
+    scenario = copy_fixture("opv2v/scenario")
+    (scenario / "641" / "000068.yaml").write_text("")
+    with pytest.raises(loaders.LoaderError, match="000068.yaml: the file is empty"):
+        loaders.open(scenario)
+
+
+def test_dair_v2x_bad_label_value(copy_fixture):
+    root = copy_fixture("dair_v2x/cooperative-vehicle-infrastructure")
+    label = root / "vehicle-side" / "label" / "lidar" / "000010.json"
+    label.write_text(label.read_text().replace('"x": 10.0', '"x": "ten"'))
+    with pytest.raises(loaders.LoaderError, match=r"000010.json: \[0\]\.3d_location\.x: expected a number"):
+        loaders.open(root)

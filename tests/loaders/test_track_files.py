@@ -87,3 +87,13 @@ def test_nan_coordinates_are_dropped_with_a_warning(copy_fixture):
     with pytest.warns(UserWarning, match="dropped 1 row.*first: row 2"):
         seq = loaders.open(folder)
     assert seq.dropped_rows == 1 and list(seq[1].track_ids) == ["P1"]
+
+
+def test_truncated_file_drops_the_cut_row(copy_fixture):
+    folder = copy_fixture("sind/handmade")
+    path = folder / "Veh_smoothed_tracks.csv"
+    text = path.read_text()
+    path.write_text(text[: text.rindex("\n", 0, len(text) - 1) + 25])
+    with pytest.warns(UserWarning, match="dropped 1 row.*first: row 5"):
+        seq = loaders.open(folder)
+    assert seq.dropped_rows == 1
