@@ -11,8 +11,9 @@ pedestrian crossing on every arm. The signal is green for road A:
 - pedestrians walk over the south crossing (both ways) and along the sidewalks, away from the
   intersection; parked cars stand in the parking strips.
 
-Every object moves along a fixed path at a fixed speed, so objects placed without overlap in
-the first frame stay apart in every frame. The road arms grow with the object count (and the
+Every object moves along a fixed path at a fixed speed (the same speed for every object on a
+lane), and the paths only meet where the turning cars join an emptied departing lane, so objects
+placed apart in the first frame stay apart in every frame (the tests check this). The road arms grow with the object count (and the
 lanes per direction, from 1 to 4), so up to 1000 objects fit without overlap.
 Every random draw comes from ``numpy.random.default_rng(seed)``.
 """
@@ -228,7 +229,7 @@ def generate(n_objects: int = 200, n_frames: int = 50, seed: int = 0) -> Sequenc
     placed = [
         *_through(rng, layout, groups["through"], speeds),
         *_queued(layout, groups["queued"], rng),
-        *_departing(rng, layout, groups["departing"], speeds, groups["through"]),
+        *_departing(rng, layout, groups["departing"], speeds),
         *_along(rng, layout.parking_paths(), groups["parked"], 0.0, from_start=False),
         *_walking(rng, layout.crossing_paths(), walkers, from_start=False),
         *_walking(rng, layout.sidewalk_paths(), strollers, from_start=True),
@@ -345,8 +346,7 @@ def _queued(layout: _Layout, groups: list[_Group], rng) -> list[_Placed]:
     return placed
 
 
-def _departing(rng, layout: _Layout, groups: list[_Group], speeds: dict,
-               through: list[_Group]) -> list[_Placed]:
+def _departing(rng, layout: _Layout, groups: list[_Group], speeds: dict) -> list[_Placed]:
     """Road B's departing lanes: cars driving away, beyond the crossings and clear of turners."""
     placed = []
     for index, group in enumerate(groups):
