@@ -6,7 +6,7 @@ import time
 import numpy as np
 
 from . import se2
-from .consensus import filter_sets
+from .consensus import PairSets, sets_within
 from .context import build_context, fold_heading, pair_signs
 from .estimate import residuals, robust_se2
 from .local_matching import accepted_quadruples
@@ -69,15 +69,17 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
     t = lap("context", started)
 
     radius = max(params.sigma2, params.sigma3) if params.consensus else params.sigma2
-    quads = accepted_quadruples(ego_context, cav_context, signs, len(cav), params.sigma1_rad, radius)
+    quads = accepted_quadruples(ego_context, cav_context, ego_heading, cav_heading, signs, params.sigma1_rad, radius)
     t = lap("local_matching", t)
 
+    n_pairs = len(ego) * len(cav)
     rule = params.consensus_rule if params.consensus else None
-    sets = filter_sets(quads, params.sigma2, params.sigma3, rule, len(ego), len(cav))
-    t = lap("consensus", t)
+    candidates = sets_within(quads, params.sigma2, n_pairs)
+    voted_by = sets_within(quads, params.sigma3, n_pairs, by_member=True) if rule else PairSets.empty(n_pairs)
+    t = lap("candidate_sets", t)
 
-    chosen = select(sets, ego_xy, cav_xy, params.distance_limit)
-    t = lap("selection", t)
+    chosen = select(candidates, voted_by, rule, ego_xy, cav_xy, params.distance_limit)
+    t = lap("consensus_selection", t)
 
     pairs = chosen.pairs
     src, dst = cav_xy[pairs[:, 1]], ego_xy[pairs[:, 0]]
@@ -93,7 +95,7 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
         init=init,
         estimated=estimated,
         anchor=anchor,
-        candidate_count=0 if chosen.anchor is None else int(sets.candidate_count[chosen.anchor]),
+        candidate_count=chosen.candidate_count,
         consensus_count=len(pairs),
         runner_up_count=chosen.runner_up_count,
         residuals=residuals(correction, src, dst),

@@ -2,6 +2,11 @@
 
 The answer is the anchor whose filtered set L^(2)_ij is largest (eq. 12). Anchors whose pairs lie on
 average farther apart than ``distance_limit`` after the pre-transform are rejected (released code).
+
+Filtering never grows a set, so card(L_ij) bounds card(L^(2)_ij): anchors are visited from the
+largest candidate set down and the search stops once no remaining set can reach the best size
+found (branch and bound). The answer is the same as filtering every set; only the work differs.
+
 Ties are broken by what the sets are, never by input order: first the smaller residual of a
 least-squares rigid fit of the set, then the set's centroids (see ``tie_break_key``).
 """
@@ -9,10 +14,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.spatial.distance import cdist
 
-from .consensus import FilteredSets
+from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
 
 
@@ -22,17 +28,78 @@ class Selection:
     """Winning anchor pair id, or None when every set is empty or rejected."""
     pairs: np.ndarray
     """(K, 2) (ego index, CAV index) of the winning set, sorted by ego index."""
+    candidate_count: int
+    """card(L_ij) of the winning anchor before filtering (eq. 8)."""
     runner_up_count: int
     """Largest set among anchors that share no pair with the winner."""
 
 
-def mean_pair_distance(sets: FilteredSets, ego_xy: np.ndarray, cav_xy: np.ndarray, n_cav: int,
-                       n_pairs: int) -> np.ndarray:
-    """(Ne * Nc,) mean centre distance of each set's pairs (CAV centres pre-transformed), 0 if empty."""
-    distance = cdist(ego_xy, cav_xy).ravel()[sets.member]
-    total = np.bincount(sets.anchor, weights=distance, minlength=n_pairs)
-    count = np.bincount(sets.anchor, minlength=n_pairs)
-    return np.divide(total, count, out=np.zeros(n_pairs), where=count > 0)
+@numba.njit(cache=True)
+def _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+                   scratch, ego_count, cav_count, voter_here, out):
+    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average."""
+    size = final_set(anchor, L_start, L_member, voted_start, voted_by, rule, n_cav, scratch, ego_count,
+                     cav_count, voter_here, out)
+    total = 0.0
+    for k in range(size):
+        total += distance[out[k]]
+    return size if size == 0 or total / size <= limit else 0
+
+
+@numba.njit(cache=True)
+def _largest_sets(order, candidate_count, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav,
+                  distance, limit):
+    """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
+
+    Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
+    position in ``order`` where the visit stopped.
+    """
+    width = max(1, int(candidate_count.max()))
+    scratch = np.zeros((3, width), np.bool_)
+    ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
+    voter_here = np.zeros(len(candidate_count), np.bool_)
+    out = np.empty(width, np.int64)
+    visited = np.empty(len(order), np.int64)
+    sizes = np.empty(len(order), np.int64)
+    offsets = np.zeros(len(order) + 1, np.int64)
+    members = np.empty(16 * width, np.int64)
+    best, n = 0, 0
+    while n < len(order):
+        anchor = order[n]
+        if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
+            break
+        size = _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                              limit, scratch, ego_count, cav_count, voter_here, out)
+        if offsets[n] + size > len(members):
+            grown = np.empty(2 * len(members) + size, np.int64)
+            grown[: offsets[n]] = members[: offsets[n]]
+            members = grown
+        members[offsets[n]: offsets[n] + size] = out[:size]
+        visited[n], sizes[n] = anchor, size
+        offsets[n + 1] = offsets[n] + size
+        best = max(best, size)
+        n += 1
+    return visited[:n], sizes[:n], offsets[: n + 1], members[: offsets[n]], n
+
+
+@numba.njit(cache=True)
+def _strongest_rival(order, first, candidate_count, runner_up, in_winner, L_start, L_member, voted_start,
+                     voted_by, rule, n_ego, n_cav, distance, limit):
+    """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on."""
+    width = max(1, int(candidate_count.max()))
+    scratch = np.zeros((3, width), np.bool_)
+    ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
+    voter_here = np.zeros(len(candidate_count), np.bool_)
+    out = np.empty(width, np.int64)
+    for n in range(first, len(order)):
+        anchor = order[n]
+        if candidate_count[anchor] <= runner_up:
+            break
+        size = _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                              limit, scratch, ego_count, cav_count, voter_here, out)
+        if size > runner_up and not in_winner[out[:size]].any():
+            runner_up = size
+    return runner_up
 
 
 def tie_break_key(pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray) -> tuple[float, ...]:
@@ -49,32 +116,43 @@ def tie_break_key(pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray) -> 
     return tuple(round(float(value), 9) for value in key)
 
 
-def select(sets: FilteredSets, ego_xy: np.ndarray, cav_xy: np.ndarray, distance_limit: float) -> Selection:
-    """Eq. 12-13: the largest set after rejecting anchors beyond the distance limit."""
-    n_cav = len(cav_xy)
-    n_pairs = len(ego_xy) * n_cav
-    empty = np.zeros((0, 2), dtype=np.intp)
-    if n_pairs == 0 or len(sets.anchor) == 0:
-        return Selection(anchor=None, pairs=empty, runner_up_count=0)
-    count = np.bincount(sets.anchor, minlength=n_pairs)
-    count[mean_pair_distance(sets, ego_xy, cav_xy, n_cav, n_pairs) > distance_limit] = 0
-    best = int(count.max())
+def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
+    return np.stack([members // n_cav, members % n_cav], axis=1)
+
+
+def select(L: PairSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
+           distance_limit: float) -> Selection:
+    """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
+    n_ego, n_cav = len(ego_xy), len(cav_xy)
+    empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, runner_up_count=0)
+    candidate_count = L.sizes()
+    if n_ego * n_cav == 0 or not candidate_count.any():
+        return empty
+    order = np.argsort(-candidate_count, kind="stable")
+    distance = cdist(ego_xy, cav_xy).ravel()
+    common = (L.start, L.member, voted_by.start, voted_by.member, RULE_CODES[rule], n_ego, n_cav, distance,
+              float(distance_limit))
+    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, *common)
+    best = int(sizes.max(initial=0))
     if best == 0:
-        return Selection(anchor=None, pairs=empty, runner_up_count=0)
-    starts = np.searchsorted(sets.anchor, np.arange(n_pairs + 1))
-    members = {int(a): sets.member[starts[a]:starts[a + 1]] for a in np.flatnonzero(count == best)}
+        return empty
     set_keys: dict[bytes, tuple[float, ...]] = {}
     keys = {}
-    for a, m in members.items():
+    for k in np.flatnonzero(sizes == best):
+        m = members[offsets[k]:offsets[k + 1]]
         fingerprint = np.sort(m).tobytes()
         if fingerprint not in set_keys:
-            set_keys[fingerprint] = tie_break_key(np.stack([m // n_cav, m % n_cav], axis=1), ego_xy, cav_xy)
-        keys[a] = set_keys[fingerprint] + (*ego_xy[a // n_cav], *cav_xy[a % n_cav])
-    winner = min(keys, key=keys.__getitem__)
-    in_winner = np.zeros(n_pairs, dtype=bool)
-    in_winner[members[winner]] = True
-    shares = np.bincount(sets.anchor, weights=in_winner[sets.member], minlength=n_pairs) > 0
-    rivals = count[~shares]
-    pairs = np.stack([members[winner] // n_cav, members[winner] % n_cav], axis=1)
-    return Selection(anchor=winner, pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
-                     runner_up_count=int(rivals.max(initial=0)))
+            set_keys[fingerprint] = tie_break_key(_as_pairs(m, n_cav), ego_xy, cav_xy)
+        a = int(visited[k])
+        keys[k] = set_keys[fingerprint] + (*ego_xy[a // n_cav], *cav_xy[a % n_cav])
+    k_win = min(keys, key=keys.__getitem__)
+    winner = members[offsets[k_win]:offsets[k_win + 1]]
+    in_winner = np.zeros(n_ego * n_cav, dtype=bool)
+    in_winner[winner] = True
+    set_of_member = np.repeat(np.arange(len(sizes)), sizes)
+    shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
+    runner_up = int(sizes[~shares].max(initial=0))
+    runner_up = _strongest_rival(order, stop, candidate_count, runner_up, in_winner, *common)
+    pairs = _as_pairs(winner, n_cav)
+    return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
+                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)

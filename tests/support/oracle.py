@@ -50,8 +50,10 @@ def _rigid_rms(pairs, ego_xy, cav_xy):
     return float(np.sqrt(np.mean(np.sum((moved - d) ** 2, axis=1)))), dst, src
 
 
-def oracle_pairs(ego, cav, init, sigma1_deg, sigma2, sigma3, distance_limit, consensus, rule, heading):
-    """Pairs (ego index, CAV index) chosen by eq. 5-13, ties broken like ``cbm.selection``."""
+def oracle(ego, cav, init, sigma1_deg, sigma2, sigma3, distance_limit, consensus, rule, heading):
+    """Eq. 5-13 with ties broken like ``cbm.selection``: (pairs, card(L) of the winner, runner-up size).
+
+    The runner-up is the largest filtered set that shares no pair with the winner's."""
     ne, nc = len(ego), len(cav)
     R, t = init[:2, :2], init[:2, 2]
     init_yaw = math.atan2(init[1, 0], init[0, 0])
@@ -101,7 +103,7 @@ def oracle_pairs(ego, cav, init, sigma1_deg, sigma2, sigma3, distance_limit, con
 
     best = max(len(m) for m in final.values()) if final else 0
     if best == 0:
-        return np.zeros((0, 2), dtype=int)
+        return np.zeros((0, 2), dtype=int), 0, 0
 
     def key(a):
         pairs = sorted(final[a])
@@ -110,4 +112,5 @@ def oracle_pairs(ego, cav, init, sigma1_deg, sigma2, sigma3, distance_limit, con
         return tuple(round(float(v), 9) for v in values) + (*ego_xy[a[0]], *cav_xy[a[1]])
 
     winner = min((a for a in anchors if len(final[a]) == best), key=key)  # eq. 12-13
-    return np.array(sorted(final[winner]), dtype=int).reshape(-1, 2)
+    runner_up = max((len(m) for m in final.values() if not (m & final[winner])), default=0)
+    return np.array(sorted(final[winner]), dtype=int).reshape(-1, 2), len(L[winner]), runner_up
