@@ -83,7 +83,7 @@ def cast_columns(path: Path, frame: pl.DataFrame, types: dict[str, pl.DataType])
     for name, dtype in types.items():
         column = frame[name]
         if dtype == pl.Utf8:
-            converted = column.cast(pl.Utf8).str.strip_chars() if column.dtype in (pl.Utf8, *NUMERIC) else None
+            converted = None if column.dtype.is_nested() else column.cast(pl.Utf8, strict=False).str.strip_chars()
         elif column.dtype == pl.Utf8:
             converted = column.str.strip_chars().cast(dtype, strict=False)
         elif column.dtype in NUMERIC or column.dtype == pl.Boolean:
@@ -95,6 +95,8 @@ def cast_columns(path: Path, frame: pl.DataFrame, types: dict[str, pl.DataType])
         bad = converted.is_null() & column.is_not_null()
         if dtype != pl.Utf8 and column.dtype == pl.Utf8:
             bad = bad & (column.str.strip_chars() != "")
+        if dtype.is_integer() and column.dtype.is_float():
+            bad = bad | (converted.cast(pl.Float64) != column).fill_null(False)
         if bad.any():
             row = int(bad.arg_max())
             raise LoaderError(f"{path}: row {row + 1}, column {name}: {column[row]!r} is not "

@@ -79,3 +79,17 @@ def test_open_on_the_shared_data(shared_data):
     assert len(loaders.open(shared_data / "argoverse2")) == 156
     assert len(loaders.open(shared_data / "interaction")) == 100
     assert len(loaders.open(shared_data / "opv2v_schema" / "000069.yaml")[0]) == 1
+
+
+def test_parquet_types(tmp_path):
+    base = {"track_id": ["1", "2"], "x": [0.0, 1.0], "y": [0.0, 1.0], "length": [4.0, 4.0],
+            "width": [2.0, 2.0], "yaw": [0.0, 0.0]}
+    pl.DataFrame({**base, "frame": [0.0, 1.0], "category": ["car", "bus"]},
+                 schema_overrides={"category": pl.Categorical}).write_parquet(tmp_path / "ok.parquet")
+    assert list(loaders.open(tmp_path / "ok.parquet")[1].categories) == ["bus"]
+    pl.DataFrame({**base, "frame": [0.0, 1.5]}).write_parquet(tmp_path / "bad.parquet")
+    with pytest.raises(loaders.LoaderError, match="row 2, column frame: 1.5 is not an integer"):
+        loaders.open(tmp_path / "bad.parquet")
+    pl.DataFrame({**base, "frame": [0, 1], "x": [[0.0], [1.0]]}).write_parquet(tmp_path / "nested.parquet")
+    with pytest.raises(loaders.LoaderError, match="column x has type List"):
+        loaders.open(tmp_path / "nested.parquet")
