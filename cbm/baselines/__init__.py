@@ -1,15 +1,18 @@
-"""The paper's baselines (Song et al., RA-L 2024, sec. IV): ICP, RICP and VIPS, each with the interface
-of ``cbm.match``: ``method(ego_boxes, cav_boxes, init, params=None, **kw) -> MatchResult``.
+"""CBM, its ablation without global consensus, and the paper's baselines (Song et al., RA-L 2024,
+sec. IV): ICP, RICP and VIPS, each with the interface of ``cbm.match``: ``method(ego_boxes, cav_boxes, init, params=None, **kw) -> MatchResult``.
 
     from cbm.baselines import run
     result = run("vips", ego_boxes, cav_boxes, init, ego_labels=labels_e, cav_labels=labels_c)
 """
 from __future__ import annotations
 
+import dataclasses
 from typing import Any, Callable
 
 import numpy as np
 
+from ..params import CBMParams
+from ..pipeline import match
 from ..result import MatchResult
 from .icp import ICPParams, match_icp
 from .ricp import RICPParams, match_ricp
@@ -18,11 +21,18 @@ from .vips import VIPSParams, match_vips
 Method = Callable[..., MatchResult]
 
 
+def match_cbm_without_consensus(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
+                                params: CBMParams | None = None) -> MatchResult:
+    """CBM with eq. 9-10 skipped: the paper's ablation (Table I, last column)."""
+    return match(ego_boxes, cav_boxes, init, dataclasses.replace(params or CBMParams(), consensus=False))
+
+
 def build_registry() -> tuple[dict[str, Method], dict[str, type]]:
-    """The methods by name and their parameter classes. ("cbm" and "cbm-no-consensus" belong here
-    once ``cbm.match`` exists.)"""
-    methods: dict[str, Method] = {"icp": match_icp, "ricp": match_ricp, "vips": match_vips}
-    params: dict[str, type] = {"icp": ICPParams, "ricp": RICPParams, "vips": VIPSParams}
+    """The methods by name and their parameter classes."""
+    methods: dict[str, Method] = {"cbm": match, "cbm-no-consensus": match_cbm_without_consensus,
+                                  "icp": match_icp, "ricp": match_ricp, "vips": match_vips}
+    params: dict[str, type] = {"cbm": CBMParams, "cbm-no-consensus": CBMParams, "icp": ICPParams,
+                               "ricp": RICPParams, "vips": VIPSParams}
     return methods, params
 
 
@@ -38,5 +48,5 @@ def run(name: str, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarra
     return METHODS[name](ego_boxes, cav_boxes, init, params, **kw)
 
 
-__all__ = ["ICPParams", "METHODS", "PARAMS", "RICPParams", "VIPSParams", "match_icp", "match_ricp",
-           "match_vips", "run"]
+__all__ = ["ICPParams", "METHODS", "PARAMS", "RICPParams", "VIPSParams", "match_cbm_without_consensus",
+           "match_icp", "match_ricp", "match_vips", "run"]

@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 from .. import se2
 from ..result import MatchResult
 from ._common import as_boxes, as_transform, check_count, check_params, check_positive, make_result, mutual_nearest_pairs
-from ._fit import weighted_procrustes
+from ..estimate import weighted_procrustes
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from scipy.spatial import cKDTree
 from .. import se2
 from ..result import MatchResult
 from ._common import as_boxes, as_transform, check_count, check_params, check_positive, make_result, mutual_nearest_pairs
-from ._fit import weighted_procrustes
+from ..estimate import weighted_procrustes
 
 _SCALE_NEIGHBOURS = 7
 """FRICP's ``FindKnearestMed(kdtree, Y, 7)``: each target point and its 6 nearest neighbours."""

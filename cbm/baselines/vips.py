@@ -16,7 +16,7 @@ from .. import se2
 from ..result import MatchResult
 from ._common import (as_boxes, as_labels, as_transform, check_count, check_params, check_positive,
                       make_result, sort_pairs)
-from ._fit import weighted_procrustes
+from ..estimate import weighted_procrustes
 
 _DENSE_EIGEN_LIMIT = 2
 """Up to this many candidate assignments the eigenvector comes from a dense solver (ARPACK needs more)."""

@@ -6,7 +6,7 @@ import pytest
 
 from cbm import se2
 from cbm.baselines import METHODS, PARAMS, ICPParams, RICPParams, VIPSParams, run
-from cbm.baselines._fit import weighted_procrustes
+from cbm.estimate import weighted_procrustes
 from cbm.result import MatchResult
 
 NAMES = ["icp", "ricp", "vips"]
@@ -233,14 +233,23 @@ def test_bad_parameters_raise_value_error_naming_the_field(cls: type, field: str
 
 
 def test_registry_runs_each_method_with_its_defaults() -> None:
-    assert set(METHODS) == set(PARAMS) == set(NAMES)
+    assert set(METHODS) == set(PARAMS) == set(NAMES) | {"cbm", "cbm-no-consensus"}
     ego, cav, init, _, _ = make_scene(0, n=10)
-    for name in NAMES:
+    for name in METHODS:
         assert isinstance(run(name, ego, cav, init, PARAMS[name]()), MatchResult)
     with pytest.raises(ValueError, match="name"):
         run("cmb", ego, cav, init)
     with pytest.raises(TypeError, match="params"):
         run("icp", ego, cav, init, VIPSParams())
+
+
+def test_cbm_without_consensus_is_cbm_with_the_switch_off() -> None:
+    from cbm import CBMParams, match
+
+    ego, cav, init, _, _ = make_scene(3, n=30)
+    params = CBMParams(sigma2=4.0)
+    ablation = run("cbm-no-consensus", ego, cav, init, params)
+    np.testing.assert_array_equal(ablation.pairs, match(ego, cav, init, CBMParams(sigma2=4.0, consensus=False)).pairs)
 
 
 # --- the shared Procrustes fit ----------------------------------------------------------------------------
