@@ -15,6 +15,9 @@ test: $(VENV)/.installed-test chromium
 
 bench: $(VENV)/.installed
 	$(PY) bench/bench_match.py
+	$(PY) bench/bench_heading.py
+	$(PY) bench/bench_loaders.py
+	$(PY) bench/bench_baselines.py
 
 install: $(VENV)/.installed
 
