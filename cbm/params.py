@@ -5,6 +5,8 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
+from .inputs import check_positive
+
 HeadingMode = Literal["fold", "align"]
 ConsensusRule = Literal["paper", "released"]
 
@@ -40,10 +42,7 @@ class CBMParams:
     """Metres. Smallest Welsch scale nu of the robust pose estimate (about the detection noise)."""
 
     def __post_init__(self) -> None:
-        for name in ("sigma1", "sigma2", "sigma3", "distance_limit", "welsch_floor"):
-            value = getattr(self, name)
-            if not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-                raise ValueError(f"CBMParams.{name} must be a positive finite number, got {value!r}")
+        check_positive(self, "sigma1", "sigma2", "sigma3", "distance_limit", "welsch_floor")
         if self.sigma1 > 90:
             raise ValueError(f"CBMParams.sigma1 is in degrees and must be at most 90, got {self.sigma1!r}")
         if self.consensus_rule not in ("paper", "released"):

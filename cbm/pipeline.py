@@ -9,34 +9,11 @@ from . import se2
 from .consensus import PairSets, sets_within
 from .context import build_context, fold_heading, pair_signs
 from .estimate import residuals, robust_se2
+from .inputs import checked_boxes, checked_transform
 from .local_matching import accepted_quadruples
 from .params import CBMParams
 from .result import MatchResult
 from .selection import select
-
-
-def _checked_boxes(name: str, boxes: np.ndarray) -> np.ndarray:
-    array = np.asarray(boxes, dtype=float)
-    if array.size == 0:
-        array = array.reshape(0, 7)
-    if array.ndim != 2 or array.shape[1] != 7:
-        raise ValueError(f"{name} must be an (N, 7) array of x, y, z, length, width, height, yaw; "
-                         f"got shape {array.shape}")
-    if not np.isfinite(array).all():
-        row = int(np.flatnonzero(~np.isfinite(array).all(axis=1))[0])
-        raise ValueError(f"{name} must be finite; row {row} is {array[row].tolist()}")
-    return array
-
-
-def _checked_transform(name: str, T: np.ndarray) -> np.ndarray:
-    array = np.asarray(T, dtype=float)
-    if array.shape != (3, 3) or not np.isfinite(array).all():
-        raise ValueError(f"{name} must be a finite (3, 3) SE(2) matrix; got shape {array.shape}")
-    rotation = array[:2, :2]
-    if not (np.allclose(rotation.T @ rotation, np.eye(2), atol=1e-6) and np.linalg.det(rotation) > 0
-            and np.allclose(array[2], [0.0, 0.0, 1.0])):
-        raise ValueError(f"{name} must be a rigid SE(2) transform (rotation block orthonormal, last row 0 0 1)")
-    return array
 
 
 def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
@@ -51,9 +28,9 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
     params = CBMParams() if params is None else params
     if not isinstance(params, CBMParams):
         raise ValueError(f"params must be a CBMParams, got {type(params).__name__}")
-    ego = _checked_boxes("ego_boxes", ego_boxes)
-    cav = _checked_boxes("cav_boxes", cav_boxes)
-    init = np.eye(3) if init is None else _checked_transform("init", init)
+    ego = checked_boxes("ego_boxes", ego_boxes)
+    cav = checked_boxes("cav_boxes", cav_boxes)
+    init = np.eye(3) if init is None else checked_transform("init", init)
     timings: dict[str, float] = {}
 
     def lap(stage: str, since: float) -> float:

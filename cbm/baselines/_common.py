@@ -1,37 +1,15 @@
 """Input checks, association and result assembly shared by the baselines."""
 from __future__ import annotations
 
-import math
-
 import numpy as np
 from scipy.spatial import cKDTree
 
+from time import perf_counter
+from typing import Any, Callable
+
 from .. import se2
+from ..inputs import checked_boxes, checked_transform
 from ..result import MatchResult
-
-
-def as_boxes(name: str, boxes: np.ndarray) -> np.ndarray:
-    """``boxes`` as a finite ``(N, 7)`` float64 array, or ValueError naming the argument."""
-    arr = np.asarray(boxes, dtype=float)
-    if arr.ndim != 2 or arr.shape[1] != 7:
-        raise ValueError(f"{name} must have shape (N, 7), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
-    return arr
-
-
-def as_transform(name: str, T: np.ndarray) -> np.ndarray:
-    """``T`` as a finite rigid ``(3, 3)`` SE(2) matrix, or ValueError naming the argument."""
-    arr = np.asarray(T, dtype=float)
-    if arr.shape != (3, 3):
-        raise ValueError(f"{name} must have shape (3, 3), got {arr.shape}")
-    if not np.all(np.isfinite(arr)):
-        raise ValueError(f"{name} must be finite")
-    R = arr[:2, :2]
-    if not (np.allclose(arr[2], [0.0, 0.0, 1.0]) and np.allclose(R.T @ R, np.eye(2), atol=1e-6)
-            and np.linalg.det(R) > 0):
-        raise ValueError(f"{name} must be a rigid SE(2) transform (rotation block, last row 0 0 1)")
-    return arr
 
 
 def as_labels(name: str, labels: np.ndarray | None, n: int) -> np.ndarray | None:
@@ -42,14 +20,6 @@ def as_labels(name: str, labels: np.ndarray | None, n: int) -> np.ndarray | None
     if arr.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},) like its boxes, got {arr.shape}")
     return arr
-
-
-def check_positive(owner: object, *names: str) -> None:
-    """ValueError unless each named field of ``owner`` is a positive finite number."""
-    for name in names:
-        value = getattr(owner, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-            raise ValueError(f"{type(owner).__name__}.{name} must be a positive finite number, got {value!r}")
 
 
 def check_count(owner: object, name: str, minimum: int) -> None:
@@ -101,3 +71,20 @@ def make_result(ego_boxes: np.ndarray, cav_boxes: np.ndarray, pairs: np.ndarray,
     return MatchResult(pairs=pairs, transform=final, init=np.array(init, dtype=float), estimated=estimated,
                        anchor=None, candidate_count=len(pairs), consensus_count=len(pairs), runner_up_count=0,
                        residuals=residuals, timings=timings)
+
+
+def closest_point_match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any,
+                        iterate: Callable[[np.ndarray, np.ndarray, np.ndarray, Any], np.ndarray]) -> MatchResult:
+    """ICP-style methods: ``iterate`` the transform from ``init`` on the centres, then associate
+    mutual nearest neighbours within ``params.max_correspondence_distance``."""
+    ego_boxes = checked_boxes("ego_boxes", ego_boxes)
+    cav_boxes = checked_boxes("cav_boxes", cav_boxes)
+    init = checked_transform("init", init)
+    t0 = perf_counter()
+    ego_xy, cav_xy = ego_boxes[:, :2], cav_boxes[:, :2]
+    T = iterate(ego_xy, cav_xy, init, params)
+    t1 = perf_counter()
+    pairs = mutual_nearest_pairs(ego_xy, se2.apply_points(T, cav_xy), params.max_correspondence_distance)
+    t2 = perf_counter()
+    return make_result(ego_boxes, cav_boxes, pairs, T, init,
+                       {"iterate": t1 - t0, "associate": t2 - t1, "total": t2 - t0})

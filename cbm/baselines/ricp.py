@@ -4,15 +4,15 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from time import perf_counter
 
 import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import se2
 from ..result import MatchResult
-from ._common import as_boxes, as_transform, check_count, check_params, check_positive, make_result, mutual_nearest_pairs
 from ..estimate import weighted_procrustes
+from ..inputs import check_positive
+from ._common import closest_point_match, check_count, check_params
 
 _SCALE_NEIGHBOURS = 7
 """FRICP's ``FindKnearestMed(kdtree, Y, 7)``: each target point and its 6 nearest neighbours."""
@@ -64,18 +64,7 @@ def match_ricp(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
     floor ``nu_end_k * median neighbour spacing``. The matched pairs are the mutual nearest neighbours
     within ``max_correspondence_distance`` under the final ``T``. Headings and sizes are not used.
     """
-    params = check_params(params, RICPParams)
-    ego_boxes = as_boxes("ego_boxes", ego_boxes)
-    cav_boxes = as_boxes("cav_boxes", cav_boxes)
-    init = as_transform("init", init)
-    t0 = perf_counter()
-    ego_xy, cav_xy = ego_boxes[:, :2], cav_boxes[:, :2]
-    T = ricp_transform(ego_xy, cav_xy, init, params)
-    t1 = perf_counter()
-    pairs = mutual_nearest_pairs(ego_xy, se2.apply_points(T, cav_xy), params.max_correspondence_distance)
-    t2 = perf_counter()
-    return make_result(ego_boxes, cav_boxes, pairs, T, init,
-                       {"iterate": t1 - t0, "associate": t2 - t1, "total": t2 - t0})
+    return closest_point_match(ego_boxes, cav_boxes, init, check_params(params, RICPParams), ricp_transform)
 
 
 def ricp_transform(ego_xy: np.ndarray, cav_xy: np.ndarray, init: np.ndarray, params: RICPParams) -> np.ndarray:

@@ -14,9 +14,9 @@ from scipy.spatial.distance import cdist
 
 from .. import se2
 from ..result import MatchResult
-from ._common import (as_boxes, as_labels, as_transform, check_count, check_params, check_positive,
-                      make_result, sort_pairs)
 from ..estimate import weighted_procrustes
+from ..inputs import check_positive, checked_boxes, checked_transform
+from ._common import as_labels, check_count, check_params, make_result, sort_pairs
 
 _DENSE_EIGEN_LIMIT = 2
 """Up to this many candidate assignments the eigenvector comes from a dense solver (ARPACK needs more)."""
@@ -82,9 +82,9 @@ def match_vips(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, p
     4. Transform: unweighted Procrustes fit of the matched centres (``init`` below two pairs).
     """
     params = check_params(params, VIPSParams)
-    ego_boxes = as_boxes("ego_boxes", ego_boxes)
-    cav_boxes = as_boxes("cav_boxes", cav_boxes)
-    init = as_transform("init", init)
+    ego_boxes = checked_boxes("ego_boxes", ego_boxes)
+    cav_boxes = checked_boxes("cav_boxes", cav_boxes)
+    init = checked_transform("init", init)
     ego_labels = as_labels("ego_labels", ego_labels, len(ego_boxes))
     cav_labels = as_labels("cav_labels", cav_labels, len(cav_boxes))
     t0 = perf_counter()
