@@ -1,0 +1,101 @@
+"""Why a frame failed: rules that read a result, its trial and CBM's own sets.
+
+Each rule returns a ``Finding`` or None; ``diagnose`` lists the findings of all rules, most basic first.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .inspect import Inspection
+from .result import MatchResult
+from .scenario import Trial
+
+
+@dataclass(frozen=True)
+class Finding:
+    code: str
+    """One of: few_covisible, no_anchor, single_pair, distance_limit, heading_fold, wrong_anchor."""
+    message: str
+
+
+def too_few_covisible(trial: Trial, minimum: int = 3) -> Finding | None:
+    """Fewer co-visible objects than a context needs to be told apart."""
+    n = len(trial.gt_pairs)
+    if n < minimum:
+        return Finding("few_covisible", f"too few co-visible objects: {n} (fewer than {minimum})")
+    return None
+
+
+def no_anchor_reached_two(result: MatchResult, inspection: Inspection) -> Finding | None:
+    """No candidate set held 2 pairs (eq. 8), or the distance limit rejected every one."""
+    if result.anchor is not None:
+        return None
+    if inspection.sets.candidates.sizes().any():
+        return Finding("no_anchor", "no anchor reached 2 pairs: every candidate set was emptied by consensus "
+                                    "and the one-to-one rule or rejected by the distance limit")
+    return Finding("no_anchor", "no anchor reached 2 pairs: no context vectors agreed within sigma1 and sigma2 (eq. 7-8)")
+
+
+def single_pair(result: MatchResult) -> Finding | None:
+    """The winning set held one pair: nothing to estimate a pose from."""
+    if result.anchor is not None and result.consensus_count == 1:
+        return Finding("single_pair", "the winner had a single pair: no pose estimate was made")
+    return None
+
+
+def distance_limit(result: MatchResult, trial: Trial, inspection: Inspection, near: float = 0.8) -> Finding | None:
+    """The right anchor was rejected by the distance limit, or the winner came within ``near`` of it."""
+    limit = inspection.sets.params.distance_limit
+    right = inspection.best_anchor_among(trial.gt_pairs)
+    if right is not None and right.rejected:
+        return Finding("distance_limit", f"the right anchor {right.anchor} was rejected by the distance limit: its "
+                                         f"pairs are {right.mean_distance:.1f} m apart on average (limit {limit:g} m)")
+    if result.anchor is not None:
+        winner = inspection.anchor(*result.anchor)
+        if winner.mean_distance >= near * limit:
+            return Finding("distance_limit", f"the winning anchor was nearly rejected by the distance limit: "
+                                             f"{winner.mean_distance:.1f} m of {limit:g} m")
+    return None
+
+
+def heading_fold(trial: Trial, inspection: Inspection) -> Finding | None:
+    """Co-visible objects whose local frames CBM compares turned by pi against each other: the frames
+    as compared (CAV frame times its sign) point more than 135 degrees apart. Only ``fold`` can do this."""
+    sets = inspection.sets
+    gt = np.asarray(trial.gt_pairs).reshape(-1, 2)
+    if len(gt) == 0:
+        return None
+    alignment = np.cos(sets.ego_heading[gt[:, 0]] - sets.cav_heading[gt[:, 1]]) * sets.signs[gt[:, 0], gt[:, 1]]
+    flipped = np.flatnonzero(alignment < -math.cos(math.pi / 4))
+    if len(flipped) == 0:
+        return None
+    ids = ", ".join(str(trial.ego_ids[gt[k, 0]]) for k in flipped[:5])
+    return Finding("heading_fold", f"{len(flipped)} co-visible object(s) folded differently for the two agents "
+                                   f"(heading near +-90 degrees: {ids}); their local frames are flipped — "
+                                   f"heading='align' avoids this")
+
+
+def wrong_anchor(result: MatchResult, trial: Trial, inspection: Inspection) -> Finding | None:
+    """The winning anchor is not a true pair, and the best true anchor scored less."""
+    if result.anchor is None:
+        return None
+    gt = {tuple(p) for p in np.asarray(trial.gt_pairs).reshape(-1, 2).tolist()}
+    if tuple(result.anchor) in gt:
+        return None
+    right = inspection.best_anchor_among(trial.gt_pairs)
+    if right is None:
+        return Finding("wrong_anchor", f"the winning anchor {tuple(result.anchor)} was wrong "
+                                       f"({result.consensus_count} pairs) and there is no right anchor")
+    return Finding("wrong_anchor", f"the winning anchor {tuple(result.anchor)} was wrong with {result.consensus_count} "
+                                   f"pairs; the best right anchor {right.anchor} came second with {right.size}")
+
+
+def diagnose(result: MatchResult, trial: Trial, inspection: Inspection) -> list[Finding]:
+    """Every finding that applies, most basic first; empty when nothing looks wrong."""
+    findings = [too_few_covisible(trial), no_anchor_reached_two(result, inspection), single_pair(result),
+                distance_limit(result, trial, inspection), heading_fold(trial, inspection),
+                wrong_anchor(result, trial, inspection)]
+    return [f for f in findings if f is not None]

@@ -1,0 +1,95 @@
+"""Explain CBM on one input: any anchor's context, candidate set, votes and filtered set.
+
+``Inspection`` runs steps 1-4 once (``cbm.pipeline.build_sets``) and then answers questions about
+single anchors with plain numpy, so the app can show why a pair was kept or dropped.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .params import CBMParams
+from .pipeline import Sets, build_sets, checked_inputs
+
+
+@dataclass(frozen=True)
+class AnchorDetail:
+    """One anchor pair's way through eq. 8-13."""
+
+    anchor: tuple[int, int]
+    candidates: np.ndarray
+    """(K, 2) L_ij, the anchor pair included (eq. 8); empty when fewer than 2 pairs were accepted."""
+    votes: np.ndarray
+    """(K,) votes each candidate got from the set's voters (left side of eq. 10)."""
+    kept_by_consensus: np.ndarray
+    """(K,) bool: the candidate survived the consensus rule (all True when consensus is off)."""
+    final: np.ndarray
+    """(M, 2) L^(2)_ij after the one-to-one rule (eq. 11)."""
+    mean_distance: float
+    """Mean centre distance of the final pairs after ``init`` (NaN when empty)."""
+    rejected: bool
+    """The distance limit rejects the anchor."""
+
+    @property
+    def size(self) -> int:
+        """What the anchor scores in eq. 12: card(L^(2)_ij), 0 when rejected."""
+        return 0 if self.rejected else len(self.final)
+
+
+def _occurs_once(values: np.ndarray) -> np.ndarray:
+    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
+    return counts[inverse] == 1
+
+
+def one_to_one_mask(pairs: np.ndarray) -> np.ndarray:
+    """Eq. 11: pairs whose ego object and CAV object each occur once."""
+    if len(pairs) == 0:
+        return np.zeros(0, dtype=bool)
+    return _occurs_once(pairs[:, 0]) & _occurs_once(pairs[:, 1])
+
+
+class Inspection:
+    """CBM's sets on one input, kept so that any anchor can be explained."""
+
+    def __init__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
+                 params: CBMParams | None = None) -> None:
+        ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
+        self.sets: Sets = build_sets(ego, cav, init, params)
+        self.n_cav = len(cav)
+
+    def _pairs(self, ids: np.ndarray) -> np.ndarray:
+        return np.stack([ids // self.n_cav, ids % self.n_cav], axis=1).reshape(-1, 2)
+
+    def context(self, agent: str, index: int, against: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """(neighbour indices, (n - 1, 2) context vectors) of one object in its own local frame
+        (eq. 5-6). For a CAV object compared ``against`` an ego object, the frame as CBM turns it."""
+        context = self.sets.ego_context if agent == "ego" else self.sets.cav_context
+        rows = context.anchor == index
+        vectors = context.vectors[rows]
+        if agent == "cav" and against is not None:
+            vectors = vectors * self.sets.signs[against, index]
+        return context.member[rows], vectors
+
+    def anchor(self, i: int, j: int) -> AnchorDetail:
+        """Anchor (i, j) through candidate set, consensus, one-to-one rule and distance limit."""
+        sets = self.sets
+        a = i * self.n_cav + j
+        members = sets.candidates.member[sets.candidates.start[a]:sets.candidates.start[a + 1]]
+        candidates = self._pairs(members)
+        lone = one_to_one_mask(candidates)
+        voters = members[lone] if sets.rule == "released" else members
+        vs = sets.voted_by
+        votes = np.array([np.isin(vs.member[vs.start[m]:vs.start[m + 1]], voters).sum() for m in members], dtype=int)
+        kept = {None: np.ones(len(members), dtype=bool), "paper": votes > 1, "released": lone | (votes >= 1)}[sets.rule]
+        survivors = candidates[kept]
+        final = survivors[one_to_one_mask(survivors)]
+        final = final[np.argsort(final[:, 0], kind="stable")]
+        distance = float(np.linalg.norm(sets.ego_xy[final[:, 0]] - sets.cav_xy[final[:, 1]], axis=1).mean()) if len(final) else float("nan")
+        return AnchorDetail(anchor=(i, j), candidates=candidates, votes=votes, kept_by_consensus=kept, final=final,
+                            mean_distance=distance, rejected=bool(len(final)) and distance > sets.params.distance_limit)
+
+    def best_anchor_among(self, pairs: np.ndarray) -> AnchorDetail | None:
+        """The anchor with the largest score among the given pairs (ties: the first), or None."""
+        details = [self.anchor(int(i), int(j)) for i, j in np.asarray(pairs).reshape(-1, 2)]
+        return max(details, key=lambda d: d.size, default=None)

@@ -1,0 +1,200 @@
+"""Parameter sweeps: trials over frames and a grid of parameters, every method on every trial, one
+row of metrics per (frame, grid point, method).
+
+    from cbm.sweep import FrameInputs, Sweep, run
+    sweep = Sweep(methods=("cbm", "icp"), grid={"eta": [0.2, 0.6], "sigma2": [2.0, 3.0]}, seed=0)
+    rows = run(sweep, [FrameInputs(0, {"boxes": boxes, "ids": ids})], workers=2)
+
+A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or of the
+parameters of one or more methods (``cbm.baselines.PARAMS``; it changes only those methods' runs).
+Every trial of frame ``k`` draws from ``trial_rng(seed, k)``, as the app does, so any row can be
+reproduced there from its frame, parameters and seed. Rows come in task order -- frame, scenario
+grid point, method, method grid point, each in the order given -- whatever the number of workers.
+"""
+from __future__ import annotations
+
+import dataclasses
+import inspect
+import itertools
+import multiprocessing
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass, field
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+import numpy as np
+
+from .baselines import METHODS, PARAMS
+from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
+from .scenario import ScenarioParams, Trial, make_trial, trial_rng
+
+SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
+"""Scenario parameter columns, ``seed`` included (it is the sweep's seed)."""
+TRIAL_COLUMNS = ("ego_id", "cav_id")
+METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad",
+                  "rre", "rte", "margin", "estimated", "success", "init_rre", "init_rte")
+"""Per-trial metrics (``cbm.metrics.TrialMetrics`` without the runtime, ``is_success``, and the
+RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
+TIMING_COLUMNS = ("runtime_s",)
+"""Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
+FORCED = {"cbm-no-consensus": {"consensus": False}}
+"""Parameters a method always runs with, whatever the grid (recorded as run)."""
+
+
+@dataclass(frozen=True)
+class FrameInputs:
+    """One frame's world-frame objects, as ``make_trial`` takes them."""
+
+    index: int
+    """Frame index: the trials of this frame draw from ``trial_rng(seed, index)``."""
+    trial: Mapping[str, Any]
+    """``make_trial`` keyword arguments: ``boxes``, ``ids`` and, as the protocol needs them,
+    ``ego_pose``, ``cav_pose``, ``ego_id``, ``cav_id``, ``visibility``."""
+    labels: np.ndarray | None = None
+    """Class label of each object (same order as ``ids``), for the methods that take labels (VIPS)."""
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """What to run: methods, a grid (name -> values), a seed and the fixed scenario settings."""
+
+    methods: tuple[str, ...]
+    grid: Mapping[str, Sequence[Any]] = field(default_factory=dict)
+    seed: int = 0
+    scenario: ScenarioParams = ScenarioParams()
+    """Scenario settings the grid does not vary (its ``seed`` is replaced by the sweep's)."""
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "methods", tuple(self.methods))
+        object.__setattr__(self, "grid", {name: tuple(values) for name, values in self.grid.items()})
+        unknown = [m for m in self.methods if m not in METHODS]
+        if not self.methods or unknown:
+            raise ValueError(f"methods must be a non-empty selection of {sorted(METHODS)}, got {list(self.methods)}")
+        if len(set(self.methods)) != len(self.methods):
+            raise ValueError(f"methods must not repeat, got {list(self.methods)}")
+        for name, values in self.grid.items():
+            self._check_grid_name(name)
+            if not values:
+                raise ValueError(f"grid parameter {name!r} has no values")
+        self.scenario_points()
+        for method in self.methods:
+            self.method_points(method)
+
+    def _check_grid_name(self, name: str) -> None:
+        if name == "seed":
+            raise ValueError("seed is the sweep's own argument, not a grid parameter")
+        if name in SCENARIO_FIELDS:
+            return
+        if not any(name in method_fields(m) for m in self.methods):
+            owners = [m for m in METHODS if name in method_fields(m)]
+            where = f"a parameter of {', '.join(owners)}, none of which is selected" if owners else "not a parameter"
+            raise ValueError(f"grid parameter {name!r} is {where}; scenario parameters: "
+                             f"{', '.join(f for f in SCENARIO_FIELDS if f != 'seed')}; method parameters: "
+                             f"{', '.join(sorted({f for m in self.methods for f in method_fields(m)}))}")
+
+    def scenario_points(self) -> list[ScenarioParams]:
+        """The scenario of every point of the scenario part of the grid, in grid order."""
+        names = [n for n in self.grid if n in SCENARIO_FIELDS]
+        base = dataclasses.replace(self.scenario, seed=self.seed)
+        return [dataclasses.replace(base, **dict(zip(names, values)))
+                for values in itertools.product(*(self.grid[n] for n in names))]
+
+    def method_points(self, method: str) -> list[Any]:
+        """``method``'s parameters at every point of its part of the grid, in grid order."""
+        names = [n for n in self.grid if n in method_fields(method)]
+        return [PARAMS[method](**dict(zip(names, values)), **FORCED.get(method, {}))
+                for values in itertools.product(*(self.grid[n] for n in names))]
+
+    def trial_count(self, n_frames: int) -> int:
+        """Rows a run over ``n_frames`` frames gives."""
+        return n_frames * len(self.scenario_points()) * sum(len(self.method_points(m)) for m in self.methods)
+
+    def parameter_columns(self) -> list[str]:
+        """Scenario fields, then every field of the selected methods' parameters (first use first)."""
+        method_columns = dict.fromkeys(f.name for m in self.methods for f in dataclasses.fields(PARAMS[m]))
+        return [*SCENARIO_FIELDS, *method_columns]
+
+    def columns(self) -> list[str]:
+        """Every column of a row, in order: frame, method, parameters, agents, metrics, timing."""
+        return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *METRIC_COLUMNS, *TIMING_COLUMNS]
+
+
+def method_fields(method: str) -> tuple[str, ...]:
+    """The parameters of ``method`` a grid may vary (those it does not force)."""
+    return tuple(f.name for f in dataclasses.fields(PARAMS[method]) if f.name not in FORCED.get(method, {}))
+
+
+def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
+    """Every parameter a grid over ``methods`` may name, with its default (its type parses values)."""
+    defaults = {f.name: f.default for f in dataclasses.fields(ScenarioParams) if f.name != "seed"}
+    for method in methods:
+        defaults.update({f.name: f.default for f in dataclasses.fields(PARAMS[method]) if f.name in method_fields(method)})
+    return defaults
+
+
+def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
+        progress: Callable[[int], None] | None = None) -> list[dict[str, Any]]:
+    """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
+    (frame, scenario point) tasks in a process pool; ``progress(n)`` is called as ``n`` rows finish."""
+    tasks = [(frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
+    done = progress or (lambda n: None)
+    if workers <= 1:
+        rows = []
+        for task in tasks:
+            task_rows = run_task(sweep, *task)
+            done(len(task_rows))
+            rows.extend(task_rows)
+        return rows
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        futures = [pool.submit(run_task, sweep, *task) for task in tasks]
+        for future in as_completed(futures):
+            done(len(future.result()))
+        return [row for future in futures for row in future.result()]
+
+
+def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list[dict[str, Any]]:
+    """The rows of one frame at one scenario point: one trial, every method at each of its grid points."""
+    trial = make_trial(**frame.trial, params=scenario, rng=trial_rng(sweep.seed, frame.index))
+    base = {"frame": frame.index, **dataclasses.asdict(scenario),
+            "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
+    init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
+    rows = []
+    for method in sweep.methods:
+        for params in sweep.method_points(method):
+            metrics = evaluate(run_method(method, trial, params, frame), trial)
+            rows.append(_row(sweep, base, method, params, metrics, init_error))
+    return rows
+
+
+def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs) -> Any:
+    """``method`` on ``trial``; methods that take labels get the objects' labels when the frame has them."""
+    kwargs = {}
+    if frame.labels is not None and "ego_labels" in inspect.signature(METHODS[method]).parameters:
+        label_of = dict(zip(np.asarray(frame.trial["ids"]).tolist(), np.asarray(frame.labels).tolist()))
+        kwargs = {"ego_labels": np.array([label_of[i] for i in trial.ego_ids.tolist()]),
+                  "cav_labels": np.array([label_of[i] for i in trial.cav_ids.tolist()])}
+    return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, **kwargs)
+
+
+def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, metrics: TrialMetrics,
+         init_error: dict[str, float]) -> dict[str, Any]:
+    """One table row: every column of ``sweep.columns()``, None for other methods' parameters."""
+    measured = dataclasses.asdict(metrics)
+    row = dict.fromkeys(sweep.columns())
+    row.update(base)
+    row.update(method=method, **dataclasses.asdict(params), success=is_success(metrics), **init_error)
+    row.update({name: measured[name] for name in (*METRIC_COLUMNS, *TIMING_COLUMNS) if name in measured})
+    return row
+
+
+def _text(value: Any) -> str | None:
+    return None if value is None else str(value)
+
+
+def summarise(rows: Sequence[Mapping[str, Any]], by: Sequence[str]) -> list[tuple[tuple, dict[str, float]]]:
+    """Micro-averaged aggregates (``cbm.metrics.aggregate``) of the rows grouped by the columns
+    ``by``: ``(key, aggregate)`` per group, groups in order of first appearance."""
+    groups: dict[tuple, list[TrialMetrics]] = {}
+    names = [f.name for f in dataclasses.fields(TrialMetrics)]
+    for row in rows:
+        groups.setdefault(tuple(row[c] for c in by), []).append(TrialMetrics(**{n: row[n] for n in names}))
+    return [(key, aggregate(metrics)) for key, metrics in groups.items()]

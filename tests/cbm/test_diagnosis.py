@@ -1,0 +1,111 @@
+"""The why-it-failed rules on constructed cases, and the inspector against the fast path."""
+import numpy as np
+import pytest
+
+from cbm import CBMParams, match, se2
+from cbm.diagnosis import diagnose
+from cbm.inspect import Inspection
+from cbm.scenario import ScenarioParams, make_trial
+from support.scenes import street_scene
+
+
+def codes(trial, params=None):
+    params = params or CBMParams()
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    return {f.code for f in diagnose(result, trial, Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params))}
+
+
+def trial_of(world, **scenario):
+    return make_trial(world, np.arange(len(world)), ScenarioParams(**scenario))
+
+
+def test_a_clean_frame_has_no_findings():
+    world = street_scene(40, np.random.default_rng(0))
+    assert codes(trial_of(world, eta=0.6, sigma_p=0.1, seed=1)) == set()
+
+
+def test_too_few_covisible_objects():
+    world = street_scene(30, np.random.default_rng(1))
+    assert "few_covisible" in codes(trial_of(world, eta=0.05, seed=2))
+
+
+def test_no_anchor_reached_two_pairs():
+    world = street_scene(12, np.random.default_rng(2))
+    trial = trial_of(world, eta=1.0, sigma_p=2.0, seed=3)
+    assert "no_anchor" in codes(trial, CBMParams(sigma2=0.05, sigma1=1.0))
+
+
+def boxes(rows):
+    out = np.zeros((len(rows), 7))
+    out[:, [0, 1, 6]] = rows
+    out[:, 3:6] = (4.5, 1.9, 1.6)
+    return out
+
+
+def test_single_pair_winner():
+    """Anchor (0, 0) accepts CAV objects 1 and 2 for ego object 1: the one-to-one rule drops both.
+    CAV objects 1 and 2 face 30 degrees off, so no other anchor accepts anything."""
+    ego = boxes([(0, 0, 0), (10, 0, 0)])
+    cav = boxes([(0, 0, 0), (10, 0.5, np.radians(30)), (10, -0.5, np.radians(30))])
+    params = CBMParams(consensus=False)
+    result = match(ego, cav, np.eye(3), params)
+    assert result.anchor == (0, 0) and result.consensus_count == 1 and not result.estimated
+    findings = diagnose(result, make_trial(np.zeros((0, 7)), np.zeros(0), ScenarioParams()),
+                        Inspection(ego, cav, np.eye(3), params))
+    assert "single_pair" in {f.code for f in findings}
+
+
+def test_right_anchor_rejected_by_the_distance_limit():
+    world = street_scene(30, np.random.default_rng(4))
+    trial = trial_of(world, eta=0.7, seed=5, loc_x=12.0, loc_y=12.0)
+    assert "distance_limit" in codes(trial, CBMParams(distance_limit=10.0))
+
+
+def test_heading_fold_is_reported_in_fold_mode_only():
+    rng = np.random.default_rng(5)
+    world = street_scene(24, rng)
+    world[:, 6] = np.pi / 2 - 0.02
+    trial = trial_of(world, eta=1.0, flip_prob=0.0, loc_x=0.0, loc_y=0.0, loc_yaw=3.0)
+    assert "heading_fold" in codes(trial, CBMParams(heading="fold"))
+    assert "heading_fold" not in codes(trial, CBMParams(heading="align"))
+
+
+def test_wrong_anchor_reports_both_counts():
+    world = street_scene(40, np.random.default_rng(0))
+    trial = trial_of(world, eta=0.15, sigma_p=0.8, sigma_theta=10.0, seed=0)
+    params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    findings = {f.code: f.message for f in diagnose(result, trial, inspection)}
+    assert tuple(result.anchor) not in {tuple(p) for p in trial.gt_pairs.tolist()}
+    right = inspection.best_anchor_among(trial.gt_pairs)
+    assert right.size <= result.consensus_count
+    assert findings["wrong_anchor"].endswith(f"with {result.consensus_count} pairs; the best right anchor "
+                                             f"{right.anchor} came second with {right.size}")
+
+
+@pytest.mark.parametrize("setting", [dict(), dict(consensus_rule="released", sigma3=1.0), dict(consensus=False),
+                                     dict(heading="fold")])
+def test_inspector_agrees_with_the_fast_path(setting):
+    world = street_scene(30, np.random.default_rng(8))
+    trial = trial_of(world, eta=0.6, sigma_p=0.3, sigma_theta=3.0, seed=9)
+    params = CBMParams(**setting)
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    winner = inspection.anchor(*result.anchor)
+    np.testing.assert_array_equal(winner.final, result.pairs)
+    assert len(winner.candidates) == result.candidate_count
+    sizes = [inspection.anchor(i, j).size for i in range(len(trial.ego_boxes)) for j in range(len(trial.cav_boxes))]
+    assert max(sizes) == result.consensus_count
+
+
+def test_context_of_a_cav_object_turns_with_its_sign():
+    world = street_scene(10, np.random.default_rng(9))
+    ego = world.copy()
+    cav = world.copy()
+    cav[:, 6] += np.pi
+    inspection = Inspection(ego, cav, np.eye(3), CBMParams(heading="align"))
+    members, ego_vectors = inspection.context("ego", 0)
+    _, cav_vectors = inspection.context("cav", 0, against=0)
+    np.testing.assert_allclose(cav_vectors, ego_vectors, atol=1e-9)
+    assert list(members) == list(range(1, 10))
