@@ -86,10 +86,9 @@ class Sweep:
             return
         if not any(name in method_fields(m) for m in self.methods):
             owners = [m for m in METHODS if name in method_fields(m)]
-            where = f"a parameter of {', '.join(owners)}, none of which is selected" if owners else "not a parameter"
-            raise ValueError(f"grid parameter {name!r} is {where}; scenario parameters: "
-                             f"{', '.join(f for f in SCENARIO_FIELDS if f != 'seed')}; method parameters: "
-                             f"{', '.join(sorted({f for m in self.methods for f in method_fields(m)}))}")
+            where = (f"a parameter of {', '.join(owners)}, none of which is selected" if owners
+                     else "not a parameter of the scenario or of any method")
+            raise ValueError(f"grid parameter {name!r} is {where}")
 
     def scenario_points(self) -> list[ScenarioParams]:
         """The scenario of every point of the scenario part of the grid, in grid order."""

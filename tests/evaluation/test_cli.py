@@ -1,0 +1,112 @@
+"""evaluate.py end to end: the files it writes, byte-identical tables, one-line errors with exit status 2."""
+import importlib.util
+import subprocess
+import sys
+from pathlib import Path
+
+import polars as pl
+import pytest
+
+REPO = Path(__file__).resolve().parents[2]
+TINY = ["--dataset", "synthetic:40", "--frames", "0:20:10", "--methods", "cbm,icp,vips",
+        "--grid", "eta=0.4,0.8", "sigma_p=0,0.3", "sigma2=2,3", "--seed", "3"]
+
+
+def load_evaluate():
+    spec = importlib.util.spec_from_file_location("evaluate_cli", REPO / "evaluate.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+evaluate_cli = load_evaluate()
+
+
+@pytest.fixture(scope="module")
+def two_runs(tmp_path_factory):
+    """The tiny run twice without timing: as a command with two workers, and in-process with one."""
+    first, second = tmp_path_factory.mktemp("first"), tmp_path_factory.mktemp("second")
+    command = [sys.executable, "evaluate.py", *TINY, "--no-timing", "--workers", "2", "--out", str(first)]
+    done = subprocess.run(command, cwd=REPO, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, done.stderr
+    assert evaluate_cli.main([*TINY, "--no-timing", "--workers", "1", "--out", str(second)]) == 0
+    return first, second, done.stdout
+
+
+def test_a_run_writes_the_table_the_summary_and_the_plots(two_runs):
+    first, _, stdout = two_runs
+    names = {"trials.parquet", "trials.csv", "summary.md", "precision_vs_eta.png", "rre_rte.png"}
+    assert {p.name for p in first.iterdir()} == names
+    assert stdout.startswith((first / "summary.md").read_text())
+    assert "| Pre. (%) |" in stdout and "| cbm sigma2=2 | cbm sigma2=3 | icp | vips |" in stdout
+
+
+def test_the_table_has_one_row_per_trial_with_every_parameter_and_metric(two_runs):
+    table = pl.read_parquet(two_runs[0] / "trials.parquet")
+    assert table.columns[:3] == ["dataset", "frame", "method"]
+    for column in ("eta", "sigma_p", "sigma_theta", "loc_x", "loc_yaw", "seed", "sigma1", "sigma2", "top_k",
+                   "precision", "recall", "ad", "rre", "rte", "success", "init_rte"):
+        assert column in table.columns
+    assert "runtime_s" not in table.columns
+    assert table.height == 2 * 4 * (2 + 1 + 1)
+    assert table["dataset"].unique().to_list() == ["synthetic:40"]
+    assert table.equals(pl.read_csv(two_runs[0] / "trials.csv", schema=table.schema))
+
+
+def test_the_same_seed_gives_byte_identical_tables_and_summary(two_runs):
+    first, second, _ = two_runs
+    for name in ("trials.csv", "trials.parquet", "summary.md"):
+        assert (first / name).read_bytes() == (second / name).read_bytes(), name
+
+
+def test_with_timing_the_runtime_is_the_last_column(tmp_path):
+    args = ["--dataset", "synthetic:30", "--frames", "0", "--methods", "icp", "--workers", "1", "--out", str(tmp_path)]
+    assert evaluate_cli.main(args) == 0
+    table = pl.read_csv(tmp_path / "trials.csv")
+    assert table.columns[-1] == "runtime_s" and (table["runtime_s"] > 0).all()
+    assert "median runtime (ms)" in (tmp_path / "summary.md").read_text()
+
+
+def test_the_range_protocol_on_the_shipped_scene_names_its_agents(tmp_path):
+    args = ["--frames", "0,100", "--protocol", "range", "--methods", "icp", "--grid", "localization=gaussian",
+            "--workers", "1", "--out", str(tmp_path)]
+    assert evaluate_cli.main(args) == 0
+    table = pl.read_parquet(tmp_path / "trials.parquet")
+    assert table["ego_id"].to_list() == ["ego", "ego"] and table["cav_id"].null_count() == 0
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--grid", "eta=2"], "ScenarioParams.eta must be a number in [0, 1]"),
+    (["--grid", "eta"], "'eta' is not NAME=V1,V2"),
+    (["--grid", "wobble=1"], "unknown parameter 'wobble'"),
+    (["--grid", "sigma2=2", "--methods", "icp"], "none of which is selected"),
+    (["--grid", "consensus=maybe"], "consensus takes true or false"),
+    (["--grid", "eta=0.2,0.2"], "eta repeats a value"),
+    (["--frames", "0:999"], "out of range"),
+    (["--frames", "a:b"], "--frames"),
+    (["--methods", "cbm,sift"], "unknown 'sift'"),
+    (["--protocol", "opv2v"], "use --protocol range"),
+    (["--protocol", "teleport"], "invalid choice"),
+    (["--dataset", "no/such/place"], "does not exist"),
+    (["--workers", "0"], "--workers must be at least 1"),
+])
+def test_bad_input_is_one_line_on_stderr_and_exit_status_2(args, message, capsys, tmp_path):
+    with pytest.raises(SystemExit) as stop:
+        evaluate_cli.main([*args, "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and err.startswith("evaluate.py: error:") and message in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
+    target = tmp_path / "trials.csv"
+    target.write_text("old")
+
+    def crash(path):
+        path.write_text("half")
+        raise OSError("disk full")
+
+    with pytest.raises(OSError):
+        evaluate_cli.write_atomic(target, crash)
+    assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["trials.csv"]
