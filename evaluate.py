@@ -1,10 +1,11 @@
-"""Evaluate CBM and the baselines on a dataset: a tidy per-trial table, a Table-I-shaped summary and plots.
+"""Evaluate CBM and the baselines on datasets: a tidy per-trial table, a Table-I-shaped summary and plots.
 
     python evaluate.py --dataset argoverse2 --frames 0:156:4 --protocol sind \\
         --grid eta=0.2,0.4,0.6,0.8 sigma_p=0,0.3 sigma_theta=0,3 --seed 0 --out results/sind
 
 Writes into ``--out``: ``trials.parquet`` and ``trials.csv`` (one row per frame, grid point and
-method: dataset, frame, method, every parameter, every metric, then ``runtime_s`` last),
+method: dataset, frame, method, every parameter, every metric, then ``runtime_s`` last; several
+``--dataset`` names are run one after the other with the same frames and grid),
 ``summary.md`` (also printed), ``precision_vs_eta.png`` (when the grid varies ``eta``) and
 ``rre_rte.png``. Each file is written to a temporary file first and moved into place.
 
@@ -23,6 +24,7 @@ import argparse
 import math
 import os
 import sys
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Callable, NoReturn, Sequence
 
@@ -69,8 +71,8 @@ class Parser(argparse.ArgumentParser):
 def build_parser() -> Parser:
     """The command line of ``evaluate.py``."""
     parser = Parser(prog="evaluate.py", description=__doc__.splitlines()[0])
-    parser.add_argument("--dataset", default="argoverse2",
-                        help="argoverse2, synthetic[:count[:seed=S]] or a dataset path (default: argoverse2)")
+    parser.add_argument("--dataset", nargs="+", default=["argoverse2"],
+                        help="one or more of argoverse2, synthetic[:count[:seed=S]] or a dataset path (default: argoverse2)")
     parser.add_argument("--frames", default="all",
                         help="frame indices: all, or a comma list of N and A:B[:STEP] ranges (end excluded)")
     parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default="sind")
@@ -156,6 +158,15 @@ def parse_value(name: str, text: str, default: Any) -> Any:
         raise CliError(f"--grid: {name} takes {type(default).__name__} values, got {text!r}") from None
 
 
+@dataclass(frozen=True)
+class Source:
+    """One dataset's part of a run: what the sweep needs of each frame, and the frames skipped."""
+
+    name: str
+    inputs: list[FrameInputs]
+    skipped: list[int]
+
+
 def frame_inputs(seq: loaders.Sequence, frames: Sequence[int], protocol: str,
                  cav_distance: float) -> tuple[list[FrameInputs], list[int]]:
     """What the sweep needs of each frame, and the frames skipped for want of an ego or a CAV."""
@@ -233,18 +244,19 @@ def _median(values: list[float]) -> float:
     return finite[mid] if len(finite) % 2 else 0.5 * (finite[mid - 1] + finite[mid])
 
 
-def summary_markdown(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str, Any]], frames: list[int],
-                     skipped: list[int]) -> str:
+def summary_markdown(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str, Any]],
+                     sources: list[Source]) -> str:
     """The whole summary page: what was run, the Table-I-shaped table and, when eta varies, precision by eta."""
     variants = variant_names(rows, sweep)
     grid = " ".join(f"{n}={','.join(_fmt(v) for v in values)}" for n, values in sweep.grid.items()) or "(none)"
     parts = [
         "# Evaluation summary", "",
-        f"dataset `{args.dataset}`, protocol `{args.protocol}`, seed {args.seed}, {len(frames)} frames "
-        f"({_ranges(frames)}), grid: `{grid}`, {len(rows)} trials.",
+        f"protocol `{args.protocol}`, seed {args.seed}, grid: `{grid}`, {len(rows) // len(set(variants))} trials x {len(set(variants))} methods.", "",
     ]
-    if skipped:
-        parts.append(f"Skipped {len(skipped)} frames without an ego or a CAV: {_ranges(skipped)}.")
+    for source in sources:
+        frames = [f.index for f in source.inputs]
+        skipped = f"; skipped {len(source.skipped)} without an ego or a CAV: {_ranges(source.skipped)}" if source.skipped else ""
+        parts.append(f"- `{source.name}`: {len(frames)} frames ({_ranges(frames)}){skipped}")
     parts += ["", "## Association and pose (micro-averaged over all trials)", "",
               table_one(rows, variants, timing=not args.no_timing), "",
               "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
@@ -267,12 +279,14 @@ def _ranges(frames: list[int]) -> str:
 
 
 def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep: Sweep) -> plt.Figure:
-    """The paper's SIND figure: precision against eta, one panel per noise level, one line per method."""
+    """The paper's SIND figure: precision against eta, one panel per noise level, one line per method
+    (one column per value of the last noise parameter of the grid when it has at most 5)."""
     by = levels(sweep)
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
     stats = summarise(keyed, [*by, "variant", "eta"])
     panels = list(dict.fromkeys(key[:-2] for key, _ in stats))
-    columns = min(len(panels), 4)
+    last = len(sweep.grid[by[-1]]) if by else 1
+    columns = last if last <= 5 else min(len(panels), 4)
     n_rows = math.ceil(len(panels) / columns)
     fig, axes = plt.subplots(n_rows, columns, figsize=(3.6 * columns, 3.2 * n_rows), sharey=True, squeeze=False)
     for ax, panel in zip(axes.flat, panels):
@@ -320,21 +334,20 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
         raise
 
 
-def trial_table(dataset: str, rows: list[dict[str, Any]], sweep: Sweep, timing: bool) -> pl.DataFrame:
+def trial_table(rows: list[dict[str, Any]], sweep: Sweep, timing: bool) -> pl.DataFrame:
     """The tidy per-trial table: dataset, then the sweep's columns, the runtime last or left out."""
-    columns = [c for c in sweep.columns() if timing or c not in TIMING_COLUMNS]
-    data = {"dataset": [dataset] * len(rows), **{c: [row[c] for row in rows] for c in columns}}
+    columns = ["dataset", *(c for c in sweep.columns() if timing or c not in TIMING_COLUMNS)]
+    data = {c: [row[c] for row in rows] for c in columns}
     return pl.DataFrame(data, strict=False).with_columns(pl.col(*TRIAL_COLUMNS).cast(pl.Utf8))
 
 
-def write_outputs(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str, Any]], frames: list[int],
-                  skipped: list[int]) -> str:
+def write_outputs(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str, Any]], sources: list[Source]) -> str:
     """Write the table, the summary and the plots into ``args.out``; return the summary."""
     args.out.mkdir(parents=True, exist_ok=True)
-    table = trial_table(args.dataset, rows, sweep, timing=not args.no_timing)
+    table = trial_table(rows, sweep, timing=not args.no_timing)
     write_atomic(args.out / "trials.parquet", lambda p: table.write_parquet(p))
     write_atomic(args.out / "trials.csv", lambda p: table.write_csv(p))
-    summary = summary_markdown(args, sweep, rows, frames, skipped)
+    summary = summary_markdown(args, sweep, rows, sources)
     write_atomic(args.out / "summary.md", lambda p: p.write_text(summary))
     variants = variant_names(rows, sweep)
     figures = {"rre_rte.png": plot_rre_rte(rows, variants)}
@@ -346,8 +359,8 @@ def write_outputs(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str, A
     return summary
 
 
-def prepare(args: argparse.Namespace) -> tuple[Sweep, list[FrameInputs], list[int], list[int]]:
-    """Check the arguments and load the frames: the sweep, its frame inputs, the frames and the skipped ones."""
+def prepare(args: argparse.Namespace) -> tuple[Sweep, list[Source]]:
+    """Check the arguments and load the frames of every dataset."""
     if args.workers < 1:
         raise CliError(f"--workers must be at least 1, got {args.workers}")
     if args.seed < 0:
@@ -356,18 +369,27 @@ def prepare(args: argparse.Namespace) -> tuple[Sweep, list[FrameInputs], list[in
         raise CliError(f"--cav-distance must be a finite number >= 0, got {args.cav_distance}")
     if args.out.exists() and not args.out.is_dir():
         raise CliError(f"--out: {args.out} exists and is not a folder")
+    if len(set(args.dataset)) != len(args.dataset):
+        raise CliError("--dataset: a dataset is named twice")
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
     try:
         sweep = Sweep(methods=methods, grid=grid, seed=args.seed, scenario=ScenarioParams(protocol=args.protocol))
-        seq = loaders.open(args.dataset)
+    except ValueError as error:
+        raise CliError(str(error)) from None
+    return sweep, [load_source(name, args) for name in args.dataset]
+
+
+def load_source(name: str, args: argparse.Namespace) -> Source:
+    """Open dataset ``name`` and make its frame inputs for the protocol."""
+    try:
+        seq = loaders.open(name)
     except ValueError as error:
         raise CliError(str(error).splitlines()[0]) from None
-    frames = parse_frames(args.frames, len(seq))
-    inputs, skipped = frame_inputs(seq, frames, args.protocol, args.cav_distance)
+    inputs, skipped = frame_inputs(seq, parse_frames(args.frames, len(seq)), args.protocol, args.cav_distance)
     if not inputs:
-        raise CliError(f"no frame of {args.dataset} has an ego and a CAV for the {args.protocol} protocol")
-    return sweep, inputs, frames, skipped
+        raise CliError(f"no frame of {name} has an ego and a CAV for the {args.protocol} protocol")
+    return Source(name, inputs, skipped)
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -375,15 +397,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
     try:
-        sweep, inputs, frames, skipped = prepare(args)
+        sweep, sources = prepare(args)
     except CliError as error:
         parser.error(str(error))
-    with tqdm(total=sweep.trial_count(len(inputs)), unit="trial", disable=None) as bar:
-        rows = run(sweep, inputs, workers=args.workers, progress=bar.update)
-    print(write_outputs(args, sweep, rows, frames, skipped))
+    rows = []
+    with tqdm(total=sum(sweep.trial_count(len(s.inputs)) for s in sources), unit="trial", disable=None) as bar:
+        for source in sources:
+            found = run(sweep, source.inputs, workers=args.workers, progress=bar.update)
+            rows.extend({"dataset": source.name, **row} for row in found)
+    print(write_outputs(args, sweep, rows, sources))
     print(f"wrote trials.parquet, trials.csv, summary.md and plots to {args.out}", file=sys.stderr)
     return 0
-
 
 if __name__ == "__main__":
     sys.exit(main())

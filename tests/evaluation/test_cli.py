@@ -8,13 +8,14 @@ import polars as pl
 import pytest
 
 REPO = Path(__file__).resolve().parents[2]
-TINY = ["--dataset", "synthetic:40", "--frames", "0:20:10", "--methods", "cbm,icp,vips",
+TINY = ["--dataset", "synthetic:40", "synthetic:40:seed=1", "--frames", "0:20:10", "--methods", "cbm,icp,vips",
         "--grid", "eta=0.4,0.8", "sigma_p=0,0.3", "sigma2=2,3", "--seed", "3"]
 
 
 def load_evaluate():
     spec = importlib.util.spec_from_file_location("evaluate_cli", REPO / "evaluate.py")
     module = importlib.util.module_from_spec(spec)
+    sys.modules[spec.name] = module
     spec.loader.exec_module(module)
     return module
 
@@ -41,15 +42,15 @@ def test_a_run_writes_the_table_the_summary_and_the_plots(two_runs):
     assert "| Pre. (%) |" in stdout and "| cbm sigma2=2 | cbm sigma2=3 | icp | vips |" in stdout
 
 
-def test_the_table_has_one_row_per_trial_with_every_parameter_and_metric(two_runs):
+def test_the_table_has_one_row_per_dataset_and_trial_with_every_parameter_and_metric(two_runs):
     table = pl.read_parquet(two_runs[0] / "trials.parquet")
     assert table.columns[:3] == ["dataset", "frame", "method"]
     for column in ("eta", "sigma_p", "sigma_theta", "loc_x", "loc_yaw", "seed", "sigma1", "sigma2", "top_k",
                    "precision", "recall", "ad", "rre", "rte", "success", "init_rte"):
         assert column in table.columns
     assert "runtime_s" not in table.columns
-    assert table.height == 2 * 4 * (2 + 1 + 1)
-    assert table["dataset"].unique().to_list() == ["synthetic:40"]
+    assert table.height == 2 * 2 * 4 * (2 + 1 + 1)
+    assert table["dataset"].unique(maintain_order=True).to_list() == ["synthetic:40", "synthetic:40:seed=1"]
     assert table.equals(pl.read_csv(two_runs[0] / "trials.csv", schema=table.schema))
 
 
