@@ -5,10 +5,12 @@ single anchors with plain numpy, so the app can show why a pair was kept or drop
 """
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
 
+from .consensus import PairSets
 from .params import CBMParams
 from .pipeline import Sets, build_sets, checked_inputs
 
@@ -42,6 +44,17 @@ def _occurs_once(values: np.ndarray) -> np.ndarray:
     return counts[inverse] == 1
 
 
+def _votes_from(voted_by: PairSets, members: np.ndarray, voters: np.ndarray, n_pairs: int) -> np.ndarray:
+    """For each member: how many ``voters`` hold it in their voting set."""
+    is_voter = np.zeros(n_pairs, dtype=bool)
+    is_voter[voters] = True
+    starts = voted_by.start[members]
+    lengths = voted_by.start[members + 1] - starts
+    owner = np.repeat(np.arange(len(members)), lengths)
+    rows = starts[owner] + np.arange(lengths.sum()) - np.repeat(np.cumsum(lengths) - lengths, lengths)
+    return np.bincount(owner, weights=is_voter[voted_by.member[rows]], minlength=len(members)).astype(int)
+
+
 def one_to_one_mask(pairs: np.ndarray) -> np.ndarray:
     """Eq. 11: pairs whose ego object and CAV object each occur once."""
     if len(pairs) == 0:
@@ -71,6 +84,7 @@ class Inspection:
             vectors = vectors * self.sets.signs[against, index]
         return context.member[rows], vectors
 
+    @functools.lru_cache(maxsize=4096)
     def anchor(self, i: int, j: int) -> AnchorDetail:
         """Anchor (i, j) through candidate set, consensus, one-to-one rule and distance limit."""
         sets = self.sets
@@ -79,8 +93,7 @@ class Inspection:
         candidates = self._pairs(members)
         lone = one_to_one_mask(candidates)
         voters = members[lone] if sets.rule == "released" else members
-        vs = sets.voted_by
-        votes = np.array([np.isin(vs.member[vs.start[m]:vs.start[m + 1]], voters).sum() for m in members], dtype=int)
+        votes = _votes_from(sets.voted_by, members, voters, len(sets.signs.ravel()))
         kept = {None: np.ones(len(members), dtype=bool), "paper": votes > 1, "released": lone | (votes >= 1)}[sets.rule]
         survivors = candidates[kept]
         final = survivors[one_to_one_mask(survivors)]
