@@ -1,0 +1,83 @@
+"""One tab's 3D scene: a fixed set of nodes (one per group of boxes or lines) whose arrays are
+replaced on each redraw, all in one atomic message batch."""
+from __future__ import annotations
+
+import numpy as np
+import viser
+
+from .drawing import Drawing, Lines, Mesh
+
+_DUMMY_VERTICES = np.zeros((3, 3), np.float32)
+_DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
+_DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
+TOP_DOWN = {"position": (-12.0, 0.0, 80.0), "look_at": (8.0, 0.0, 0.0)}
+"""Default camera: high above the ego, looking down and a little forward (x points up the screen)."""
+
+
+class SceneView:
+    """The nodes of one client's scene, created once and updated in place."""
+
+    def __init__(self, client: viser.ClientHandle) -> None:
+        self.client = client
+        self.meshes: dict[str, viser.MeshHandle] = {}
+        self.lines: dict[str, viser.LineSegmentsHandle] = {}
+        self.labels: dict[str, viser.LabelHandle] = {}
+
+    @property
+    def node_names(self) -> set[str]:
+        """Names of the nodes drawn so far (visible or not)."""
+        return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values())}
+
+    def reset_camera(self, centre_y: float = 0.0) -> None:
+        """Look down on the ego from behind, centred sideways on ``centre_y`` (higher when the
+        layout shows two panels side by side)."""
+        x, _, z = TOP_DOWN["position"]
+        self.client.camera.position = (x, centre_y, z + 1.6 * abs(centre_y))
+        self.client.camera.look_at = (TOP_DOWN["look_at"][0], centre_y, 0.0)
+
+    def show(self, drawing: Drawing) -> None:
+        """Replace the scene's arrays with ``drawing``'s."""
+        with self.client.atomic():
+            for name, mesh in drawing.meshes.items():
+                self._mesh(name, mesh)
+            for name, lines in drawing.lines.items():
+                self._lines(name, lines)
+            for name in set(self.labels) - set(drawing.labels):
+                self.labels[name].visible = False
+            for name, (text, position) in drawing.labels.items():
+                self.label(name, text, position)
+
+    def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
+        """Show (or move) the label ``name``."""
+        handle = self.labels.get(name)
+        if handle is None:
+            self.labels[name] = self.client.scene.add_label(f"/labels/{name}", text, position=position)
+        else:
+            handle.text, handle.position, handle.visible = text, position, True
+
+    def hide_label(self, name: str) -> None:
+        if name in self.labels:
+            self.labels[name].visible = False
+
+    def _mesh(self, name: str, mesh: Mesh) -> None:
+        empty = len(mesh.faces) == 0
+        vertices, faces = (_DUMMY_VERTICES, _DUMMY_FACES) if empty else (mesh.vertices, mesh.faces)
+        handle = self.meshes.get(name)
+        if handle is None:
+            self.meshes[name] = self.client.scene.add_mesh_simple(
+                f"/scene/{name}", vertices, faces, color=mesh.color, opacity=mesh.opacity, flat_shading=True,
+                side="double", cast_shadow=False, receive_shadow=False, visible=not empty)
+            return
+        handle.vertices, handle.faces = vertices, faces
+        handle.color, handle.opacity, handle.visible = mesh.color, mesh.opacity, not empty
+
+    def _lines(self, name: str, lines: Lines) -> None:
+        empty = len(lines.segments) == 0
+        points = _DUMMY_SEGMENTS if empty else lines.segments
+        colors = np.broadcast_to(np.array(lines.color, np.uint8), points.shape).copy()
+        handle = self.lines.get(name)
+        if handle is None:
+            self.lines[name] = self.client.scene.add_line_segments(
+                f"/scene/{name}", points, colors, thickness=lines.thickness, thickness_units="screen", visible=not empty)
+            return
+        handle.points, handle.colors, handle.visible = points, colors, not empty

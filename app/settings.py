@@ -1,0 +1,125 @@
+"""Everything one browser tab has chosen, as one immutable value, and its preset form.
+
+A preset is the TOML form of ``Settings`` without the frame and the CAV: a table per part, keys
+named like the fields of ``cbm.scenario.ScenarioParams``, ``cbm.CBMParams`` and the method
+parameter classes (angles in degrees, as everywhere at the edges).
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, Literal, Mapping
+
+from cbm import CBMParams
+from cbm.baselines import PARAMS
+from cbm.scenario import ScenarioParams
+
+Layout = Literal["overlay", "after", "before", "side by side"]
+LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
+METHOD_NAMES = {"cbm": "CBM", "cbm-no-consensus": "CBM without consensus", "icp": "ICP", "ricp": "RICP",
+                "vips": "VIPS"}
+AUTO_CAV = "auto"
+
+
+@dataclass(frozen=True)
+class ViewOptions:
+    """What the 3D view shows."""
+
+    layout: Layout = "overlay"
+    """CAV boxes ``before`` calibration (at ``init``), ``after`` (at the estimate), both overlaid, or
+    the two scenes side by side (before on the left)."""
+    ghosts: bool = False
+    """Ground-truth outlines of every object either agent sees."""
+    lines: bool = True
+    """Match lines: right (green), wrong (red), missed true pairs (grey, dashed)."""
+    labels: bool = True
+    """A label on the object clicked last."""
+
+    def __post_init__(self) -> None:
+        if self.layout not in LAYOUTS:
+            raise ValueError(f"ViewOptions.layout must be one of {LAYOUTS}, got {self.layout!r}")
+
+
+DEFAULT_SCENARIO = ScenarioParams(protocol="range", sigma_p=0.2, sigma_theta=2.0, flip_prob=0.5,
+                                  localization="fixed", loc_x=3.0, loc_y=3.0, loc_yaw=5.0)
+"""The range protocol (the recording car is the ego, another vehicle the CAV) with the paper's
+SIND localization offset and mild detection noise: a wrong pose anyone can see, repaired by CBM."""
+
+
+def default_method_params() -> dict[str, Any]:
+    return {name: cls() for name, cls in PARAMS.items()}
+
+
+@dataclass(frozen=True)
+class Settings:
+    """One tab's choices: frame, agents, scenario, method and its parameters, view."""
+
+    frame: int = 0
+    cav: str = AUTO_CAV
+    """The vehicle acting as the CAV, or ``auto`` (the one nearest 25 m from the ego)."""
+    method: str = "cbm"
+    scenario: ScenarioParams = DEFAULT_SCENARIO
+    method_params: Mapping[str, Any] = field(default_factory=default_method_params)
+    """Parameters of every method by name (``cbm`` and ``cbm-no-consensus`` share CBMParams)."""
+    view: ViewOptions = ViewOptions()
+
+    @property
+    def cbm(self) -> CBMParams:
+        return self.method_params["cbm"]
+
+    @property
+    def params(self) -> Any:
+        """The parameters of the selected method."""
+        return self.method_params["cbm" if self.method == "cbm-no-consensus" else self.method]
+
+    def with_params(self, method: str, **changes: Any) -> "Settings":
+        """These settings with some parameters of ``method`` changed."""
+        key = "cbm" if method == "cbm-no-consensus" else method
+        params = dict(self.method_params)
+        params[key] = dataclasses.replace(params[key], **changes)
+        return dataclasses.replace(self, method_params=params)
+
+
+def to_preset(settings: Settings) -> dict[str, Any]:
+    """The TOML-ready form of ``settings`` (frame and CAV left out: they belong to the dataset)."""
+    params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items() if name != "cbm-no-consensus"}
+    return {"method": settings.method, "scenario": dataclasses.asdict(settings.scenario),
+            "view": dataclasses.asdict(settings.view), **params}
+
+
+def from_preset(data: Mapping[str, Any], base: Settings | None = None) -> Settings:
+    """Settings from a preset's tables; missing keys keep ``base``'s values. Raises ``KeyError``
+    naming an unknown table or key, ``TypeError``/``ValueError`` naming a field of the wrong type."""
+    base = base or Settings()
+    method_params = dict(base.method_params)
+    known = {"method", "scenario", "view", *[n for n in PARAMS if n != "cbm-no-consensus"]}
+    for table in data:
+        if table not in known:
+            raise KeyError(f"unknown table [{table}]; expected one of {sorted(known)}")
+    method = data.get("method", base.method)
+    if method not in METHOD_NAMES:
+        raise ValueError(f"method must be one of {sorted(METHOD_NAMES)}, got {method!r}")
+    for name in PARAMS:
+        if name in data and name != "cbm-no-consensus":
+            method_params[name] = _replaced(name, method_params[name], data[name])
+    return Settings(frame=base.frame, cav=base.cav, method=method,
+                    scenario=_replaced("scenario", base.scenario, data.get("scenario", {})),
+                    method_params=method_params, view=_replaced("view", base.view, data.get("view", {})))
+
+
+def _replaced(table: str, value: Any, changes: Any) -> Any:
+    if not isinstance(changes, Mapping):
+        raise TypeError(f"[{table}] must be a table of keys, got {type(changes).__name__}")
+    fields = {f.name: f for f in dataclasses.fields(value)}
+    for key, new in changes.items():
+        if key not in fields:
+            raise KeyError(f"[{table}] unknown key {key!r}; expected one of {sorted(fields)}")
+        old = getattr(value, key)
+        expected = float if isinstance(old, float) and not isinstance(old, bool) else type(old)
+        if isinstance(new, bool) != isinstance(old, bool) or not isinstance(new, (int, float) if expected is float else expected):
+            raise TypeError(f"[{table}] {key} must be {expected.__name__}, got {new!r}")
+    try:
+        return dataclasses.replace(value, **{k: float(v) if isinstance(getattr(value, k), float) else v
+                                             for k, v in changes.items()})
+    except ValueError as error:
+        raise ValueError(f"[{table}] {error}") from None
