@@ -18,7 +18,7 @@ from cbm.diagnosis import Finding, diagnose
 from cbm.inspect import Inspection
 from cbm.metrics import TrialMetrics, evaluate
 from cbm.result import MatchResult
-from cbm.scenario import Trial, make_trial, trial_rng
+from cbm.scenario import Trial, in_range, make_trial, trial_rng
 from cbm.sweep import FrameInputs, run_method
 from loaders import Sequence, is_vehicle
 from loaders.agents import agent_pose, choose_cav, choose_ego, frame_trial_inputs
@@ -94,6 +94,9 @@ class Explorer:
             raise ValueError(f"frame {index} has no vehicle that could be the ego")
         cav, note = self._cav(frame, ego, settings.cav)
         inputs = frame_trial_inputs(frame, ego, cav)
+        if settings.scenario.protocol == "opv2v" and inputs["visibility"] is None:
+            inputs["visibility"] = _visibility_by_range(inputs, settings.scenario.sensor_range)
+            note += "; no per-agent visibility in this dataset: sensor range used"
         trial = make_trial(**inputs, params=settings.scenario, rng=trial_rng(settings.scenario.seed, index))
         result = run_method(settings.method, trial, _method_params(settings),
                             FrameInputs(index, inputs, labels=frame.categories))
@@ -136,6 +139,13 @@ def steady_cav(sequence: Sequence, near: float = 15.0, far: float = 40.0) -> str
         for track in frame.track_ids[vehicles][(distance >= near) & (distance <= far)]:
             counts[str(track)] = counts.get(str(track), 0) + 1
     return min(counts, key=lambda track: (-counts[track], track)) if counts else None
+
+
+def _visibility_by_range(inputs: dict[str, Any], sensor_range: float) -> dict[str, np.ndarray]:
+    """What each agent sees when the dataset does not say: the objects within sensor range."""
+    boxes, ids = inputs["boxes"], np.asarray(inputs["ids"])
+    return {"ego": ids[in_range(boxes, inputs["ego_pose"], sensor_range)],
+            "cav": ids[in_range(boxes, inputs["cav_pose"], sensor_range)]}
 
 
 def _method_params(settings: Settings) -> Any:

@@ -1,0 +1,210 @@
+"""Real-browser end-to-end tests: Playwright drives Debian's chromium against a live server."""
+from __future__ import annotations
+
+import io
+import re
+import shutil
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.presets import discover
+from app.server import ExplorerServer
+from app.session import Explorer
+from app.settings import Settings
+
+CHROMIUM = shutil.which("chromium")
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
+REPO = Path(__file__).resolve().parents[2]
+
+pytestmark = [pytest.mark.browser,
+              pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
+
+
+@pytest.fixture(scope="module")
+def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory, monkeypatch_module) -> ExplorerServer:
+    monkeypatch_module.setenv("CBM_EXPLORER_PRESETS", str(tmp_path_factory.mktemp("presets")))
+    presets, _ = discover()
+    running = ExplorerServer(explorer, presets["default"].apply(Settings()), port=0)
+    yield running
+    running.stop()
+
+
+@pytest.fixture(scope="module")
+def monkeypatch_module():
+    with pytest.MonkeyPatch.context() as patch:
+        yield patch
+
+
+@pytest.fixture(scope="module")
+def browser():
+    sync_api = pytest.importorskip("playwright.sync_api")
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield launched
+        launched.close()
+
+
+def _open(browser, server: ExplorerServer):
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.goto(server.url)
+    page.get_by_text("precision / recall").wait_for(timeout=30_000)
+    return page
+
+
+def _metrics(page) -> str:
+    return page.get_by_text("precision / recall").locator("xpath=ancestor::table").inner_text()
+
+
+def _header(page) -> str:
+    return page.get_by_text(re.compile(r"^Frame \d+")).first.inner_text()
+
+
+def _slider(page, label: str):
+    control = page.locator("label", has_text=label).first.get_attribute("for")
+    return page.locator(f'[id="{control}"] [role="slider"]')
+
+
+def _wait_until(condition, timeout: float = 15.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.1)
+
+
+def _session(server: ExplorerServer, count: int):
+    _wait_until(lambda: len(server.sessions) >= count and all(s.last for s in server.sessions.values()))
+    return max(server.sessions.items())[1]
+
+
+def _pick_option(page, label: str, option: str) -> None:
+    control = page.locator("label", has_text=label).first.get_attribute("for")
+    page.locator(f'[id="{control}"]').click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def _close_notifications(page) -> None:
+    for button in page.locator(".mantine-Notification-root button").all():
+        button.click()
+
+
+def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
+    page = _open(browser, server)
+    session = _session(server, 1)
+    assert {"/scene/ego_vehicle", "/scene/cav_vehicle", "/scene/ego_boxes", "/scene/cav_boxes"} <= session.view.node_names
+
+    first = _metrics(page)
+    page.get_by_role("tab", name="Method").click()
+    sigma2 = _slider(page, "σ2 L1 (m)")
+    sigma2.focus()
+    page.keyboard.press("Home")
+    _wait_until(lambda: _metrics(page) != first)
+    assert session.settings.cbm.sigma2 == 0.25
+    assert session.last.settings.cbm.sigma2 == 0.25
+
+    header = _header(page)
+    frame = _slider(page, "frame")
+    frame.focus()
+    for _ in range(5):
+        page.keyboard.press("ArrowRight")
+    _wait_until(lambda: _header(page) != header and session.last.frame_index == 5)
+    assert _header(page).startswith("Frame 5")
+
+    page.get_by_role("tab", name="View").click()
+    _pick_option(page, "CAV boxes", "before")
+    _wait_until(lambda: session.last.settings.view.layout == "before")
+    _pick_option(page, "CAV boxes", "side by side")
+    _wait_until(lambda: session.last.settings.view.layout == "side by side")
+    assert session.view.labels["before"].visible and session.view.labels["after"].visible
+
+    second = _open(browser, server)
+    other = _session(server, 2)
+    assert other is not session
+    assert other.settings.cbm.sigma2 == 3.0 and other.settings.frame == 0
+    second.get_by_role("tab", name="Method").click()
+    assert _slider(second, "σ2 L1 (m)").get_attribute("aria-valuenow") == "3"
+    assert _header(second).startswith("Frame 0")
+    _slider(second, "σ2 L1 (m)").focus()
+    second.keyboard.press("End")
+    _wait_until(lambda: other.last.settings.cbm.sigma2 == 10.0)
+    assert session.settings.cbm.sigma2 == 0.25 and session.settings.frame == 5
+    page.get_by_role("tab", name="Method").click()
+    assert sigma2.get_attribute("aria-valuenow") == "0.25"
+    second.close()
+
+    _close_notifications(page)
+    time.sleep(1.0)
+    ARTIFACTS.mkdir(exist_ok=True)
+    shot = ARTIFACTS / "explorer.png"
+    page.screenshot(path=str(shot))
+    from PIL import Image
+
+    pixels = np.asarray(Image.open(io.BytesIO(shot.read_bytes())).convert("RGB"), dtype=int)
+    scene = pixels[:, : pixels.shape[1] * 2 // 3]
+    orange = (scene[..., 0] > 200) & (scene[..., 1] > 100) & (scene[..., 1] < 190) & (scene[..., 2] < 80)
+    blue = (scene[..., 2] > 180) & (scene[..., 0] < 140)
+    assert orange.sum() > 200 and blue.sum() > 200, "the scene shows ego (blue) and CAV (orange) boxes"
+    assert scene.std() > 10, "the screenshot is not blank"
+    page.close()
+
+
+def test_a_failing_recompute_is_notified_and_the_server_lives_on(browser, server: ExplorerServer) -> None:
+    page = _open(browser, server)
+    session = _session(server, 1)
+    frames = len(server.explorer)
+    session.explorer = _Broken(server.explorer)
+    session.change(lambda s: s.with_params("cbm", sigma1=12.0))
+    page.get_by_text("Recompute failed").wait_for(timeout=15_000)
+    session.explorer = server.explorer
+    other = _open(browser, server)
+    assert _header(other).startswith("Frame 0") and len(server.explorer) == frames
+    other.close()
+    page.close()
+
+
+class _Broken:
+    """An explorer whose recompute fails, as a dataset with a bad frame would."""
+
+    def __init__(self, explorer: Explorer) -> None:
+        self.inner = explorer
+
+    def compute(self, settings: Settings):
+        raise ValueError("this frame cannot be computed")
+
+    def __getattr__(self, name: str):
+        return getattr(self.inner, name)
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+def test_serve_prints_the_url_and_serves_the_page(tmp_path: Path) -> None:
+    import urllib.request
+
+    port = _free_port()
+    process = subprocess.Popen([sys.executable, "serve.py", "--port", str(port), "--dataset", "synthetic"],
+                               cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={"CBM_EXPLORER_PRESETS": str(tmp_path), "PATH": "/usr/bin:/bin"})
+    watchdog = threading.Timer(60, process.kill)
+    watchdog.start()
+    try:
+        announced = next((line for line in process.stdout if line.startswith("CBM Explorer on")), "")
+        assert f"http://127.0.0.1:{port}" in announced
+        with urllib.request.urlopen(f"http://127.0.0.1:{port}/", timeout=10) as response:
+            assert response.status == 200
+    finally:
+        watchdog.cancel()
+        process.terminate()
+        process.wait(timeout=10)

@@ -1,0 +1,73 @@
+"""The coalescer: under a burst of concurrent submits only the latest value is delivered last,
+results arrive in submission order, far fewer computations run than were asked for, and a failure
+is reported without stopping the worker."""
+from __future__ import annotations
+
+import threading
+import time
+
+from app.coalesce import Coalescer
+
+
+def _collecting(compute_seconds: float = 0.005):
+    delivered: list[tuple[int, int]] = []
+    computed: list[int] = []
+    failures: list[BaseException] = []
+
+    def compute(value: int) -> int:
+        computed.append(value)
+        time.sleep(compute_seconds)
+        if value < 0:
+            raise ValueError("negative")
+        return value
+
+    worker = Coalescer(compute, lambda result, generation: delivered.append((result, generation)), failures.append)
+    return worker, delivered, computed, failures
+
+
+def test_concurrent_burst_draws_only_the_latest_state_last() -> None:
+    worker, delivered, computed, _ = _collecting()
+    lock = threading.Lock()
+    latest = {"value": -1}
+    counter = iter(range(10_000))
+
+    def fire() -> None:
+        for _ in range(50):
+            with lock:
+                value = next(counter)
+                worker.submit(value)
+                latest["value"] = value
+
+    threads = [threading.Thread(target=fire) for _ in range(8)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    assert worker.wait_idle(timeout=10)
+    worker.close()
+    assert delivered[-1][0] == latest["value"]
+    assert delivered[-1][1] == 400
+    generations = [g for _, g in delivered]
+    assert generations == sorted(generations) and len(set(generations)) == len(generations)
+    assert len(computed) < 400 / 4
+
+
+def test_failure_is_reported_and_the_worker_lives_on() -> None:
+    worker, delivered, _, failures = _collecting(0.0)
+    worker.submit(-1)
+    assert worker.wait_idle(timeout=5)
+    worker.submit(3)
+    assert worker.wait_idle(timeout=5)
+    worker.close()
+    assert len(failures) == 1 and isinstance(failures[0], ValueError)
+    assert delivered == [(3, 2)]
+
+
+def test_a_slow_computation_never_piles_up_work() -> None:
+    worker, delivered, computed, _ = _collecting(0.05)
+    for value in range(100):
+        worker.submit(value)
+        time.sleep(0.001)
+    assert worker.wait_idle(timeout=10)
+    worker.close()
+    assert computed[-1] == 99 and len(computed) <= 5
