@@ -49,7 +49,7 @@ class Panels:
         self.gui, self.session = gui, session
         self.metrics = gui.add_markdown("Computing the first frame…")
         self.plot = gui.add_uplot(*_empty_plot(), title="over frames", aspect=2.0,
-                                  scales={"x": uplot.Scale(time=False), "y": uplot.Scale(auto=False, range=(0.0, 1.0)),
+                                  scales={"x": uplot.Scale(time=False, auto=True), "y": uplot.Scale(auto=False, range=(0.0, 1.0)),
                                           "m": uplot.Scale(auto=True)},
                                   axes=(uplot.Axis(), uplot.Axis(scale="y"), uplot.Axis(scale="m", side=1)))
         with gui.add_folder("Frame", expand_by_default=True):
@@ -169,4 +169,7 @@ def _empty_plot() -> tuple[tuple[np.ndarray, ...], tuple[uplot.Series, ...]]:
     series = (uplot.Series(label="frame"), uplot.Series(label="precision", stroke="#1e9c3c", width=2, scale="y"),
               uplot.Series(label="recall", stroke="#3478f6", width=2, scale="y"),
               uplot.Series(label="RTE (m)", stroke="#e1261e", width=2, scale="m"))
-    return tuple(np.zeros(0) for _ in series), series
+    # viser 1.1.1's uPlot never draws data sent to a chart that was created empty: start it with
+    # two frames of gaps instead.
+    placeholder = (np.array([0.0, 1.0]), *(np.full(2, np.nan) for _ in series[1:]))
+    return placeholder, series

@@ -10,8 +10,10 @@ from .drawing import Drawing, Lines, Mesh
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
 _DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
-TOP_DOWN = {"position": (-12.0, 0.0, 80.0), "look_at": (8.0, 0.0, 0.0)}
+TOP_DOWN = {"position": (-10.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
 """Default camera: high above the ego, looking down and a little forward (x points up the screen)."""
+PANEL_SHIFT = 0.15
+"""Sideways shift of the view per metre of height, so the scene clears the control panel on the right."""
 
 
 class SceneView:
@@ -32,8 +34,10 @@ class SceneView:
         """Look down on the ego from behind, centred sideways on ``centre_y`` (higher when the
         layout shows two panels side by side)."""
         x, _, z = TOP_DOWN["position"]
-        self.client.camera.position = (x, centre_y, z + 1.6 * abs(centre_y))
-        self.client.camera.look_at = (TOP_DOWN["look_at"][0], centre_y, 0.0)
+        z += 1.3 * abs(centre_y)
+        y = centre_y - PANEL_SHIFT * z
+        self.client.camera.position = (x, y, z)
+        self.client.camera.look_at = (TOP_DOWN["look_at"][0], y, 0.0)
 
     def show(self, drawing: Drawing) -> None:
         """Replace the scene's arrays with ``drawing``'s."""

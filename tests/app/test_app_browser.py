@@ -69,9 +69,22 @@ def _header(page) -> str:
     return page.get_by_text(re.compile(r"^Frame \d+")).first.inner_text()
 
 
+def _label(page, text: str):
+    return page.locator("label").filter(has_text=re.compile(f"^{re.escape(text)}$")).first
+
+
 def _slider(page, label: str):
-    control = page.locator("label", has_text=label).first.get_attribute("for")
+    control = _label(page, label).get_attribute("for")
     return page.locator(f'[id="{control}"] [role="slider"]')
+
+
+def _type_into(page, label: str, value: str) -> None:
+    """Type ``value`` into the number box beside a slider, as a user does (arrow keys would also
+    turn viser's camera, which listens to the keyboard)."""
+    row = _label(page, label).locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+    box = row.locator("input.mantine-NumberInput-input")
+    box.fill(value)
+    box.blur()
 
 
 def _wait_until(condition, timeout: float = 15.0) -> None:
@@ -87,7 +100,7 @@ def _session(server: ExplorerServer, count: int):
 
 
 def _pick_option(page, label: str, option: str) -> None:
-    control = page.locator("label", has_text=label).first.get_attribute("for")
+    control = _label(page, label).get_attribute("for")
     page.locator(f'[id="{control}"]').click()
     page.get_by_role("option", name=option, exact=True).click()
 
@@ -105,19 +118,15 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     first = _metrics(page)
     page.get_by_role("tab", name="Method").click()
     sigma2 = _slider(page, "σ2 L1 (m)")
-    sigma2.focus()
-    page.keyboard.press("Home")
+    _type_into(page, "σ2 L1 (m)", "0.25")
     _wait_until(lambda: _metrics(page) != first)
     assert session.settings.cbm.sigma2 == 0.25
     assert session.last.settings.cbm.sigma2 == 0.25
 
-    header = _header(page)
-    frame = _slider(page, "frame")
-    frame.focus()
-    for _ in range(5):
-        page.keyboard.press("ArrowRight")
-    _wait_until(lambda: _header(page) != header and session.last.frame_index == 5)
-    assert _header(page).startswith("Frame 5")
+    for k in range(1, 6):
+        _type_into(page, "frame", str(k))
+        _wait_until(lambda: session.last.frame_index == k)
+    _wait_until(lambda: _header(page).startswith("Frame 5"))
 
     page.get_by_role("tab", name="View").click()
     _pick_option(page, "CAV boxes", "before")
@@ -133,14 +142,20 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     second.get_by_role("tab", name="Method").click()
     assert _slider(second, "σ2 L1 (m)").get_attribute("aria-valuenow") == "3"
     assert _header(second).startswith("Frame 0")
-    _slider(second, "σ2 L1 (m)").focus()
-    second.keyboard.press("End")
+    _type_into(second, "σ2 L1 (m)", "10")
     _wait_until(lambda: other.last.settings.cbm.sigma2 == 10.0)
     assert session.settings.cbm.sigma2 == 0.25 and session.settings.frame == 5
     page.get_by_role("tab", name="Method").click()
     assert sigma2.get_attribute("aria-valuenow") == "0.25"
     second.close()
 
+    page.get_by_role("tab", name="Method").click()
+    _type_into(page, "σ2 L1 (m)", "3")
+    _wait_until(lambda: session.last.settings.cbm.sigma2 == 3.0)
+    for k in range(6, 16):
+        _type_into(page, "frame", str(k))
+        _wait_until(lambda: session.last.frame_index == k)
+    assert len(session.history.rows) >= 10
     _close_notifications(page)
     time.sleep(1.0)
     ARTIFACTS.mkdir(exist_ok=True)
