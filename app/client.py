@@ -71,15 +71,17 @@ class ClientSession:
         self.worker.submit(settings)
 
     def change(self, edit: Callable[[Settings], Settings]) -> None:
-        """Apply ``edit`` to the settings and recompute (coalesced)."""
+        """Apply ``edit`` to the settings and recompute (coalesced); no-op edits compute nothing.
+        Submitting under the lock keeps the worker's latest value the latest settings."""
         try:
             with self._lock:
-                self.settings = edit(self.settings)
-                current = self.settings
+                current = edit(self.settings)
+                if current == self.settings:
+                    return
+                self.settings = current
+                self.worker.submit(current)
         except (ValueError, TypeError) as error:
             self.notify("Setting refused", str(error), "red")
-            return
-        self.worker.submit(current)
 
     def step(self, delta: int) -> None:
         self.panels.frame.value = (self.settings.frame + delta) % len(self.explorer)
