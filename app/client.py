@@ -11,6 +11,7 @@ import viser
 
 from . import drawing
 from .coalesce import Coalescer
+from .explore import ExplorePanel
 from .panels import Panels
 from .presets import PresetError, discover, save_preset
 from .scene_view import SceneView
@@ -59,6 +60,7 @@ class ClientSession:
         self.view = SceneView(client)
         self.view.reset_camera()
         self.panels = Panels(client.gui, self, settings, len(explorer), list(presets))
+        self.explore = ExplorePanel(client.gui, self.panels.tabs, self)
         for problem in problems:
             self.notify("Preset skipped", problem, "yellow")
         self._playing = threading.Event()
@@ -126,6 +128,7 @@ class ClientSession:
     def close(self) -> None:
         self._closed.set()
         self._playing.set()
+        self.explore.close()
         self.worker.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, drawing.Drawing]:
@@ -147,6 +150,7 @@ class ClientSession:
         self.panels.metrics.content = picture.metrics_markdown
         self.panels.plot.data = self.history.arrays()
         self._refresh_cav_choices(outcome)
+        self.explore.refresh(outcome, picture)
 
     def _failed(self, error: BaseException) -> None:
         self.notify("Recompute failed", f"{type(error).__name__}: {error}", "red")
@@ -170,20 +174,22 @@ class ClientSession:
             time.sleep(1.0 / max(1, int(self.panels.speed.value)))
 
     def _picked(self, event: viser.SceneNodePointerEvent) -> None:
-        """Label the object under a click (the ray meets the plane at mid box height)."""
+        """Label the object under a click (the ray meets the plane at mid box height) and show its
+        context in the inspector."""
         outcome, picture = self.last, self.last_drawing
-        if outcome is None or picture is None or not outcome.settings.view.labels:
-            self.view.hide_label("picked")
-            return
         origin, direction = np.asarray(event.ray_origin), np.asarray(event.ray_direction)
-        if abs(direction[2]) < 1e-9:
+        if outcome is None or picture is None or abs(direction[2]) < 1e-9:
             return
         point = origin + direction * (0.8 - origin[2]) / direction[2]
         found = drawing.pick(picture, point[:2])
-        if found is None:
+        if found is None or not outcome.settings.view.labels:
             self.view.hide_label("picked")
+        if found is None:
             return
         group, index = found
+        self.explore.picked(outcome, picture, group, int(picture.objects[group][1][index]))
+        if not outcome.settings.view.labels:
+            return
         boxes, _ = picture.objects[group]
         self.view.label("picked", drawing.describe(outcome, picture, group, index),
                         (float(boxes[index, 0]), float(boxes[index, 1]), float(boxes[index, 5]) + 1.0))

@@ -58,7 +58,7 @@ class Panels:
             self.play = gui.add_checkbox("play", False)
             self.speed = gui.add_slider("speed (frames/s)", 1, 10, 1, 4)
             self.cav = gui.add_dropdown("CAV", (AUTO_CAV,), initial_value=AUTO_CAV, hint="vehicle acting as the CAV")
-        tabs = gui.add_tab_group()
+        self.tabs = tabs = gui.add_tab_group()
         with tabs.add_tab("Scenario"):
             self.protocol = gui.add_dropdown("protocol", ("range", "sind", "opv2v"),
                                              initial_value=settings.scenario.protocol)

@@ -39,6 +39,16 @@ class CavChoice:
 
 
 @dataclass(frozen=True)
+class TrialInputs:
+    """One frame's inputs as a tab makes its trial: the sweep's ``FrameInputs`` and the agents."""
+
+    frame: FrameInputs
+    ego_id: str
+    cav_id: str
+    cav_note: str
+
+
+@dataclass(frozen=True)
 class Outcome:
     """Everything one recompute produced."""
 
@@ -84,10 +94,9 @@ class Explorer:
         order = np.lexsort((ids, distance))[:limit]
         return [CavChoice(str(ids[k]), float(distance[k])) for k in order]
 
-    def compute(self, settings: Settings) -> Outcome:
-        """Trial, method result, metrics and diagnosis for ``settings``."""
-        started = time.perf_counter()
-        index = min(max(settings.frame, 0), len(self.sequence) - 1)
+    def trial_inputs(self, settings: Settings, index: int) -> TrialInputs:
+        """Frame ``index``'s trial inputs under ``settings`` (ego, CAV, visibility), as ``compute``
+        and the sequence runs use them; ``ValueError`` when the frame has no ego or no CAV."""
         frame = self.sequence[index]
         ego = choose_ego(frame)
         if ego is None:
@@ -97,9 +106,16 @@ class Explorer:
         if settings.scenario.protocol == "opv2v" and inputs["visibility"] is None:
             inputs["visibility"] = _visibility_by_range(inputs, settings.scenario.sensor_range)
             note += "; no per-agent visibility in this dataset: sensor range used"
+        return TrialInputs(FrameInputs(index, inputs, labels=frame.categories), ego, cav, note)
+
+    def compute(self, settings: Settings) -> Outcome:
+        """Trial, method result, metrics and diagnosis for ``settings``."""
+        started = time.perf_counter()
+        index = min(max(settings.frame, 0), len(self.sequence) - 1)
+        prepared = self.trial_inputs(settings, index)
+        inputs, ego, cav, note = prepared.frame.trial, prepared.ego_id, prepared.cav_id, prepared.cav_note
         trial = make_trial(**inputs, params=settings.scenario, rng=trial_rng(settings.scenario.seed, index))
-        result = run_method(settings.method, trial, _method_params(settings),
-                            FrameInputs(index, inputs, labels=frame.categories))
+        result = run_method(settings.method, trial, _method_params(settings), prepared.frame)
         metrics = evaluate(result, trial)
         findings = self._findings(settings, trial, result)
         world_to_ego = se2.inverse(trial.ego_pose)

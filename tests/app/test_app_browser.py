@@ -2,8 +2,6 @@
 from __future__ import annotations
 
 import io
-import re
-import shutil
 import socket
 import subprocess
 import sys
@@ -13,21 +11,17 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from support import browser as ui
 
 from app.presets import discover
 from app.server import ExplorerServer
 from app.session import Explorer
 from app.settings import Settings
 
-CHROMIUM = shutil.which("chromium")
-ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
-        "--disable-background-networking", "--disable-component-update", "--disable-sync",
-        "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
-ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
 REPO = Path(__file__).resolve().parents[2]
 
 pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
+              pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
 
 
 @pytest.fixture(scope="module")
@@ -45,105 +39,49 @@ def monkeypatch_module():
         yield patch
 
 
-@pytest.fixture(scope="module")
-def browser():
-    sync_api = pytest.importorskip("playwright.sync_api")
-    with sync_api.sync_playwright() as playwright:
-        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
-        yield launched
-        launched.close()
-
-
-def _open(browser, server: ExplorerServer):
-    page = browser.new_page(viewport={"width": 1400, "height": 900})
-    page.goto(server.url)
-    page.get_by_text("precision / recall").wait_for(timeout=30_000)
-    return page
-
-
-def _metrics(page) -> str:
-    return page.get_by_text("precision / recall").locator("xpath=ancestor::table").inner_text()
-
-
-def _header(page) -> str:
-    return page.get_by_text(re.compile(r"^Frame \d+")).first.inner_text()
-
-
-def _label(page, text: str):
-    return page.locator("label").filter(has_text=re.compile(f"^{re.escape(text)}$")).first
-
-
-def _slider(page, label: str):
-    control = _label(page, label).get_attribute("for")
-    return page.locator(f'[id="{control}"] [role="slider"]')
-
-
 def _type_into(page, label: str, value: str) -> None:
     """Type ``value`` into the number box beside a slider, as a user does (arrow keys would also
     turn viser's camera, which listens to the keyboard)."""
-    row = _label(page, label).locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+    row = ui.label(page, label).locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
     box = row.locator("input.mantine-NumberInput-input")
     box.fill(value)
     box.blur()
 
 
-def _wait_until(condition, timeout: float = 15.0) -> None:
-    deadline = time.monotonic() + timeout
-    while not condition():
-        assert time.monotonic() < deadline, "timed out"
-        time.sleep(0.1)
-
-
-def _session(server: ExplorerServer, count: int):
-    _wait_until(lambda: len(server.sessions) >= count and all(s.last for s in server.sessions.values()))
-    return max(server.sessions.items())[1]
-
-
-def _pick_option(page, label: str, option: str) -> None:
-    control = _label(page, label).get_attribute("for")
-    page.locator(f'[id="{control}"]').click()
-    page.get_by_role("option", name=option, exact=True).click()
-
-
-def _close_notifications(page) -> None:
-    for button in page.locator(".mantine-Notification-root button").all():
-        button.click()
-
-
 def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
-    page = _open(browser, server)
-    session = _session(server, 1)
+    page = ui.open_page(browser, server)
+    session = ui.session(server, 1)
     assert {"/scene/ego_vehicle", "/scene/cav_vehicle", "/scene/ego_boxes", "/scene/cav_boxes"} <= session.view.node_names
 
-    first = _metrics(page)
+    first = ui.metrics(page)
     page.get_by_role("tab", name="Method").click()
-    sigma2 = _slider(page, "σ2 L1 (m)")
+    sigma2 = ui.slider(page, "σ2 L1 (m)")
     _type_into(page, "σ2 L1 (m)", "0.25")
-    _wait_until(lambda: _metrics(page) != first)
+    ui.wait_until(lambda: ui.metrics(page) != first)
     assert session.settings.cbm.sigma2 == 0.25
     assert session.last.settings.cbm.sigma2 == 0.25
 
     for k in range(1, 6):
         _type_into(page, "frame", str(k))
-        _wait_until(lambda: session.last.frame_index == k)
-    _wait_until(lambda: _header(page).startswith("Frame 5"))
+        ui.wait_until(lambda: session.last.frame_index == k)
+    ui.wait_until(lambda: ui.header(page).startswith("Frame 5"))
 
     page.get_by_role("tab", name="View").click()
-    _pick_option(page, "CAV boxes", "before")
-    _wait_until(lambda: session.last.settings.view.layout == "before")
-    _pick_option(page, "CAV boxes", "side by side")
-    _wait_until(lambda: session.last.settings.view.layout == "side by side")
+    ui.pick_option(page, "CAV boxes", "before")
+    ui.wait_until(lambda: session.last.settings.view.layout == "before")
+    ui.pick_option(page, "CAV boxes", "side by side")
+    ui.wait_until(lambda: session.last.settings.view.layout == "side by side")
     assert session.view.labels["before"].visible and session.view.labels["after"].visible
 
-    second = _open(browser, server)
-    other = _session(server, 2)
+    second = ui.open_page(browser, server)
+    other = ui.session(server, 2)
     assert other is not session
     assert other.settings.cbm.sigma2 == 3.0 and other.settings.frame == 0
     second.get_by_role("tab", name="Method").click()
-    assert _slider(second, "σ2 L1 (m)").get_attribute("aria-valuenow") == "3"
-    assert _header(second).startswith("Frame 0")
+    assert ui.slider(second, "σ2 L1 (m)").get_attribute("aria-valuenow") == "3"
+    assert ui.header(second).startswith("Frame 0")
     _type_into(second, "σ2 L1 (m)", "10")
-    _wait_until(lambda: other.last.settings.cbm.sigma2 == 10.0)
+    ui.wait_until(lambda: other.last.settings.cbm.sigma2 == 10.0)
     assert session.settings.cbm.sigma2 == 0.25 and session.settings.frame == 5
     page.get_by_role("tab", name="Method").click()
     assert sigma2.get_attribute("aria-valuenow") == "0.25"
@@ -151,15 +89,15 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
 
     page.get_by_role("tab", name="Method").click()
     _type_into(page, "σ2 L1 (m)", "3")
-    _wait_until(lambda: session.last.settings.cbm.sigma2 == 3.0)
+    ui.wait_until(lambda: session.last.settings.cbm.sigma2 == 3.0)
     for k in range(6, 16):
         _type_into(page, "frame", str(k))
-        _wait_until(lambda: session.last.frame_index == k)
+        ui.wait_until(lambda: session.last.frame_index == k)
     assert len(session.history.rows) >= 10
-    _close_notifications(page)
+    ui.close_notifications(page)
     time.sleep(1.0)
-    ARTIFACTS.mkdir(exist_ok=True)
-    shot = ARTIFACTS / "explorer.png"
+    ui.ARTIFACTS.mkdir(exist_ok=True)
+    shot = ui.ARTIFACTS / "explorer.png"
     page.screenshot(path=str(shot))
     from PIL import Image
 
@@ -173,15 +111,15 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
 
 
 def test_a_failing_recompute_is_notified_and_the_server_lives_on(browser, server: ExplorerServer) -> None:
-    page = _open(browser, server)
-    session = _session(server, 1)
+    page = ui.open_page(browser, server)
+    session = ui.session(server, 1)
     frames = len(server.explorer)
     session.explorer = _Broken(server.explorer)
     session.change(lambda s: s.with_params("cbm", sigma1=12.0))
     page.get_by_text("Recompute failed").wait_for(timeout=15_000)
     session.explorer = server.explorer
-    other = _open(browser, server)
-    assert _header(other).startswith("Frame 0") and len(server.explorer) == frames
+    other = ui.open_page(browser, server)
+    assert ui.header(other).startswith("Frame 0") and len(server.explorer) == frames
     other.close()
     page.close()
 

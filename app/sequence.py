@@ -1,0 +1,119 @@
+"""Sequence runs: a tab's settings over every frame of the sequence, through the evaluation's sweep.
+
+The frames' inputs come from ``Explorer.trial_inputs`` -- the same ego, CAV and visibility the tab
+uses -- and every trial draws from ``trial_rng(seed, frame)`` inside ``cbm.sweep``, so each row is
+the number the tab shows on that frame. Frames run in chunks; a cancel stops at the next chunk and
+keeps the rows done so far.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Iterable, Sequence
+
+import numpy as np
+
+from cbm.sweep import FrameInputs, Sweep, method_fields, run, summarise
+
+from .background import Task
+from .session import Explorer
+from .settings import METHOD_NAMES, Settings
+
+CHUNK = 8
+"""Frames per chunk: a cancel takes effect within one chunk."""
+
+
+def sweep_for(settings: Settings) -> Sweep:
+    """A one-point sweep that runs exactly the tab's method, parameters, scenario and seed."""
+    params = settings.params
+    grid = {name: [getattr(params, name)] for name in method_fields(settings.method)}
+    return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario)
+
+
+def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) -> tuple[list[FrameInputs], list[int]]:
+    """The sweep inputs of ``frames`` as the tab builds them, and the frames that have no ego or
+    no CAV (skipped)."""
+    inputs, skipped = [], []
+    for index in frames:
+        try:
+            inputs.append(explorer.trial_inputs(settings, index).frame)
+        except ValueError:
+            skipped.append(index)
+    return inputs, skipped
+
+
+@dataclass(frozen=True)
+class SequenceRun:
+    """The rows of one sequence run (one per frame, ``cbm.sweep`` columns) and what it ran."""
+
+    settings: Settings
+    rows: tuple[dict[str, Any], ...]
+    n_frames: int
+    """Frames asked for."""
+    skipped: tuple[int, ...]
+    """Frames without an ego or a CAV."""
+    cancelled: bool
+
+    def row(self, frame: int) -> dict[str, Any]:
+        """The row of ``frame`` (``KeyError`` when it was not run)."""
+        for row in self.rows:
+            if row["frame"] == frame:
+                return row
+        raise KeyError(f"frame {frame} was not run")
+
+    def summary(self) -> dict[str, float]:
+        """Micro-averaged metrics over the rows (``cbm.metrics.aggregate``); empty without rows."""
+        return summarise(self.rows, by=("method",))[0][1] if self.rows else {}
+
+    def markdown(self) -> str:
+        """The aggregate table shown after a run."""
+        s = self.summary()
+        state = "cancelled after" if self.cancelled else "over"
+        head = (f"**{METHOD_NAMES[self.settings.method]}**, {state} {len(self.rows)} of {self.n_frames} frames "
+                f"(seed {self.settings.scenario.seed}, {self.settings.scenario.protocol} protocol)")
+        if not s:
+            return head + "\n\nNo frame was run."
+        lines = [head, "", "| | |", "|---|---|",
+                 f"| success (RTE < 1 m, RRE < 1°) | {_num(100 * s['success_rate'], ' %', 1)} |",
+                 f"| precision / recall | {_num(s['precision'])} / {_num(s['recall'])} |",
+                 f"| AD | {_num(s['ad'], ' m')} |",
+                 f"| RTE mean / median | {_num(s['rte_mean'], ' m')} / {_num(s['rte_median'], ' m')} |",
+                 f"| RRE mean / median | {_num(s['rre_mean'], '°')} / {_num(s['rre_median'], '°')} |",
+                 f"| frames with an estimate | {int(s['n_estimated'])} |",
+                 f"| median time per frame | {_num(1000 * s['runtime_median_s'], ' ms', 1)} |"]
+        if self.skipped:
+            lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, self.skipped))}")
+        return "\n".join(lines)
+
+    def plot_data(self) -> tuple[np.ndarray, ...]:
+        """(frames, precision, recall, RTE, RRE) arrays for the per-frame plot (NaN where undefined)."""
+        columns = ("frame", "precision", "recall", "rte", "rre")
+        return tuple(np.array([_float(row[c]) for row in self.rows], dtype=float) for c in columns)
+
+
+def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = None,
+                 frames: Sequence[int] | None = None, chunk: int = CHUNK) -> SequenceRun:
+    """``settings`` over ``frames`` (default: all), in chunks, reporting progress to ``task`` and
+    stopping early (``cancelled=True``, the rows so far) when it is cancelled."""
+    frames = list(range(len(explorer)) if frames is None else frames)
+    sweep = sweep_for(settings)
+    rows: list[dict[str, Any]] = []
+    skipped: list[int] = []
+    for start in range(0, len(frames), chunk):
+        if task is not None and task.cancelled:
+            break
+        inputs, missing = frame_inputs(explorer, settings, frames[start:start + chunk])
+        rows.extend(run(sweep, inputs))
+        skipped.extend(missing)
+        if task is not None:
+            task.report((start + chunk) / len(frames))
+    done = len(rows) + len(skipped)
+    return SequenceRun(settings, tuple(rows), len(frames), tuple(skipped), cancelled=done < len(frames))
+
+
+def _float(value: Any) -> float:
+    return math.nan if value is None else float(value)
+
+
+def _num(value: float, unit: str = "", digits: int = 2) -> str:
+    return "—" if value is None or math.isnan(value) else f"{value:.{digits}f}{unit}"

@@ -1,0 +1,87 @@
+"""Worst frames of a sequence run, ranked by one metric, with the diagnosis of each.
+
+A frame's diagnosis comes from recomputing it exactly as the tab would (``Explorer.compute`` with
+the run's settings at that frame), so the list shows what a jump there puts on screen.
+"""
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any, Callable, Iterable, Sequence
+
+from cbm.diagnosis import Finding
+
+from .sequence import SequenceRun
+from .session import Explorer
+
+RANKINGS: dict[str, tuple[str, bool]] = {
+    # label: (row column, higher is worse)
+    "RTE": ("rte", True),
+    "RRE": ("rre", True),
+    "precision": ("precision", False),
+    "recall": ("recall", False),
+    "consensus margin": ("margin", False),
+}
+"""Metrics the worst frames can be ranked by. An undefined value (no estimate, no match, no anchor)
+ranks worst."""
+UNITS = {"rte": " m", "rre": "°", "precision": "", "recall": "", "margin": ""}
+
+
+def badness(row: dict[str, Any], metric: str) -> float:
+    """How bad ``row`` is by ``metric``: larger is worse, undefined is worst (+inf)."""
+    column, higher_is_worse = RANKINGS[metric]
+    value = row[column]
+    if value is None or math.isnan(float(value)):
+        return math.inf
+    return float(value) if higher_is_worse else -float(value)
+
+
+def rank(rows: Iterable[dict[str, Any]], metric: str, count: int = 10) -> list[dict[str, Any]]:
+    """The ``count`` worst rows by ``metric``, worst first (ties: lower frame first)."""
+    return sorted(rows, key=lambda row: (-badness(row, metric), row["frame"]))[:count]
+
+
+def label(row: dict[str, Any], metric: str) -> str:
+    """One entry of the jump list, e.g. ``frame 37 · RTE 4.21 m``."""
+    column = RANKINGS[metric][0]
+    value = row[column]
+    shown = "—" if value is None or math.isnan(float(value)) else f"{float(value):.2f}{UNITS[column]}"
+    return f"frame {row['frame']} · {metric} {shown}"
+
+
+def frame_of(entry: str) -> int:
+    """The frame of a jump-list entry made by ``label``."""
+    return int(entry.split(" · ")[0].removeprefix("frame "))
+
+
+def diagnoses(explorer: Explorer, run: SequenceRun, frames: Sequence[int],
+              check: Callable[[], None] = lambda: None) -> dict[int, list[Finding]]:
+    """The diagnosis of each of ``frames`` under the run's settings (``check()`` between frames may
+    raise to stop)."""
+    found = {}
+    for frame in frames:
+        check()
+        found[frame] = explorer.compute(dataclasses.replace(run.settings, frame=frame)).findings
+    return found
+
+
+def candidate_frames(run: SequenceRun, count: int = 10) -> list[int]:
+    """Every frame that is among the ``count`` worst by some metric (each once, in frame order)."""
+    return sorted({row["frame"] for metric in RANKINGS for row in rank(run.rows, metric, count)})
+
+
+def markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[int, list[Finding]]) -> str:
+    """The worst-frames table: metrics and the diagnosis of each frame."""
+    if not rows:
+        return "Run the sequence first."
+    lines = [f"**Worst frames by {metric}**", "", "| frame | P / R | RTE | RRE | margin | why it failed |",
+             "|---|---|---|---|---|---|"]
+    for row in rows:
+        why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
+        lines.append(f"| {row['frame']} | {_cell(row['precision'])} / {_cell(row['recall'])} | {_cell(row['rte'], ' m')} "
+                     f"| {_cell(row['rre'], '°')} | {_cell(row['margin'], '', 0)} | {why} |")
+    return "\n".join(lines)
+
+
+def _cell(value: Any, unit: str = "", digits: int = 2) -> str:
+    return "—" if value is None or math.isnan(float(value)) else f"{float(value):.{digits}f}{unit}"

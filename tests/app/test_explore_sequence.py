@@ -1,0 +1,72 @@
+"""Sequence runs: every row is the tab's own number on that frame; a cancel stops early."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from app.background import Task
+from app.sequence import CHUNK, run_sequence, sweep_for
+from app.session import Explorer
+from app.settings import Settings
+
+COMPARED = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad", "rre", "rte",
+            "margin", "estimated")
+
+
+def sind(**changes) -> Settings:
+    settings = Settings()
+    return dataclasses.replace(settings, scenario=dataclasses.replace(settings.scenario, protocol="sind",
+                                                                      sigma_p=0.3, sigma_theta=3.0, **changes))
+
+
+def _same(a, b) -> bool:
+    return (math.isnan(a) and math.isnan(b)) if isinstance(a, float) and math.isnan(a) else a == b
+
+
+@pytest.mark.parametrize("settings", [sind(seed=3), sind(seed=1).with_params("cbm", sigma2=1.5, heading="fold"),
+                                      dataclasses.replace(sind(eta=0.3), method="icp")],
+                         ids=["cbm", "cbm-tuned", "icp"])
+def test_rows_equal_the_tabs_own_computation(small_explorer: Explorer, settings: Settings) -> None:
+    run = run_sequence(small_explorer, settings, frames=range(6))
+    assert [row["frame"] for row in run.rows] == list(range(6)) and not run.cancelled
+    for frame in range(6):
+        shown = small_explorer.compute(dataclasses.replace(settings, frame=frame))
+        row = run.row(frame)
+        assert row["method"] == settings.method and row["seed"] == settings.scenario.seed
+        assert row["cav_id"] == shown.cav_id and row["ego_id"] == shown.ego_id
+        for name in COMPARED:
+            assert _same(row[name], getattr(shown.metrics, name)), (frame, name)
+
+
+def test_the_sweep_runs_the_tabs_parameters() -> None:
+    settings = sind().with_params("cbm", sigma1=7.5, distance_limit=30.0)
+    sweep = sweep_for(settings)
+    assert sweep.method_points("cbm") == [settings.cbm]
+    assert sweep.scenario_points() == [settings.scenario]
+
+
+def test_cancel_stops_at_the_next_chunk(small_explorer: Explorer) -> None:
+    reports: list[float] = []
+    task = Task(reports.append)
+    original = task.report
+
+    def report_then_cancel(fraction: float) -> None:
+        original(fraction)
+        task.cancel()
+
+    task.report = report_then_cancel
+    run = run_sequence(small_explorer, sind(), task, frames=range(3 * CHUNK))
+    assert run.cancelled and len(run.rows) == CHUNK and len(reports) == 1
+    assert "cancelled after 8 of 24 frames" in run.markdown()
+
+
+def test_summary_table_and_plot(small_explorer: Explorer) -> None:
+    run = run_sequence(small_explorer, sind(), frames=range(4))
+    text = run.markdown()
+    assert "over 4 of 4 frames" in text and "precision / recall" in text and "success" in text
+    frames, *values = run.plot_data()
+    assert frames.tolist() == [0, 1, 2, 3] and [len(v) for v in values] == [4, 4, 4, 4]
+    with pytest.raises(KeyError):
+        run.row(40)

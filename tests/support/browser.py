@@ -1,0 +1,73 @@
+"""Helpers of the real-browser tests: Debian's chromium under Playwright, and ways to read the app's
+page and wait for a tab's session."""
+from __future__ import annotations
+
+import re
+import shutil
+import time
+from pathlib import Path
+from typing import Callable, Iterator
+
+CHROMIUM = shutil.which("chromium")
+ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
+        "--disable-background-networking", "--disable-component-update", "--disable-sync",
+        "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
+ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
+
+
+def launch(sync_api) -> Iterator:
+    """Yield a headless chromium (``sync_api``: ``playwright.sync_api``) and close it after."""
+    with sync_api.sync_playwright() as playwright:
+        launched = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        yield launched
+        launched.close()
+
+
+def open_page(browser, server):
+    """A new tab on ``server``, once its first frame's metrics are shown."""
+    page = browser.new_page(viewport={"width": 1400, "height": 900})
+    page.goto(server.url)
+    page.get_by_text("precision / recall").first.wait_for(timeout=30_000)
+    return page
+
+
+def metrics(page) -> str:
+    return page.get_by_text("precision / recall").first.locator("xpath=ancestor::table").inner_text()
+
+
+def header(page) -> str:
+    return page.get_by_text(re.compile(r"^Frame \d+")).first.inner_text()
+
+
+def label(page, text: str):
+    """The GUI label whose whole text is ``text``."""
+    return page.locator("label").filter(has_text=re.compile(f"^{re.escape(text)}$")).first
+
+
+def slider(page, text: str):
+    control = label(page, text).get_attribute("for")
+    return page.locator(f'[id="{control}"] [role="slider"]')
+
+
+def wait_until(condition: Callable[[], bool], timeout: float = 15.0) -> None:
+    deadline = time.monotonic() + timeout
+    while not condition():
+        assert time.monotonic() < deadline, "timed out"
+        time.sleep(0.1)
+
+
+def session(server, count: int):
+    """The newest of at least ``count`` tab sessions, once every one has drawn its first frame."""
+    wait_until(lambda: len(server.sessions) >= count and all(s.last for s in server.sessions.values()))
+    return max(server.sessions.items())[1]
+
+
+def pick_option(page, text: str, option: str) -> None:
+    control = label(page, text).get_attribute("for")
+    page.locator(f'[id="{control}"]').click()
+    page.get_by_role("option", name=option, exact=True).click()
+
+
+def close_notifications(page) -> None:
+    for button in page.locator(".mantine-Notification-root button").all():
+        button.click()
