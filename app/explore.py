@@ -43,6 +43,7 @@ class ExplorePanel:
         self.searched: SearchResult | None = None
         self.inspected: tuple[int, int | None, int | None] | None = None
         """(frame, ego index, CAV index) of the pair the inspector shows."""
+        self.shown: inspector.ContextPicture | None = None
         self.inspector_view = SceneView(session.client)
         with tabs.add_tab("Explore"):
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
@@ -62,6 +63,7 @@ class ExplorePanel:
                 self.worst_table = gui.add_markdown("")
             with gui.add_folder("Context inspector"):
                 self.inspect_winner = gui.add_button("inspect the winning anchor")
+                self.look = gui.add_button("look at the context panels")
                 self.clear = gui.add_button("clear")
                 self.inspector_text = gui.add_markdown("Click a box in the scene to see its context and its "
                                                        "counterpart's, drawn right of the scene.")
@@ -86,6 +88,7 @@ class ExplorePanel:
         self.jump.on_click(lambda e: self.jump_to(worst.frame_of(self.worst.value)) if self.worst.value != NO_RUN else None)
         self.inspect_winner.on_click(lambda e: self.inspect_anchor())
         self.clear.on_click(lambda e: self.clear_inspector())
+        self.look.on_click(lambda e: self.look_at_inspector())
         self.search_button.on_click(lambda e: self.start_search())
         self.apply.on_click(lambda e: self.apply_setting(self.best.value))
         self.csv.on_click(lambda e: self._download_rows("csv", export.metrics_csv))
@@ -183,14 +186,24 @@ class ExplorePanel:
         else:
             self.clear_inspector()
 
+    def look_at_inspector(self) -> None:
+        """Point the camera down on the inspector's panels (reset camera goes back to the scene)."""
+        if self.shown is None:
+            self.session.notify("Nothing inspected", "click a box first", "yellow")
+            return
+        x, y = self.shown.centre
+        camera = self.session.client.camera
+        camera.position = (x - 10.0, y, 1.1 * self.shown.span)
+        camera.look_at = (x, y, 0.0)
+
     def clear_inspector(self) -> None:
-        self.inspected = None
+        self.inspected = self.shown = None
         self.inspector_view.show(inspector.empty())
         self.inspector_text.content = "Click a box in the scene to see its context."
 
     def _inspect(self, outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None) -> None:
         shown = inspector.inspect(outcome, picture, ego, cav)
-        self.inspected = (outcome.frame_index, ego, cav)
+        self.inspected, self.shown = (outcome.frame_index, ego, cav), shown
         self.inspector_view.show(shown.drawing())
         self.inspector_text.content = shown.markdown
 

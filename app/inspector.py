@@ -42,6 +42,10 @@ class ContextPicture:
     lines: dict[str, Lines]
     labels: dict[str, tuple[str, tuple[float, float, float]]]
     markdown: str
+    centre: tuple[float, float] = (0.0, 0.0)
+    """Middle of the panels drawn (where a camera looks to see them)."""
+    span: float = 1.0
+    """Metres from the first panel's far edge to the last's."""
 
     def drawing(self) -> Drawing:
         """As a ``Drawing`` for a ``SceneView``."""
@@ -131,7 +135,10 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
             for name, mask, colour in (("kept", detail.kept_by_consensus, RIGHT), ("removed", ~detail.kept_by_consensus, WRONG)):
                 chosen = np.isin(members, detail.candidates[mask, column])
                 lines[f"inspector_{agent}_{name}"] = Lines(vector_segments(origin, vectors[chosen]), colour, 4.0)
-    return ContextPicture(ego=ego, cav=cav, lines=lines, labels=labels, markdown=_markdown(outcome, ego, cav, detail, params))
+    shown = [origins[agent] for agent in contexts]
+    centre = np.mean(shown, axis=0)
+    return ContextPicture(ego=ego, cav=cav, lines=lines, labels=labels, markdown=_markdown(outcome, ego, cav, detail, params),
+                          centre=(float(centre[0]), float(centre[1])), span=2 * reach * len(shown) + PANEL_GAP * (len(shown) - 1))
 
 
 def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: AnchorDetail | None,

@@ -49,6 +49,8 @@ def test_the_winning_anchor_is_drawn_and_explained(small_explorer: Explorer) -> 
     drawn = np.concatenate([l.segments for l in shown.lines.values() if len(l.segments)])
     scene_right = min(boxes[:, 1].min() for boxes, _ in picture.objects.values())
     assert drawn[..., 1].max() < scene_right, "the panels sit right of the scene"
+    assert drawn[..., 1].min() >= shown.centre[1] - shown.span / 2 - 1e-6
+    assert drawn[..., 1].max() <= shown.centre[1] + shown.span / 2 + 1e-6
 
 
 def test_a_click_finds_the_counterpart(small_explorer: Explorer) -> None:
