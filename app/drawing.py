@@ -212,7 +212,8 @@ def _match_lines(trial, result, ego_xy: np.ndarray, cav_xy: np.ndarray) -> tuple
             geometry.dashed(ego_xy[missed[:, 0]], cav_xy[missed[:, 1]], LINE_HEIGHT))
 
 
-def _number(value: float, unit: str = "", digits: int = 2) -> str:
+def number(value: float, unit: str = "", digits: int = 2) -> str:
+    """``value`` with ``digits`` decimals and ``unit``; a dash when it is undefined (None, NaN)."""
     return "—" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}{unit}"
 
 
@@ -230,14 +231,14 @@ def metrics_markdown(outcome: Outcome) -> str:
         f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
         f"| co-visible | {m.n_true} |",
         f"| matches ({method}) | {m.n_matched} ({m.n_correct} right) |",
-        f"| precision / recall | {_number(m.precision)} / {_number(m.recall)} |",
-        f"| AD | {_number(m.ad, ' m')} |",
-        f"| RRE / RTE | {_number(m.rre, '°')} / {_number(m.rte, ' m')} |",
-        f"| before calibration | {_number(init_rre, '°')} / {_number(init_rte, ' m')} |",
+        f"| precision / recall | {number(m.precision)} / {number(m.recall)} |",
+        f"| AD | {number(m.ad, ' m')} |",
+        f"| RRE / RTE | {number(m.rre, '°')} / {number(m.rte, ' m')} |",
+        f"| before calibration | {number(init_rre, '°')} / {number(init_rte, ' m')} |",
     ]
     if result.anchor is not None:
         lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")
-    lines.append(f"| {method} time | {_number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
+    lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     if not result.estimated:
         lines.append("")
         lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")

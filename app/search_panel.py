@@ -6,13 +6,13 @@ arrive, stops it at once.
 """
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 from cbm.search import SEARCHABLE, Candidate, grid_size, search
 from cbm.sweep import method_fields
 
 from .background import Task
+from .drawing import number
 from .sequence import frame_inputs
 from .session import Explorer
 from .settings import Settings
@@ -41,8 +41,8 @@ class SearchResult:
             p = {**self.current.params, **c.params}
             s = c.summary
             lines.append(f"| {name} | {p['sigma1']:g} | {p['sigma2']:g} | {p['sigma3']:g} | {p['distance_limit']:g} "
-                         f"| {_num(c.score, 3)} | {_num(100 * s['success_rate'], 1)} % "
-                         f"| {_num(s['precision'])} / {_num(s['recall'])} |")
+                         f"| {number(c.score, digits=3)} | {number(100 * s['success_rate'], digits=1)} % "
+                         f"| {number(s['precision'])} / {number(s['recall'])} |")
         return "\n".join(lines)
 
     def option(self, rank: int) -> str:
@@ -73,7 +73,3 @@ def run_search(explorer: Explorer, settings: Settings, objective: str = "success
     candidates = search(frames, settings.scenario, **common)
     current = search(frames, settings.scenario, space={n: [getattr(cbm, n)] for n in SEARCHABLE}, **common)[0]
     return SearchResult(settings, objective, tuple(f.index for f in frames), tuple(candidates), current)
-
-
-def _num(value: float, digits: int = 2) -> str:
-    return "—" if value is None or math.isnan(value) else f"{value:.{digits}f}"

@@ -16,6 +16,7 @@ import numpy as np
 from cbm.sweep import FrameInputs, Sweep, method_fields, run, summarise
 
 from .background import Task
+from .drawing import number
 from .session import Explorer
 from .settings import METHOD_NAMES, Settings
 
@@ -74,13 +75,13 @@ class SequenceRun:
         if not s:
             return head + "\n\nNo frame was run."
         lines = [head, "", "| | |", "|---|---|",
-                 f"| success (RTE < 1 m, RRE < 1°) | {_num(100 * s['success_rate'], ' %', 1)} |",
-                 f"| precision / recall | {_num(s['precision'])} / {_num(s['recall'])} |",
-                 f"| AD | {_num(s['ad'], ' m')} |",
-                 f"| RTE mean / median | {_num(s['rte_mean'], ' m')} / {_num(s['rte_median'], ' m')} |",
-                 f"| RRE mean / median | {_num(s['rre_mean'], '°')} / {_num(s['rre_median'], '°')} |",
+                 f"| success (RTE < 1 m, RRE < 1°) | {number(100 * s['success_rate'], ' %', 1)} |",
+                 f"| precision / recall | {number(s['precision'])} / {number(s['recall'])} |",
+                 f"| AD | {number(s['ad'], ' m')} |",
+                 f"| RTE mean / median | {number(s['rte_mean'], ' m')} / {number(s['rte_median'], ' m')} |",
+                 f"| RRE mean / median | {number(s['rre_mean'], '°')} / {number(s['rre_median'], '°')} |",
                  f"| frames with an estimate | {int(s['n_estimated'])} |",
-                 f"| median time per frame | {_num(1000 * s['runtime_median_s'], ' ms', 1)} |"]
+                 f"| median time per frame | {number(1000 * s['runtime_median_s'], ' ms', 1)} |"]
         if self.skipped:
             lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, self.skipped))}")
         return "\n".join(lines)
@@ -113,7 +114,3 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
 
 def _float(value: Any) -> float:
     return math.nan if value is None else float(value)
-
-
-def _num(value: float, unit: str = "", digits: int = 2) -> str:
-    return "—" if value is None or math.isnan(value) else f"{value:.{digits}f}{unit}"

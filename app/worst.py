@@ -11,6 +11,7 @@ from typing import Any, Callable, Iterable, Sequence
 
 from cbm.diagnosis import Finding
 
+from .drawing import number
 from .sequence import SequenceRun
 from .session import Explorer
 
@@ -78,10 +79,6 @@ def markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[int, li
              "|---|---|---|---|---|---|"]
     for row in rows:
         why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
-        lines.append(f"| {row['frame']} | {_cell(row['precision'])} / {_cell(row['recall'])} | {_cell(row['rte'], ' m')} "
-                     f"| {_cell(row['rre'], '°')} | {_cell(row['margin'], '', 0)} | {why} |")
+        lines.append(f"| {row['frame']} | {number(row['precision'])} / {number(row['recall'])} | {number(row['rte'], ' m')} "
+                     f"| {number(row['rre'], '°')} | {number(row['margin'], '', 0)} | {why} |")
     return "\n".join(lines)
-
-
-def _cell(value: Any, unit: str = "", digits: int = 2) -> str:
-    return "—" if value is None or math.isnan(float(value)) else f"{float(value):.{digits}f}{unit}"
