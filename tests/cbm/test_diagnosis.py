@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from cbm import CBMParams, match, se2
+from cbm import CBMParams, match
 from cbm.diagnosis import diagnose
 from cbm.inspect import Inspection
 from cbm.scenario import ScenarioParams, make_trial
