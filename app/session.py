@@ -115,9 +115,8 @@ class Explorer:
         prepared = self.trial_inputs(settings, index)
         inputs, ego, cav, note = prepared.frame.trial, prepared.ego_id, prepared.cav_id, prepared.cav_note
         trial = make_trial(**inputs, params=settings.scenario, rng=trial_rng(settings.scenario.seed, index))
-        result = run_method(settings.method, trial, _method_params(settings), prepared.frame)
+        result, findings = _run(settings, trial, prepared.frame)
         metrics = evaluate(result, trial)
-        findings = self._findings(settings, trial, result)
         world_to_ego = se2.inverse(trial.ego_pose)
         return Outcome(settings=settings, frame_index=index, ego_id=ego, cav_id=cav, cav_note=note, trial=trial,
                        world_boxes=se2.apply_boxes(world_to_ego, inputs["boxes"]), world_ids=np.asarray(inputs["ids"]),
@@ -133,14 +132,6 @@ class Explorer:
         if cav is None:
             raise ValueError(f"frame {frame.index} has no other vehicle to act as the CAV")
         return cav, "auto" if wanted == AUTO_CAV else f"auto ({wanted[:8]} is not in this frame)"
-
-    @staticmethod
-    def _findings(settings: Settings, trial: Trial, result: MatchResult) -> list[Finding]:
-        if settings.method not in ("cbm", "cbm-no-consensus"):
-            return []
-        params = _method_params(settings)
-        return diagnose(result, trial, Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params))
-
 
 def steady_cav(sequence: Sequence, near: float = 15.0, far: float = 40.0) -> str | None:
     """The vehicle that is ``near``-``far`` metres from the ego in the most frames (ties to the
@@ -162,6 +153,16 @@ def _visibility_by_range(inputs: dict[str, Any], sensor_range: float) -> dict[st
     boxes, ids = inputs["boxes"], np.asarray(inputs["ids"])
     return {"ego": ids[in_range(boxes, inputs["ego_pose"], sensor_range)],
             "cav": ids[in_range(boxes, inputs["cav_pose"], sensor_range)]}
+
+
+def _run(settings: Settings, trial: Trial, frame: FrameInputs) -> tuple[MatchResult, list[Finding]]:
+    """The selected method's result and, for CBM, why it failed: CBM's sets are built once and
+    serve both the match and the diagnosis."""
+    if settings.method not in ("cbm", "cbm-no-consensus"):
+        return run_method(settings.method, trial, settings.params, frame), []
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, _method_params(settings))
+    result = inspection.match()
+    return result, diagnose(result, trial, inspection)
 
 
 def _method_params(settings: Settings) -> Any:

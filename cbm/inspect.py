@@ -6,13 +6,15 @@ single anchors with plain numpy, so the app can show why a pair was kept or drop
 from __future__ import annotations
 
 import functools
+import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from .consensus import PairSets
 from .params import CBMParams
-from .pipeline import Sets, build_sets, checked_inputs
+from .pipeline import Sets, build_sets, checked_inputs, match_sets
+from .result import MatchResult
 
 
 @dataclass(frozen=True)
@@ -67,9 +69,15 @@ class Inspection:
 
     def __init__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
                  params: CBMParams | None = None) -> None:
+        started = time.perf_counter()
         ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
-        self.sets: Sets = build_sets(ego, cav, init, params)
-        self.n_cav = len(cav)
+        self._timings: dict[str, float] = {}
+        self.sets: Sets = build_sets(ego, cav, init, params, self._timings)
+        self.init, self.n_cav, self._started = init, len(cav), started
+
+    def match(self) -> MatchResult:
+        """What ``cbm.match`` returns on the same input, from the sets already built."""
+        return match_sets(self.sets, self.init, dict(self._timings), self._started)
 
     def _pairs(self, ids: np.ndarray) -> np.ndarray:
         return np.stack([ids // self.n_cav, ids % self.n_cav], axis=1).reshape(-1, 2)

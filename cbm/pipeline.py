@@ -90,8 +90,16 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
     started = time.perf_counter()
     ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
     timings: dict[str, float] = {}
-    sets = build_sets(ego, cav, init, params, timings)
+    return match_sets(build_sets(ego, cav, init, params, timings), init, timings, started)
 
+
+def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
+               started: float | None = None) -> MatchResult:
+    """Steps 5-7 on sets already built (``build_sets``): consensus, selection, pose estimate.
+    ``timings`` and ``started`` carry the earlier stages' timings into the result."""
+    started = time.perf_counter() if started is None else started
+    timings = {} if timings is None else timings
+    params, n_cav = sets.params, len(sets.cav_xy)
     t = time.perf_counter()
     chosen = select(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
     timings["consensus_selection"] = time.perf_counter() - t
@@ -104,7 +112,7 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
     timings["estimate"] = time.perf_counter() - t
     timings["total"] = time.perf_counter() - started
 
-    anchor = None if chosen.anchor is None else (chosen.anchor // len(cav), chosen.anchor % len(cav))
+    anchor = None if chosen.anchor is None else (chosen.anchor // n_cav, chosen.anchor % n_cav)
     return MatchResult(
         pairs=pairs.astype(np.intp),
         transform=correction @ init,

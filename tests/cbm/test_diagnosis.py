@@ -92,6 +92,9 @@ def test_inspector_agrees_with_the_fast_path(setting):
     params = CBMParams(**setting)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    again = inspection.match()
+    np.testing.assert_array_equal(again.pairs, result.pairs)
+    np.testing.assert_array_equal(again.transform, result.transform)
     winner = inspection.anchor(*result.anchor)
     np.testing.assert_array_equal(winner.final, result.pairs)
     assert len(winner.candidates) == result.candidate_count
