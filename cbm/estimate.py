@@ -2,14 +2,45 @@
 
 The robust loss psi of eq. 14 is Welsch's, ``1 - exp(-r^2 / (2 nu^2))``, minimised as in "Fast and
 Robust Iterative Closest Point" (Zhang, Yao, Deng, TPAMI 2022) with the correspondences fixed:
-iteratively reweighted weighted Procrustes, nu starting at 3x the median residual of the
-least-squares fit and halved down to a floor set by the expected detection noise.
+iteratively reweighted weighted Procrustes, started from a least-median fit and run at a scale nu
+that follows the noise the residuals show (``robust_fit``).
 """
 from __future__ import annotations
+
+import math
+from dataclasses import dataclass
 
 import numpy as np
 
 from . import se2
+
+RAYLEIGH_MEDIAN = math.sqrt(2.0 * math.log(2.0))
+"""Median of ||e|| for e ~ N(0, I_2): the Rayleigh distribution's median in units of sigma, so a
+median residual over it is a median-absolute-deviation estimate of sigma for 2-D residuals."""
+WELSCH_EFFICIENT_SCALE = 2.9846 / math.sqrt(2.0)
+"""nu / sigma at which Welsch's estimator is 95 % as efficient as least squares on Gaussian noise:
+Holland and Welsch (1977) give the tuning constant c = 2.9846 sigma for rho(r) ~ 1 - exp(-(r/c)^2),
+and our weight exp(-r^2 / (2 nu^2)) has c = sqrt(2) nu."""
+LMEDS_HYPOTHESES = 256
+"""Most two-pair hypotheses the least-median start tries."""
+INLIER_GATE = 3.0
+"""Pairs within this many sigma_0 of the least-median fit are inliers (for 2-D Gaussian noise a
+true pair falls outside with probability exp(-4.5) = 1.1 %)."""
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A rigid fit of matched centres and the noise it assumes."""
+
+    transform: np.ndarray
+    """(3, 3) T minimising eq. 14 (``dst ~ T src``)."""
+    weights: np.ndarray
+    """(K,) final weight of each pair in [0, 1] (all 1 for least squares)."""
+    scale: float
+    """Metres. The final Welsch scale nu (infinite for least squares)."""
+    sigma: float
+    """Metres. Per-axis std-dev of a pair's residual read from the inliers (``inlier_sigma``), at
+    least ``nu_floor / WELSCH_EFFICIENT_SCALE``: the noise the detections are assumed to carry."""
 
 
 def weighted_procrustes(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
@@ -46,22 +77,118 @@ def welsch_weights(r: np.ndarray, nu: float) -> np.ndarray:
     return np.exp(-(r ** 2) / (2.0 * nu ** 2))
 
 
-def robust_se2(src: np.ndarray, dst: np.ndarray, nu_floor: float, max_inner: int = 20,
-               tol: float = 1e-6) -> np.ndarray:
-    """Robust SE(2) fit of eq. 14 with Welsch weights and an annealed scale nu (needs >= 2 pairs)."""
+def inlier_sigma(r: np.ndarray, inlier: np.ndarray) -> float:
+    """Per-axis std-dev of the inliers' residuals with the fit's 3 degrees of freedom taken out:
+    ``sqrt(sum r^2 / (2 K_in - 3))`` (0 below 2 inliers)."""
+    k = int(np.count_nonzero(inlier))
+    return math.sqrt(float(np.sum(r[inlier] ** 2)) / (2 * k - 3)) if k >= 2 else 0.0
+
+
+def least_squares_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
+    """Plain least squares (every weight 1), as the authors' released code fits (SVD)."""
     T = weighted_procrustes(src, dst)
     r = residuals(T, src, dst)
-    nu = max(3.0 * float(np.median(r)), nu_floor)
-    while True:
-        for _ in range(max_inner):
-            w = welsch_weights(r, nu)
-            if w.sum() < 1e-12 or np.count_nonzero(w > 1e-12) < 2:
-                break
-            T_next = weighted_procrustes(src, dst, w)
-            step = np.abs(T_next - T).max()
-            T, r = T_next, residuals(T_next, src, dst)
-            if step < tol:
-                break
-        if nu <= nu_floor:
-            return T
-        nu = max(nu / 2.0, nu_floor)
+    sigma = max(inlier_sigma(r, np.ones(len(r), dtype=bool)), nu_floor / WELSCH_EFFICIENT_SCALE)
+    return Fit(T, np.ones(len(src)), math.inf, sigma)
+
+
+def _reweighted(src: np.ndarray, dst: np.ndarray, T: np.ndarray, nu: float, max_inner: int = 20,
+                tol: float = 1e-6) -> np.ndarray:
+    """Iteratively reweighted weighted Procrustes at a fixed Welsch scale ``nu``, from ``T``."""
+    r = residuals(T, src, dst)
+    for _ in range(max_inner):
+        w = welsch_weights(r, nu)
+        if np.count_nonzero(w > 1e-12) < 2:
+            break
+        T_next = weighted_procrustes(src, dst, w)
+        step = np.abs(T_next - T).max()
+        T, r = T_next, residuals(T_next, src, dst)
+        if step < tol:
+            break
+    return T
+
+
+def two_point_fits(src: np.ndarray, dst: np.ndarray, a: np.ndarray,
+                   b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(theta, tx, ty) of the least-squares rigid fit of each two pairs (a_h, b_h): the angle turns
+    ``src_b - src_a`` onto ``dst_b - dst_a`` and the midpoints coincide."""
+    ds, dd = src[b] - src[a], dst[b] - dst[a]
+    theta = np.arctan2(ds[:, 0] * dd[:, 1] - ds[:, 1] * dd[:, 0], ds[:, 0] * dd[:, 0] + ds[:, 1] * dd[:, 1])
+    c, s = np.cos(theta), np.sin(theta)
+    ms, md = 0.5 * (src[a] + src[b]), 0.5 * (dst[a] + dst[b])
+    return theta, md[:, 0] - (c * ms[:, 0] - s * ms[:, 1]), md[:, 1] - (s * ms[:, 0] + c * ms[:, 1])
+
+
+def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray, np.ndarray]:
+    """Index pairs (a, b), a != b, of the two-pair hypotheses: all of them when there are at most
+    ``limit``, else ``limit`` of them spread evenly (a runs over every pair, b at varying strides)."""
+    if k * (k - 1) // 2 <= limit:
+        a, b = np.triu_indices(k, 1)
+        return a, b
+    h = np.arange(limit)
+    a = h % k
+    return a, (a + 1 + (h * 7919) % (k - 1)) % k
+
+
+def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, float]:
+    """Least median of squares (Rousseeuw, JASA 1984) over rigid fits through two pairs
+    (``hypothesis_pairs``): the fit whose median residual over the *other* pairs is smallest, and
+    that median (lower median; 0 for two pairs). The two pairs a fit passes through are left out
+    of its median, which would otherwise start from two near-zero residuals and claim too little
+    noise. The answer stands while fewer than half of the other pairs are wrong. The pairs are put
+    in order of their distances from the centroids first, so the answer depends neither on the
+    input order nor on where either frame lies."""
+    order = np.lexsort((np.linalg.norm(src - src.mean(axis=0), axis=1), np.linalg.norm(dst - dst.mean(axis=0), axis=1)))
+    src, dst = src[order], dst[order]
+    k = len(src)
+    a, b = hypothesis_pairs(k)
+    theta, tx, ty = two_point_fits(src, dst, a, b)
+    if k == 2:
+        return se2.make(tx[0], ty[0], theta[0]), 0.0
+    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
+    dx = c * src[:, 0] - s * src[:, 1] + tx[:, None] - dst[:, 0]
+    dy = s * src[:, 0] + c * src[:, 1] + ty[:, None] - dst[:, 1]
+    squared = dx * dx + dy * dy
+    hypothesis = np.arange(len(a))
+    squared[hypothesis, a] = squared[hypothesis, b] = np.inf
+    middle = (k - 3) // 2
+    median = np.partition(squared, middle, axis=1)[:, middle]
+    best = int(np.argmin(median))
+    return se2.make(tx[best], ty[best], theta[best]), math.sqrt(median[best])
+
+
+def least_median_sigma(median: float, k: int) -> float:
+    """Rousseeuw and Leroy's (1987) scale of a least-median fit of ``k`` pairs, for 2-D residuals:
+    the Rayleigh median ``median / sqrt(2 ln 2)`` times their small-sample factor ``1 + 5 / (n - p)``
+    (``n = 2k`` coordinates, ``p = 3`` parameters), which undoes the fit's choice of the smallest median."""
+    return median / RAYLEIGH_MEDIAN * (1.0 + 5.0 / max(2 * k - 3, 1))
+
+
+def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
+    """Robust SE(2) fit of eq. 14 with Welsch weights and a scale that follows the data (>= 2 pairs).
+
+    1. Start where fewer than half of the pairs can pull: the least-median fit
+       (``least_median_fit``) and its scale sigma_0 (``least_median_sigma``).
+    2. Read the noise from the pairs within ``INLIER_GATE`` sigma_0 of it: their least-squares
+       fit and its residual std-dev sigma (``inlier_sigma``, never below ``nu_floor / c``) --
+       Rousseeuw and Leroy's reweighted least squares (1987, ch. 5).
+    3. Minimise eq. 14 by iteratively reweighted Procrustes (the majorise-minimise step of Zhang,
+       Yao, Deng, TPAMI 2022) at nu = c sigma, ``c = WELSCH_EFFICIENT_SCALE``: Holland and Welsch's
+       95 %-efficiency constant.
+
+    So on Gaussian inliers the fit stays close to least squares however large the detection noise
+    (a scale annealed to a fixed floor left it on the two or three pairs that agree best), and pairs
+    many sigma off weigh nothing. The scale is read once, from a least-squares fit of the inliers:
+    read from the robust fit's own residuals it would shrink on few pairs, round after round.
+    """
+    floor = nu_floor / WELSCH_EFFICIENT_SCALE
+    T, median = least_median_fit(src, dst)
+    r = residuals(T, src, dst)
+    inlier = r <= INLIER_GATE * max(least_median_sigma(median, len(r)), floor)
+    if np.count_nonzero(inlier) >= 2:
+        T = weighted_procrustes(src[inlier], dst[inlier])
+        r = residuals(T, src, dst)
+    sigma = max(inlier_sigma(r, inlier), floor)
+    nu = WELSCH_EFFICIENT_SCALE * sigma
+    T = _reweighted(src, dst, T, nu)
+    return Fit(T, welsch_weights(residuals(T, src, dst), nu), nu, sigma)

@@ -1,4 +1,5 @@
-"""CBM, steps 1-7 of the paper's section III, from two box lists and a wrong relative pose."""
+"""CBM, steps 1-7 of the paper's section III, from two box lists and a wrong relative pose, and the
+guided re-association beyond it (step 7b, ``cbm.reassociate``)."""
 from __future__ import annotations
 
 import time
@@ -9,10 +10,11 @@ import numpy as np
 from . import se2
 from .consensus import PairSets, sets_within
 from .context import Context, build_context, fold_heading, pair_signs
-from .estimate import residuals, robust_se2
+from .estimate import Fit, least_squares_fit, residuals, robust_fit
 from .inputs import checked_boxes, checked_transform
 from .local_matching import accepted_quadruples
 from .params import CBMParams
+from .reassociate import reassociate
 from .result import MatchResult
 from .selection import select
 
@@ -22,10 +24,10 @@ class Sets:
     """Everything CBM knows before it picks an anchor (steps 1-4 and the sets of step 5)."""
 
     params: CBMParams
-    ego_xy: np.ndarray
-    """(Ne, 2) ego centres."""
-    cav_xy: np.ndarray
-    """(Nc, 2) CAV centres pre-transformed into the ego frame by ``init`` (step 1)."""
+    ego_boxes: np.ndarray
+    """(Ne, 7) ego boxes."""
+    cav_boxes: np.ndarray
+    """(Nc, 7) CAV boxes pre-transformed into the ego frame by ``init`` (step 1)."""
     ego_heading: np.ndarray
     """(Ne,) folded ego headings (step 2)."""
     cav_heading: np.ndarray
@@ -38,6 +40,16 @@ class Sets:
     """L_ij of every anchor (eq. 8), grouped by pair id ``i * Nc + j``."""
     voted_by: PairSets
     """Row m: the pairs whose voting set holds pair m (empty when consensus is off)."""
+
+    @property
+    def ego_xy(self) -> np.ndarray:
+        """(Ne, 2) ego centres."""
+        return self.ego_boxes[:, :2]
+
+    @property
+    def cav_xy(self) -> np.ndarray:
+        """(Nc, 2) CAV centres in the ego frame after ``init``."""
+        return self.cav_boxes[:, :2]
 
     @property
     def rule(self) -> str | None:
@@ -66,7 +78,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     candidates = sets_within(quads, params.sigma2, n_pairs)
     voted_by = sets_within(quads, params.sigma3, n_pairs, by_member=True) if params.consensus else PairSets.empty(n_pairs)
     timings["candidate_sets"] = time.perf_counter() - t
-    return Sets(params, ego_xy, cav_xy, ego_heading, cav_heading, signs, ego_context, cav_context, candidates, voted_by)
+    return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates, voted_by)
 
 
 def checked_inputs(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None,
@@ -95,8 +107,8 @@ def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None 
 
 def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
                started: float | None = None) -> MatchResult:
-    """Steps 5-7 on sets already built (``build_sets``): consensus, selection, pose estimate.
-    ``timings`` and ``started`` carry the earlier stages' timings into the result."""
+    """Steps 5-7b on sets already built (``build_sets``): consensus, selection, pose estimate,
+    guided re-association. ``timings`` and ``started`` carry the earlier stages' timings into the result."""
     started = time.perf_counter() if started is None else started
     timings = {} if timings is None else timings
     params, n_cav = sets.params, len(sets.cav_xy)
@@ -105,23 +117,38 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
     timings["consensus_selection"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    pairs = chosen.pairs
-    src, dst = sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]]
+    context_pairs = pairs = chosen.pairs.astype(np.intp)
     estimated = len(pairs) >= 2
-    correction = robust_se2(src, dst, params.welsch_floor) if estimated else np.eye(3)
+    fit = estimate(sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]], params) if estimated else None
     timings["estimate"] = time.perf_counter() - t
+
+    if estimated and params.refine:
+        t = time.perf_counter()
+        refined = reassociate(sets.ego_boxes, sets.cav_boxes, pairs, fit, params.refine_gate,
+                              lambda src, dst: estimate(src, dst, params))
+        pairs, fit = refined.pairs, refined.fit
+        timings["reassociate"] = time.perf_counter() - t
+    correction = fit.transform if estimated else np.eye(3)
     timings["total"] = time.perf_counter() - started
 
     anchor = None if chosen.anchor is None else (chosen.anchor // n_cav, chosen.anchor % n_cav)
     return MatchResult(
-        pairs=pairs.astype(np.intp),
+        pairs=pairs,
         transform=correction @ init,
         init=init,
         estimated=estimated,
         anchor=anchor,
         candidate_count=chosen.candidate_count,
-        consensus_count=len(pairs),
+        consensus_count=len(context_pairs),
         runner_up_count=chosen.runner_up_count,
-        residuals=residuals(correction, src, dst),
+        residuals=residuals(correction, sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]]),
         timings=timings,
+        context_pairs=context_pairs,
     )
+
+
+def estimate(src: np.ndarray, dst: np.ndarray, params: CBMParams) -> Fit:
+    """Step 7 (eq. 14): the correction fitted to matched centres by the chosen estimator."""
+    if params.estimator == "least_squares":
+        return least_squares_fit(src, dst, params.welsch_floor)
+    return robust_fit(src, dst, params.welsch_floor)

@@ -25,13 +25,16 @@ class MatchResult:
     candidate_count: int
     """Size of the winning anchor's candidate set L_ij before consensus (eq. 8)."""
     consensus_count: int
-    """Size of the winning set after consensus and the one-to-one rule (eq. 11-12)."""
+    """Size of the winning set after consensus and the one-to-one rule (eq. 11-12): CBM's own pairs."""
     runner_up_count: int
     """Largest set of an anchor that shares no pair with the winner (0 when there is none)."""
     residuals: np.ndarray
     """(K,) metres: distance of each pair's centres after ``transform``."""
     timings: dict[str, float] = field(default_factory=dict)
     """Seconds per stage."""
+    context_pairs: np.ndarray | None = None
+    """(K0, 2) CBM's own pairs, the winning set of eq. 13, before the guided re-association that
+    may add to them (``cbm.reassociate``); None for methods that are not CBM."""
 
     @property
     def margin(self) -> int:

@@ -3,7 +3,6 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match, se2
-from cbm.estimate import robust_se2
 from cbm.metrics import evaluate
 from cbm.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
@@ -64,24 +63,6 @@ def test_moving_either_frame_rigidly_changes_nothing(seed):
     np.testing.assert_allclose(moved_cav.transform, base.transform @ se2.inverse(H), atol=1e-6)
 
 
-def test_exact_correspondences_recover_the_transform():
-    rng = np.random.default_rng(1)
-    src = rng.uniform(-50, 50, (12, 2))
-    T = se2.make(3.2, -1.7, np.radians(7.5))
-    np.testing.assert_allclose(robust_se2(src, se2.apply_points(T, src), nu_floor=0.3), T, atol=1e-9)
-
-
-def test_robust_fit_ignores_a_gross_outlier():
-    rng = np.random.default_rng(2)
-    src = rng.uniform(-50, 50, (15, 2))
-    T = se2.make(-2.0, 4.0, np.radians(-4))
-    dst = se2.apply_points(T, src) + rng.normal(0, 0.05, src.shape)
-    dst[0] += (15.0, -10.0)
-    estimate = robust_se2(src, dst, nu_floor=0.3)
-    assert np.linalg.norm(se2.translation_of(estimate) - se2.translation_of(T)) < 0.1
-    assert abs(se2.yaw_of(estimate) - se2.yaw_of(T)) < np.radians(0.2)
-
-
 @pytest.mark.parametrize("seed", range(5))
 def test_sind_protocol_at_mild_noise_is_recovered(seed):
     trial = sind_trial(n=50, seed=seed, eta=0.5, sigma_p=0.3, sigma_theta=3.0)
@@ -94,8 +75,9 @@ def test_result_explains_itself():
     trial = sind_trial(seed=7)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init)
     assert result.estimated and result.anchor is not None
-    assert tuple(result.anchor) in {tuple(p) for p in result.pairs}
-    assert result.candidate_count >= result.consensus_count == len(result.pairs)
+    assert tuple(result.anchor) in {tuple(p) for p in result.context_pairs}
+    assert result.candidate_count >= result.consensus_count == len(result.context_pairs)
+    assert {tuple(p) for p in result.context_pairs} <= {tuple(p) for p in result.pairs}
     assert 0 <= result.runner_up_count < result.consensus_count and result.margin > 0
     assert result.residuals.shape == (len(result.pairs),) and np.all(result.residuals < 1.5)
     assert set(result.timings) >= {"context", "local_matching", "candidate_sets", "consensus_selection", "estimate", "total"}

@@ -1,0 +1,135 @@
+"""Guided re-association after CBM (beyond the paper; DESIGN.md step 7b).
+
+CBM's answer is one anchor's set (eq. 13): under hard noise its local tests (eq. 7) miss many true
+pairs, although once the pose is known most true pairs lie within a metre or two of each other.
+So, starting from CBM's pairs and pose estimate:
+
+1. move the CAV boxes by the estimate and pair all boxes one-to-one by a gated assignment
+   (``gated_assignment``: global nearest neighbour, scipy's ``linear_sum_assignment``) whose cost
+   reads the centre distance in units of the pairs' noise sigma, the heading axes and the sizes;
+2. refit the pose on the new pairs (``cbm.estimate``; the noise sigma is re-read from them);
+3. repeat until the pairs stop changing, at most ``MAX_ROUNDS`` times.
+
+Guard against drift: the refined answer replaces CBM's only when it holds at least as many pairs
+(``Refinement.accepted``); otherwise CBM's stands.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+from scipy.optimize import linear_sum_assignment
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
+
+from . import se2
+from .estimate import Fit
+
+MAX_ROUNDS = 5
+"""Most association / refit rounds (the pairs usually stop changing after two or three)."""
+HEADING_SIGMA = math.radians(15.0)
+"""Std-dev of the angle between two detections' heading axes of one object (a pi flip is free)."""
+SIZE_SIGMA = 0.2
+"""Std-dev of the size mismatch ``hypot(log(l_e / l_c), log(w_e / w_c))`` of one object's detections."""
+SIZE_GATE = 0.4
+"""Largest size mismatch of a pair (the two boxes' lengths or widths about 1.5 times apart)."""
+_UNPAIRED = 1e6
+"""Cost of an entry outside the gate in a dense block: above any sum of gated costs."""
+
+Refit = Callable[[np.ndarray, np.ndarray], Fit]
+"""Fit of (src, dst) centres, ``dst ~ T src``: ``cbm.estimate.robust_fit`` or ``least_squares_fit``."""
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """The pairs and pose after re-association, and whether they replaced CBM's."""
+
+    pairs: np.ndarray
+    """(K, 2) (ego index, CAV index), one-to-one, sorted by ego index."""
+    fit: Fit
+    """Fit of the correction on ``pairs`` (CAV boxes already moved by ``init``)."""
+    rounds: int
+    """Association rounds run."""
+    accepted: bool
+    """False when the refined pairs were fewer than CBM's; then ``pairs`` and ``fit`` are CBM's."""
+
+
+def axis_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Angle between heading axes in [0, pi/2]: headings pi apart (a flipped detection) agree."""
+    d = np.abs(se2.wrap_angle(np.asarray(a) - np.asarray(b)))
+    return np.minimum(d, np.pi - d)
+
+
+def size_mismatch(ego: np.ndarray, cav: np.ndarray) -> np.ndarray:
+    """``hypot(log(l_e / l_c), log(w_e / w_c))`` of boxes row by row (0 for equal sizes)."""
+    return np.hypot(np.log(ego[:, 3] / cav[:, 3]), np.log(ego[:, 4] / cav[:, 4]))
+
+
+def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate pairs (i, j) whose centres lie within ``gate`` and whose sizes agree within
+    ``SIZE_GATE``, and their costs: the negative log-likelihood of one object seen twice,
+    ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``."""
+    found = cKDTree(ego[:, :2]).sparse_distance_matrix(cKDTree(cav[:, :2]), gate, output_type="ndarray")
+    i, j, d = found["i"].astype(np.intp), found["j"].astype(np.intp), found["v"]
+    mismatch = size_mismatch(ego[i], cav[j])
+    keep = mismatch <= SIZE_GATE
+    i, j, d, mismatch = i[keep], j[keep], d[keep], mismatch[keep]
+    cost = (d / sigma) ** 2 + (axis_difference(ego[i, 6], cav[j, 6]) / HEADING_SIGMA) ** 2 + (mismatch / SIZE_SIGMA) ** 2
+    return np.stack([i, j], axis=1), cost
+
+
+def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> np.ndarray:
+    """One-to-one pairs of ego and CAV boxes (both in the ego frame): the most pairs inside the
+    gate, and among those the least summed cost (``gated_pairs``), sorted by ego index.
+
+    The gated pairs split into connected groups that share no box; each group is solved on its
+    own (``linear_sum_assignment`` on its small dense block), so the work follows the groups' sizes.
+    """
+    candidates, cost = gated_pairs(ego, cav, gate, sigma)
+    if len(candidates) == 0:
+        return np.zeros((0, 2), dtype=np.intp)
+    n_ego = len(ego)
+    size = n_ego + len(cav)
+    graph = coo_matrix((np.ones(len(cost)), (candidates[:, 0], n_ego + candidates[:, 1])), shape=(size, size))
+    group = connected_components(graph, directed=False)[1][candidates[:, 0]]
+    order = np.argsort(group, kind="stable")
+    candidates, cost, group = candidates[order], cost[order], group[order]
+    starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
+    ends = np.r_[starts[1:], len(group)]
+    alone = ends - starts == 1
+    chosen = [candidates[starts[alone]]]
+    for start, end in zip(starts[~alone], ends[~alone]):
+        chosen.append(_assign_block(candidates[start:end], cost[start:end]))
+    pairs = np.concatenate(chosen)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def _assign_block(candidates: np.ndarray, cost: np.ndarray) -> np.ndarray:
+    """The assignment of one connected group of candidates."""
+    rows, row_of = np.unique(candidates[:, 0], return_inverse=True)
+    cols, col_of = np.unique(candidates[:, 1], return_inverse=True)
+    block = np.full((len(rows), len(cols)), _UNPAIRED)
+    block[row_of, col_of] = cost
+    r, c = linear_sum_assignment(block)
+    inside = block[r, c] < _UNPAIRED
+    return np.stack([rows[r[inside]], cols[c[inside]]], axis=1)
+
+
+def reassociate(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, gate: float,
+                refit: Refit) -> Refinement:
+    """Re-associate ``ego`` and ``cav`` boxes (the CAV's moved by ``init``) starting from CBM's
+    ``pairs`` and their ``fit``; the gate is ``gate`` times the current fit's noise sigma."""
+    current, current_fit, rounds = pairs, fit, 0
+    while rounds < MAX_ROUNDS:
+        rounds += 1
+        moved = se2.apply_boxes(current_fit.transform, cav)
+        found = gated_assignment(ego, moved, gate * current_fit.sigma, current_fit.sigma)
+        if len(found) < 2 or np.array_equal(found, current):
+            break
+        current, current_fit = found, refit(cav[found[:, 1], :2], ego[found[:, 0], :2])
+    if len(current) < len(pairs):
+        return Refinement(pairs, fit, rounds, accepted=False)
+    return Refinement(current, current_fit, rounds, accepted=True)
