@@ -36,6 +36,8 @@ SIZE_SIGMA = 0.2
 """Std-dev of the size mismatch ``hypot(log(l_e / l_c), log(w_e / w_c))`` of one object's detections."""
 SIZE_GATE = 0.4
 """Largest size mismatch of a pair (the two boxes' lengths or widths about 1.5 times apart)."""
+DENSE_BLOCK = 40_000
+"""Up to this many entries (gated ego boxes x gated CAV boxes) the assignment is one dense block."""
 _UNPAIRED = 1e6
 """Cost of an entry outside the gate in a dense block: above any sum of gated costs."""
 
@@ -85,26 +87,29 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     """One-to-one pairs of ego and CAV boxes (both in the ego frame): the most pairs inside the
     gate, and among those the least summed cost (``gated_pairs``), sorted by ego index.
 
-    The gated pairs split into connected groups that share no box; each group is solved on its
-    own (``linear_sum_assignment`` on its small dense block), so the work follows the groups' sizes.
+    A small problem is one dense block for ``linear_sum_assignment``; a large one splits into the
+    connected groups of candidates that share no box, each solved on its own, so the work follows
+    the groups' sizes rather than the product of the box counts.
     """
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    n_ego = len(ego)
-    size = n_ego + len(cav)
-    graph = coo_matrix((np.ones(len(cost)), (candidates[:, 0], n_ego + candidates[:, 1])), shape=(size, size))
+    n_rows, n_cols = len(np.unique(candidates[:, 0])), len(np.unique(candidates[:, 1]))
+    if n_rows * n_cols <= DENSE_BLOCK:
+        pairs = _assign_block(candidates, cost)
+    else:
+        pairs = np.concatenate([_assign_block(candidates[group], cost[group])
+                                for group in _connected_groups(candidates, len(ego), len(cav))])
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def _connected_groups(candidates: np.ndarray, n_ego: int, n_cav: int) -> list[np.ndarray]:
+    """Indices of the candidates of each connected group (boxes linked through shared candidates)."""
+    size = n_ego + n_cav
+    graph = coo_matrix((np.ones(len(candidates)), (candidates[:, 0], n_ego + candidates[:, 1])), shape=(size, size))
     group = connected_components(graph, directed=False)[1][candidates[:, 0]]
     order = np.argsort(group, kind="stable")
-    candidates, cost, group = candidates[order], cost[order], group[order]
-    starts = np.flatnonzero(np.r_[True, group[1:] != group[:-1]])
-    ends = np.r_[starts[1:], len(group)]
-    alone = ends - starts == 1
-    chosen = [candidates[starts[alone]]]
-    for start, end in zip(starts[~alone], ends[~alone]):
-        chosen.append(_assign_block(candidates[start:end], cost[start:end]))
-    pairs = np.concatenate(chosen)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    return np.split(order, np.flatnonzero(np.diff(group[order])) + 1)
 
 
 def _assign_block(candidates: np.ndarray, cost: np.ndarray) -> np.ndarray:

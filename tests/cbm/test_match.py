@@ -77,7 +77,6 @@ def test_result_explains_itself():
     assert result.estimated and result.anchor is not None
     assert tuple(result.anchor) in {tuple(p) for p in result.context_pairs}
     assert result.candidate_count >= result.consensus_count == len(result.context_pairs)
-    assert {tuple(p) for p in result.context_pairs} <= {tuple(p) for p in result.pairs}
     assert 0 <= result.runner_up_count < result.consensus_count and result.margin > 0
     assert result.residuals.shape == (len(result.pairs),) and np.all(result.residuals < 1.5)
     assert set(result.timings) >= {"context", "local_matching", "candidate_sets", "consensus_selection", "estimate", "total"}
