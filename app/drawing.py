@@ -109,7 +109,7 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
         if view.ghosts:
             ghost_parts.append(_shift(outcome.world_boxes[np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))], offset))
         if view.lines:
-            r, w, m = _match_lines(trial, result, trial.ego_boxes[:, :2] + offset, cav[:, :2])
+            r, w, m = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2])
             right.append(r), wrong.append(w), missed.append(m)
         for kind, segments in map_segments.items():
             local = se2.apply_points(shift @ world_to_ego, segments.reshape(-1, 2)).reshape(-1, 2, 2)
@@ -200,10 +200,19 @@ def _lift(segments2d: np.ndarray) -> np.ndarray:
     return out
 
 
-def _match_lines(trial, result, ego_xy: np.ndarray, cav_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def shown_pairs(outcome: Outcome) -> np.ndarray:
+    """The pairs the match lines show: CBM's own (before the re-association) when the view asks
+    for them and the method has them, else the method's final pairs."""
+    result = outcome.result
+    if outcome.settings.view.line_pairs == "own" and result.context_pairs is not None:
+        return result.context_pairs
+    return result.pairs
+
+
+def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Segments of right pairs, wrong pairs, and true pairs the method missed (dashed)."""
     truth = {tuple(p) for p in trial.gt_pairs.tolist()}
-    found = {tuple(p) for p in result.pairs.tolist()}
+    found = {tuple(p) for p in pairs.tolist()}
     right = np.array([p for p in found if p in truth], dtype=int).reshape(-1, 2)
     wrong = np.array([p for p in found if p not in truth], dtype=int).reshape(-1, 2)
     missed = np.array([p for p in truth if p not in found], dtype=int).reshape(-1, 2)
@@ -217,9 +226,17 @@ def number(value: float, unit: str = "", digits: int = 2) -> str:
     return "—" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}{unit}"
 
 
+def _own_pairs(result) -> str:
+    """How many of the pairs CBM found itself, when the re-association changed them."""
+    own = result.context_pairs
+    if own is None or np.array_equal(own, result.pairs):
+        return ""
+    return f"; CBM's own {len(own)}"
+
+
 def metrics_markdown(outcome: Outcome) -> str:
     """The metrics panel's text for one frame."""
-    m, result, trial = outcome.metrics, outcome.result, outcome.trial
+    m, result, trial, limit = outcome.metrics, outcome.result, outcome.trial, outcome.limit
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHOD_NAMES[outcome.settings.method]
@@ -230,11 +247,12 @@ def metrics_markdown(outcome: Outcome) -> str:
         "|---|---|",
         f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
         f"| co-visible | {m.n_true} |",
-        f"| matches ({method}) | {m.n_matched} ({m.n_correct} right) |",
+        f"| matches ({method}) | {m.n_matched} ({m.n_correct} right){_own_pairs(result)} |",
         f"| precision / recall | {number(m.precision)} / {number(m.recall)} |",
         f"| AD | {number(m.ad, ' m')} |",
         f"| RRE / RTE | {number(m.rre, '°')} / {number(m.rte, ' m')} |",
         f"| before calibration | {number(init_rre, '°')} / {number(init_rte, ' m')} |",
+        f"| limit (oracle: true pairs) | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
     ]
     if result.anchor is not None:
         lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")

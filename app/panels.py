@@ -15,7 +15,7 @@ from viser import uplot
 
 from cbm.baselines import PARAMS
 
-from .settings import AUTO_CAV, LAYOUTS, METHOD_NAMES, Settings
+from .settings import AUTO_CAV, LAYOUTS, LINE_PAIRS, METHOD_NAMES, Settings
 
 if TYPE_CHECKING:
     from .client import ClientSession
@@ -38,6 +38,7 @@ CBM_SLIDERS = {
     "sigma2": ("σ2 L1 (m)", 0.25, 10.0, 0.25, "largest L1 distance between matching context vectors (eq. 7)"),
     "sigma3": ("σ3 voting (m)", 0.25, 10.0, 0.25, "L1 tolerance of the voting sets of the consensus"),
     "distance_limit": ("distance limit (m)", 1.0, 60.0, 1.0, "reject anchors whose pairs are farther apart on average"),
+    "refine_gate": ("refine gate (σ)", 1.0, 8.0, 0.25, "re-association gate, in std-devs of the pairs' noise"),
 }
 
 
@@ -75,6 +76,9 @@ class Panels:
             self.layout = gui.add_dropdown("CAV boxes", LAYOUTS, initial_value=settings.view.layout)
             self.ghosts = gui.add_checkbox("ground-truth ghosts", settings.view.ghosts)
             self.lines = gui.add_checkbox("match lines", settings.view.lines)
+            self.line_pairs = gui.add_dropdown("CBM's lines", tuple(LINE_PAIRS.values()),
+                                               initial_value=LINE_PAIRS[settings.view.line_pairs],
+                                               hint="CBM's own pairs (eq. 13), or all pairs after the guided re-association")
             self.labels = gui.add_checkbox("label clicked objects", settings.view.labels)
             self.reset_camera = gui.add_button("reset camera")
             gui.add_markdown("Boxes: **ego** blue, **CAV** orange (faint: before calibration). Lines: "
@@ -91,7 +95,7 @@ class Panels:
         """A folder per parameter class, holding one control per field (CBM's thresholds as sliders)."""
         folders, controls = {}, {}
         for method, params in settings.method_params.items():
-            if method == "cbm-no-consensus":
+            if method == "cbm-no-consensus" or not dataclasses.fields(params):
                 continue
             with self.gui.add_folder(f"{METHOD_NAMES[method]} parameters") as folder:
                 folders[method] = folder
@@ -115,6 +119,7 @@ class Panels:
         key = "cbm" if method == "cbm-no-consensus" else method
         for name, folder in self.method_folders.items():
             folder.visible = name == key
+        self.line_pairs.visible = key == "cbm"
 
     def set_values(self, settings: Settings) -> None:
         """Move every control to ``settings`` (each move reports back as a change, coalesced)."""
@@ -129,6 +134,7 @@ class Panels:
         self.layout.value = settings.view.layout
         self.ghosts.value, self.lines.value, self.labels.value = (settings.view.ghosts, settings.view.lines,
                                                                   settings.view.labels)
+        self.line_pairs.value = LINE_PAIRS[settings.view.line_pairs]
 
     def _bind(self) -> None:
         change = self.session.change
@@ -148,6 +154,8 @@ class Panels:
         for name, control in (("layout", self.layout), ("ghosts", self.ghosts), ("lines", self.lines),
                               ("labels", self.labels)):
             control.on_update(lambda e, n=name, c=control: change(lambda s: _view(s, **{n: c.value})))
+        line_pairs = {label: key for key, label in LINE_PAIRS.items()}
+        self.line_pairs.on_update(lambda e: change(lambda s: _view(s, line_pairs=line_pairs[self.line_pairs.value])))
         self.reset_camera.on_click(lambda e: self.session.reset_camera())
         self.load_preset.on_click(lambda e: self.session.load_preset(self.preset.value))
         self.save_preset.on_click(lambda e: self.session.save_preset(self.preset_name.value))

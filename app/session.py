@@ -14,6 +14,7 @@ from typing import Any
 import numpy as np
 
 from cbm import se2
+from cbm.baselines import match_oracle
 from cbm.diagnosis import Finding, diagnose
 from cbm.inspect import Inspection
 from cbm.metrics import TrialMetrics, evaluate
@@ -64,6 +65,8 @@ class Outcome:
     world_ids: np.ndarray
     result: MatchResult
     metrics: TrialMetrics
+    limit: TrialMetrics
+    """What least squares on the true pairs reaches on this trial (the oracle): the limit."""
     findings: list[Finding]
     seconds: float
     """Server time of the whole recompute (trial, method, metrics, diagnosis)."""
@@ -117,10 +120,12 @@ class Explorer:
         trial = make_trial(**inputs, params=settings.scenario, rng=trial_rng(settings.scenario.seed, index))
         result, findings = _run(settings, trial, prepared.frame)
         metrics = evaluate(result, trial)
+        limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
         return Outcome(settings=settings, frame_index=index, ego_id=ego, cav_id=cav, cav_note=note, trial=trial,
                        world_boxes=se2.apply_boxes(world_to_ego, inputs["boxes"]), world_ids=np.asarray(inputs["ids"]),
-                       result=result, metrics=metrics, findings=findings, seconds=time.perf_counter() - started)
+                       result=result, metrics=metrics, limit=limit, findings=findings,
+                       seconds=time.perf_counter() - started)
 
     def _cav(self, frame, ego: str, wanted: str) -> tuple[str, str]:
         present = set(frame.track_ids.tolist())

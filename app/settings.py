@@ -16,8 +16,11 @@ from cbm.scenario import ScenarioParams
 
 Layout = Literal["overlay", "after", "before", "side by side"]
 LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
-METHOD_NAMES = {"cbm": "CBM", "cbm-no-consensus": "CBM without consensus", "icp": "ICP", "ricp": "RICP",
-                "vips": "VIPS"}
+LinePairs = Literal["refined", "own"]
+LINE_PAIRS = {"refined": "all pairs (after refinement)", "own": "CBM's own pairs"}
+"""What the match lines show for CBM: the final pairs, or CBM's own before the guided re-association."""
+METHOD_NAMES = {"none": "none (no calibration)", "cbm": "CBM", "cbm-no-consensus": "CBM without consensus",
+                "icp": "ICP", "ricp": "RICP", "vips": "VIPS", "oracle": "oracle (true pairs)"}
 AUTO_CAV = "auto"
 
 
@@ -32,12 +35,16 @@ class ViewOptions:
     """Ground-truth outlines of every object either agent sees."""
     lines: bool = True
     """Match lines: right (green), wrong (red), missed true pairs (grey, dashed)."""
+    line_pairs: LinePairs = "refined"
+    """CBM's lines: its final pairs (``refined``) or its own pairs before the re-association (``own``)."""
     labels: bool = True
     """A label on the object clicked last."""
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
             raise ValueError(f"ViewOptions.layout must be one of {LAYOUTS}, got {self.layout!r}")
+        if self.line_pairs not in LINE_PAIRS:
+            raise ValueError(f"ViewOptions.line_pairs must be one of {tuple(LINE_PAIRS)}, got {self.line_pairs!r}")
 
 
 DEFAULT_SCENARIO = ScenarioParams(protocol="range", sigma_p=0.2, sigma_theta=2.0, flip_prob=0.5,
@@ -82,7 +89,8 @@ class Settings:
 
 def to_preset(settings: Settings) -> dict[str, Any]:
     """The TOML-ready form of ``settings`` (frame and CAV left out: they belong to the dataset)."""
-    params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items() if name != "cbm-no-consensus"}
+    params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items()
+              if name != "cbm-no-consensus" and dataclasses.fields(p)}
     return {"method": settings.method, "scenario": dataclasses.asdict(settings.scenario),
             "view": dataclasses.asdict(settings.view), **params}
 

@@ -14,7 +14,6 @@ grid point, method, method grid point, each in the order given -- whatever the n
 from __future__ import annotations
 
 import dataclasses
-import inspect
 import itertools
 import multiprocessing
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -23,7 +22,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .baselines import METHODS, PARAMS
+from .baselines import METHODS, PARAMS, TAKES_LABELS, TAKES_TRUTH
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
 from .scenario import ScenarioParams, Trial, make_trial, trial_rng
 
@@ -165,12 +164,15 @@ def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list
 
 
 def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs) -> Any:
-    """``method`` on ``trial``; methods that take labels get the objects' labels when the frame has them."""
-    kwargs = {}
-    if frame.labels is not None and "ego_labels" in inspect.signature(METHODS[method]).parameters:
+    """``method`` on ``trial``; methods that take labels get the objects' labels when the frame has
+    them, the oracle gets the trial's true pairs."""
+    kwargs: dict[str, Any] = {}
+    if frame.labels is not None and method in TAKES_LABELS:
         label_of = dict(zip(np.asarray(frame.trial["ids"]).tolist(), np.asarray(frame.labels).tolist()))
         kwargs = {"ego_labels": np.array([label_of[i] for i in trial.ego_ids.tolist()]),
                   "cav_labels": np.array([label_of[i] for i in trial.cav_ids.tolist()])}
+    if method in TAKES_TRUTH:
+        kwargs["true_pairs"] = trial.gt_pairs
     return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, **kwargs)
 
 

@@ -5,7 +5,7 @@ import numpy as np
 import pytest
 
 from cbm import se2
-from cbm.baselines import METHODS, PARAMS, ICPParams, RICPParams, VIPSParams, run
+from cbm.baselines import METHODS, PARAMS, TAKES_TRUTH, ICPParams, RICPParams, VIPSParams, run
 from cbm.estimate import weighted_procrustes
 from cbm.result import MatchResult
 
@@ -233,10 +233,11 @@ def test_bad_parameters_raise_value_error_naming_the_field(cls: type, field: str
 
 
 def test_registry_runs_each_method_with_its_defaults() -> None:
-    assert set(METHODS) == set(PARAMS) == set(NAMES) | {"cbm", "cbm-no-consensus"}
-    ego, cav, init, _, _ = make_scene(0, n=10)
+    assert set(METHODS) == set(PARAMS) == set(NAMES) | {"cbm", "cbm-no-consensus", "none", "oracle"}
+    ego, cav, init, _, pairs = make_scene(0, n=10)
     for name in METHODS:
-        assert isinstance(run(name, ego, cav, init, PARAMS[name]()), MatchResult)
+        truth = {"true_pairs": np.array(sorted(pairs))} if name in TAKES_TRUTH else {}
+        assert isinstance(run(name, ego, cav, init, PARAMS[name](), **truth), MatchResult)
     with pytest.raises(ValueError, match="name"):
         run("cmb", ego, cav, init)
     with pytest.raises(TypeError, match="params"):
