@@ -41,7 +41,7 @@ from cbm.scenario import ScenarioParams  # noqa: E402
 from cbm.sweep import SCENARIO_FIELDS, TIMING_COLUMNS, TRIAL_COLUMNS, FrameInputs, Sweep, grid_defaults, run, summarise  # noqa: E402
 from loaders.agents import TARGET_DISTANCE, choose_cav, choose_ego, frame_trial_inputs  # noqa: E402
 
-DEFAULT_METHODS = ("cbm", "cbm-no-consensus", "icp", "ricp", "vips")
+DEFAULT_METHODS = ("none", "cbm", "cbm-no-consensus", "icp", "ricp", "vips", "oracle")
 TABLE_ROWS = (
     ("Pre. (%)", "precision", 100.0),
     ("Rec. (%)", "recall", 100.0),
@@ -205,16 +205,19 @@ def _fmt(value: Any) -> str:
 
 def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> str:
     """Markdown: one row per metric, one column per method variant (the paper's Table I), plus the
-    RRE/RTE of the uncalibrated ``init``."""
+    RRE/RTE of the uncalibrated ``init`` unless the method ``none`` (which reports it) is a column."""
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
     stats = dict(summarise(keyed, ["variant"]))
     names = [key[0] for key in stats]
-    first = [row for row in keyed if row["variant"] == names[0]]
-    gnss = {"rre_median": _median([r["init_rre"] for r in first]), "rte_median": _median([r["init_rte"] for r in first])}
-    lines = [f"| metric | {' | '.join(names)} | {GNSS} |", "|---|" + "---:|" * (len(names) + 1)]
+    columns = [stats[(n,)] for n in names]
+    if "none" not in names:
+        first = [row for row in keyed if row["variant"] == names[0]]
+        names.append(GNSS)
+        columns.append({"rre_median": _median([r["init_rre"] for r in first]),
+                        "rte_median": _median([r["init_rte"] for r in first])})
+    lines = [f"| metric | {' | '.join(names)} |", "|---|" + "---:|" * len(names)]
     for label, key, scale in (*TABLE_ROWS, *([RUNTIME_ROW] if timing else [])):
-        cells = [_cell(stats[(n,)][key], scale) for n in names]
-        lines.append(f"| {label} | {' | '.join(cells)} | {_cell(gnss.get(key, math.nan), scale)} |")
+        lines.append(f"| {label} | {' | '.join(_cell(column.get(key, math.nan), scale) for column in columns)} |")
     return "\n".join(lines)
 
 
@@ -261,7 +264,8 @@ def summary_markdown(args: argparse.Namespace, sweep: Sweep, rows: list[dict[str
               table_one(rows, variants, timing=not args.no_timing), "",
               "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
               "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
-              "Success: RTE < 1 m and RRE < 1 deg. GNSS (init): the error before calibration."]
+              "Success: RTE < 1 m and RRE < 1 deg. none / GNSS (init): the error before calibration; "
+              "oracle: least squares on the true pairs, the limit of association-based calibration."]
     if len(sweep.grid.get("eta", ())) > 1:
         parts += ["", "## Precision (%) against the co-visibility rate eta", "", eta_table(rows, variants, sweep)]
     return "\n".join(parts) + "\n"
@@ -307,15 +311,18 @@ def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep
 
 def plot_rre_rte(rows: list[dict[str, Any]], variants: list[str]) -> plt.Figure:
     """The paper's OPV2V figure: RRE and RTE distributions per method (trials with an estimate) and
-    of the uncalibrated ``init`` (GNSS), on a log scale."""
+    of the uncalibrated ``init`` (GNSS, unless the method ``none`` shows it), on a log scale."""
     names = list(dict.fromkeys(variants))
     first = [row for row, v in zip(rows, variants) if v == names[0]]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.8))
     for ax, metric, unit in ((axes[0], "rre", "deg"), (axes[1], "rte", "m")):
         data = [[row[metric] for row, v in zip(rows, variants) if v == name and row["estimated"]] for name in names]
-        data.append([row[f"init_{metric}"] for row in first])
+        ticks = list(names)
+        if "none" not in names:
+            data.append([row[f"init_{metric}"] for row in first])
+            ticks.append("GNSS")
         ax.boxplot([[max(x, LOG_FLOOR) for x in d] or [math.nan] for d in data], showfliers=True)
-        ax.set_xticks(range(1, len(data) + 1), [*names, "GNSS"], rotation=30, ha="right", fontsize=8)
+        ax.set_xticks(range(1, len(data) + 1), ticks, rotation=30, ha="right", fontsize=8)
         ax.set_yscale("log")
         ax.set_ylabel(f"{metric.upper()} ({unit}, below {LOG_FLOOR:g} drawn at {LOG_FLOOR:g})", fontsize=8)
         ax.grid(alpha=0.3, axis="y")

@@ -111,3 +111,16 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
     with pytest.raises(OSError):
         evaluate_cli.write_atomic(target, crash)
     assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["trials.csv"]
+
+
+def test_reference_methods_bound_the_default_table(tmp_path):
+    """By default every method runs between the references: ``none`` (the GNSS error, which then
+    needs no column of its own) and ``oracle`` (least squares on the true pairs)."""
+    assert evaluate_cli.main(["--dataset", "synthetic:40", "--frames", "0:2", "--no-timing", "--out", str(tmp_path)]) == 0
+    summary = (tmp_path / "summary.md").read_text()
+    assert "| metric | none | cbm | cbm-no-consensus | icp | ricp | vips | oracle |" in summary
+    assert "GNSS (init) |" not in summary
+    table = pl.read_csv(tmp_path / "trials.csv")
+    oracle, none = table.filter(pl.col("method") == "oracle"), table.filter(pl.col("method") == "none")
+    assert (oracle["precision"] == 1.0).all() and (oracle["recall"] == 1.0).all()
+    assert (none["rte"] == none["init_rte"]).all() and (none["n_matched"] == 0).all()
