@@ -18,6 +18,7 @@ bench: $(VENV)/.installed
 	$(PY) bench/bench_heading.py
 	$(PY) bench/bench_loaders.py
 	$(PY) bench/bench_baselines.py
+	$(PY) bench/bench_accuracy.py
 	$(PY) bench/bench_app.py
 
 install: $(VENV)/.installed

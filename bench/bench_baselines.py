@@ -11,7 +11,7 @@ from time import perf_counter
 import numpy as np
 
 from cbm import se2
-from cbm.baselines import METHODS, run
+from cbm.baselines import METHODS, TAKES_TRUTH, run
 
 SEED = 2024
 SIZES = (50, 100)
@@ -62,24 +62,35 @@ def trial(rng: np.random.Generator, n_per_agent: int):
     return ego, cav, init, truth
 
 
+def _mean(values: list[float]) -> str:
+    """Mean of the defined values, or a dash when there is none (``none`` matches nothing)."""
+    finite = [v for v in values if not np.isnan(v)]
+    return f"{np.mean(finite):.2f}" if finite else "-"
+
+
+def truth_for(name: str, truth: set[tuple[int, int]]) -> dict[str, np.ndarray]:
+    """The true pairs as the methods that take them want them (the oracle)."""
+    return {"true_pairs": np.array(sorted(truth)).reshape(-1, 2)} if name in TAKES_TRUTH else {}
+
+
 def main() -> None:
     rng = np.random.default_rng(SEED)
     trials = {n: [trial(rng, n) for _ in range(SCENES)] for n in SIZES}
     for name in METHODS:
-        run(name, *trials[SIZES[0]][0][:3])
-    print(f"{'method':8} {'objects':>7} {'median ms':>10} {'precision':>10} {'recall':>7}")
+        run(name, *trials[SIZES[0]][0][:3], **truth_for(name, trials[SIZES[0]][0][3]))
+    print(f"{'method':16} {'objects':>7} {'median ms':>10} {'precision':>10} {'recall':>7}")
     for name in METHODS:
         for n in SIZES:
             times, precisions, recalls = [], [], []
             for ego, cav, init, truth in trials[n]:
                 for _ in range(REPEATS):
                     t0 = perf_counter()
-                    result = run(name, ego, cav, init)
+                    result = run(name, ego, cav, init, **truth_for(name, truth))
                     times.append(perf_counter() - t0)
                 got = {tuple(p) for p in result.pairs.tolist()}
-                precisions.append(len(got & truth) / max(len(got), 1))
+                precisions.append(len(got & truth) / len(got) if got else np.nan)
                 recalls.append(len(got & truth) / len(truth))
-            print(f"{name:8} {n:7d} {1e3 * np.median(times):10.2f} {np.mean(precisions):10.2f} {np.mean(recalls):7.2f}")
+            print(f"{name:16} {n:7d} {1e3 * np.median(times):10.2f} {_mean(precisions):>10} {np.mean(recalls):7.2f}")
 
 
 if __name__ == "__main__":
