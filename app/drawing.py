@@ -89,7 +89,7 @@ def _shift(boxes: np.ndarray, offset: np.ndarray) -> np.ndarray:
 def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
     """The scene of ``outcome`` under its view options."""
     view = outcome.settings.view
-    trial, result = outcome.trial, outcome.result
+    trial = outcome.trial
     placements = _placement(outcome)
     panels = _panels(outcome)
     ego_parts, cav_parts, before_parts, ghost_parts, ego_poses, cav_poses, before_poses = [], [], [], [], [], [], []

@@ -2,7 +2,6 @@
 to a worst frame, and a download."""
 from __future__ import annotations
 
-import dataclasses
 import time
 
 import polars as pl
@@ -12,7 +11,6 @@ from support import browser as ui
 import app.sequence
 from app.server import ExplorerServer
 from app.session import Explorer
-from app.settings import Settings
 
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
@@ -20,14 +18,9 @@ pytestmark = [pytest.mark.browser,
 
 @pytest.fixture(scope="module")
 def small_server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("CBM_EXPLORER_PRESETS", str(tmp_path_factory.mktemp("presets")))
-        settings = Settings()
-        settings = dataclasses.replace(settings, scenario=dataclasses.replace(
-            settings.scenario, protocol="sind", eta=0.4, sigma_p=0.5, sigma_theta=6.0, seed=2))
-        running = ExplorerServer(small_explorer, settings, port=0)
+    with ui.scenario_server(small_explorer, tmp_path_factory.mktemp("presets"), protocol="sind", eta=0.4,
+                            sigma_p=0.5, sigma_theta=6.0, seed=2) as running:
         yield running
-        running.stop()
 
 
 def test_sequence_run_jump_to_a_worst_frame_and_download(browser, small_server: ExplorerServer,

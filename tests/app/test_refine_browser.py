@@ -2,15 +2,12 @@
 in the scene, and the reference methods in the method list."""
 from __future__ import annotations
 
-import dataclasses
-
 import numpy as np
 import pytest
 from support import browser as ui
 
 from app.server import ExplorerServer
 from app.session import Explorer
-from app.settings import Settings
 
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
@@ -20,14 +17,9 @@ pytestmark = [pytest.mark.browser,
 def hard_server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
     """The shipped scene under hard noise (SIND protocol, eta 0.3, 0.6 m, 10 degrees): CBM's own
     sets miss many true pairs there and the re-association adds them."""
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("CBM_EXPLORER_PRESETS", str(tmp_path_factory.mktemp("presets")))
-        settings = Settings()
-        settings = dataclasses.replace(settings, scenario=dataclasses.replace(
-            settings.scenario, protocol="sind", eta=0.3, sigma_p=0.6, sigma_theta=10.0, seed=1))
-        running = ExplorerServer(explorer, settings, port=0)
+    with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets"), protocol="sind", eta=0.3, sigma_p=0.6,
+                            sigma_theta=10.0, seed=1) as running:
         yield running
-        running.stop()
 
 
 def drawn_pairs(tab) -> int:

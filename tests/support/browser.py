@@ -2,11 +2,13 @@
 page and wait for a tab's session."""
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import re
 import shutil
 import time
 from pathlib import Path
-from typing import Callable, Iterator
+from typing import Any, Callable, Iterator
 
 CHROMIUM = shutil.which("chromium")
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
@@ -71,3 +73,21 @@ def pick_option(page, text: str, option: str) -> None:
 def close_notifications(page) -> None:
     for button in page.locator(".mantine-Notification-root button").all():
         button.click()
+
+
+@contextlib.contextmanager
+def scenario_server(explorer, presets_folder: Path, **scenario: Any) -> Iterator:
+    """A running app on ``explorer`` whose tabs start with the default settings' scenario changed by
+    ``scenario``, user presets in ``presets_folder``; stopped after."""
+    import pytest
+
+    from app.server import ExplorerServer
+    from app.settings import Settings
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("CBM_EXPLORER_PRESETS", str(presets_folder))
+        settings = Settings()
+        settings = dataclasses.replace(settings, scenario=dataclasses.replace(settings.scenario, **scenario))
+        running = ExplorerServer(explorer, settings, port=0)
+        yield running
+        running.stop()
