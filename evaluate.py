@@ -36,12 +36,12 @@ import polars as pl  # noqa: E402
 from tqdm import tqdm  # noqa: E402
 
 import loaders  # noqa: E402
-from cbm.baselines import METHODS  # noqa: E402
+from cbm.methods import METHODS  # noqa: E402
 from cbm.scenario import ScenarioParams  # noqa: E402
 from cbm.sweep import SCENARIO_FIELDS, TIMING_COLUMNS, TRIAL_COLUMNS, FrameInputs, Sweep, grid_defaults, run, summarise  # noqa: E402
 from loaders.agents import TARGET_DISTANCE, choose_cav, choose_ego, frame_trial_inputs  # noqa: E402
 
-DEFAULT_METHODS = ("none", "cbm", "cbm-no-consensus", "icp", "ricp", "vips", "oracle")
+DEFAULT_METHODS = tuple(METHODS)
 TABLE_ROWS = (
     ("Pre. (%)", "precision", 100.0),
     ("Rec. (%)", "recall", 100.0),

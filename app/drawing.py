@@ -11,10 +11,10 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cbm import se2
+from cbm.methods import METHODS
 
 from . import geometry
 from .session import Outcome
-from .settings import METHOD_NAMES
 
 EGO_BOXES = (52, 120, 246)
 CAV_BOXES = (255, 140, 0)
@@ -239,7 +239,7 @@ def metrics_markdown(outcome: Outcome) -> str:
     m, result, trial, limit = outcome.metrics, outcome.result, outcome.trial, outcome.limit
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
-    method = METHOD_NAMES[outcome.settings.method]
+    method = METHODS[outcome.settings.method].label
     lines = [
         f"**Frame {outcome.frame_index}** · ego `{outcome.ego_id[:8]}` · CAV `{outcome.cav_id[:8]}` ({outcome.cav_note})",
         "",

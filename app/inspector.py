@@ -9,14 +9,13 @@ ego's (x), so a context vector sits where CBM compares it.
 """
 from __future__ import annotations
 
-import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
 
 from cbm import CBMParams
 from cbm.inspect import AnchorDetail, Inspection
-from cbm.sweep import FORCED
+from cbm.methods import METHODS
 
 from . import geometry
 from .drawing import CAV_BOXES, EGO_BOXES, RIGHT, WRONG, Drawing, Lines
@@ -67,7 +66,7 @@ def counterpart(outcome: Outcome, group: str, index: int) -> tuple[int | None, i
 def inspection_of(outcome: Outcome) -> Inspection:
     """CBM's sets on the outcome's trial, with the thresholds the tab's CBM runs with."""
     settings, trial = outcome.settings, outcome.trial
-    params = dataclasses.replace(settings.cbm, **FORCED.get(settings.method, {}))
+    params = METHODS[settings.method].resolved(settings.cbm) if METHODS[settings.method].explains else settings.cbm
     return Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
 
 

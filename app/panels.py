@@ -13,9 +13,9 @@ import numpy as np
 import viser
 from viser import uplot
 
-from cbm.baselines import PARAMS
+from cbm.methods import METHODS
 
-from .settings import AUTO_CAV, LAYOUTS, LINE_PAIRS, METHOD_NAMES, Settings
+from .settings import AUTO_CAV, LAYOUTS, LINE_PAIRS, Settings
 
 if TYPE_CHECKING:
     from .client import ClientSession
@@ -69,8 +69,8 @@ class Panels:
                              for name, (label, low, high, step, hint) in SCENARIO_SLIDERS.items()}
             self.seed = gui.add_number("seed", settings.scenario.seed, min=0, step=1)
         with tabs.add_tab("Method"):
-            self.method = gui.add_dropdown("method", tuple(METHOD_NAMES.values()),
-                                           initial_value=METHOD_NAMES[settings.method])
+            self.method = gui.add_dropdown("method", tuple(m.label for m in METHODS.values()),
+                                           initial_value=METHODS[settings.method].label)
             self.method_folders, self.method_controls = self._method_controls(settings)
         with tabs.add_tab("View"):
             self.layout = gui.add_dropdown("CAV boxes", LAYOUTS, initial_value=settings.view.layout)
@@ -95,9 +95,9 @@ class Panels:
         """A folder per parameter class, holding one control per field (CBM's thresholds as sliders)."""
         folders, controls = {}, {}
         for method, params in settings.method_params.items():
-            if method == "cbm-no-consensus" or not dataclasses.fields(params):
+            if not dataclasses.fields(params):
                 continue
-            with self.gui.add_folder(f"{METHOD_NAMES[method]} parameters") as folder:
+            with self.gui.add_folder(f"{METHODS[method].label} parameters") as folder:
                 folders[method] = folder
                 for f in dataclasses.fields(params):
                     controls[(method, f.name)] = self._control(method, f, getattr(params, f.name))
@@ -109,17 +109,19 @@ class Panels:
             return self.gui.add_slider(label, low, high, step, value, hint=hint)
         if isinstance(value, bool):
             return self.gui.add_checkbox(f.name, value)
-        options = typing.get_args(typing.get_type_hints(PARAMS[method])[f.name])
+        options = typing.get_args(typing.get_type_hints(METHODS[method].params)[f.name])
         if isinstance(value, str) and options:
             return self.gui.add_dropdown(f.name, options, initial_value=value)
         return self.gui.add_number(f.name, value, step=1 if isinstance(value, int) else 0.01)
 
     def show_method(self, method: str) -> None:
         """Show only the parameters of the selected method."""
-        key = "cbm" if method == "cbm-no-consensus" else method
+        chosen = METHODS[method]
         for name, folder in self.method_folders.items():
-            folder.visible = name == key
-        self.line_pairs.visible = key == "cbm"
+            folder.visible = name == chosen.params_key
+        for (name, field), control in self.method_controls.items():
+            control.visible = name != chosen.params_key or field in chosen.tunable
+        self.line_pairs.visible = chosen.explains
 
     def set_values(self, settings: Settings) -> None:
         """Move every control to ``settings`` (each move reports back as a change, coalesced)."""
@@ -128,7 +130,7 @@ class Panels:
         for name, slider in self.scenario.items():
             slider.value = getattr(settings.scenario, name)
         self.seed.value = settings.scenario.seed
-        self.method.value = METHOD_NAMES[settings.method]
+        self.method.value = METHODS[settings.method].label
         for (method, name), control in self.method_controls.items():
             control.value = getattr(settings.method_params[method], name)
         self.layout.value = settings.view.layout
@@ -147,7 +149,7 @@ class Panels:
         for name, slider in self.scenario.items():
             slider.on_update(lambda e, n=name, c=slider: change(lambda s: _scenario(s, **{n: float(c.value)})))
         self.seed.on_update(lambda e: change(lambda s: _scenario(s, seed=max(0, int(self.seed.value)))))
-        methods = {label: name for name, label in METHOD_NAMES.items()}
+        methods = {m.label: m.name for m in METHODS.values()}
         self.method.on_update(lambda e: self._method_changed(methods[self.method.value]))
         for (method, name), control in self.method_controls.items():
             control.on_update(lambda e, m=method, n=name, c=control: change(lambda s: s.with_params(m, **{n: c.value})))

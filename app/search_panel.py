@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cbm.search import SEARCHABLE, Candidate, grid_size, search
-from cbm.sweep import method_fields
+from cbm.methods import METHODS
 
 from .background import Task
 from .drawing import number
@@ -59,7 +59,7 @@ def run_search(explorer: Explorer, settings: Settings, objective: str = "success
     if not frames:
         raise ValueError("no frame of this sequence has an ego and a CAV")
     cbm = settings.cbm
-    base = {name: getattr(cbm, name) for name in method_fields("cbm")}
+    base = {name: getattr(cbm, name) for name in METHODS["cbm"].tunable}
     total = (grid_size() + 1) * len(frames)
     done = [0]
 

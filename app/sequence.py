@@ -13,12 +13,13 @@ from typing import Any, Iterable, Sequence
 
 import numpy as np
 
-from cbm.sweep import FrameInputs, Sweep, method_fields, run, summarise
+from cbm.methods import METHODS
+from cbm.sweep import FrameInputs, Sweep, run, summarise
 
 from .background import Task
 from .drawing import number
 from .session import Explorer
-from .settings import METHOD_NAMES, Settings
+from .settings import Settings
 
 CHUNK = 8
 """Frames per chunk: a cancel takes effect within one chunk."""
@@ -27,7 +28,7 @@ CHUNK = 8
 def sweep_for(settings: Settings) -> Sweep:
     """A one-point sweep that runs exactly the tab's method, parameters, scenario and seed."""
     params = settings.params
-    grid = {name: [getattr(params, name)] for name in method_fields(settings.method)}
+    grid = {name: [getattr(params, name)] for name in METHODS[settings.method].tunable}
     return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario)
 
 
@@ -70,7 +71,7 @@ class SequenceRun:
         """The aggregate table shown after a run."""
         s = self.summary()
         state = "cancelled after" if self.cancelled else "over"
-        head = (f"**{METHOD_NAMES[self.settings.method]}**, {state} {len(self.rows)} of {self.n_frames} frames "
+        head = (f"**{METHODS[self.settings.method].label}**, {state} {len(self.rows)} of {self.n_frames} frames "
                 f"(seed {self.settings.scenario.seed}, {self.settings.scenario.protocol} protocol)")
         if not s:
             return head + "\n\nNo frame was run."

@@ -6,7 +6,6 @@ outcome from one ``Settings`` value, reproducibly: the trial draws from
 """
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass
 from typing import Any
@@ -17,6 +16,7 @@ from cbm import se2
 from cbm.baselines import match_oracle
 from cbm.diagnosis import Finding, diagnose
 from cbm.inspect import Inspection
+from cbm.methods import METHODS
 from cbm.metrics import TrialMetrics, evaluate
 from cbm.result import MatchResult
 from cbm.scenario import Trial, in_range, make_trial, trial_rng
@@ -161,20 +161,14 @@ def _visibility_by_range(inputs: dict[str, Any], sensor_range: float) -> dict[st
 
 
 def _run(settings: Settings, trial: Trial, frame: FrameInputs) -> tuple[MatchResult, list[Finding]]:
-    """The selected method's result and, for CBM, why it failed: CBM's sets are built once and
-    serve both the match and the diagnosis."""
-    if settings.method not in ("cbm", "cbm-no-consensus"):
+    """The selected method's result and, for the methods that build CBM's sets, why it failed: the
+    sets are built once and serve both the match and the diagnosis."""
+    method = METHODS[settings.method]
+    if not method.explains:
         return run_method(settings.method, trial, settings.params, frame), []
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, _method_params(settings))
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params))
     result = inspection.match()
     return result, diagnose(result, trial, inspection)
-
-
-def _method_params(settings: Settings) -> Any:
-    """The selected method's parameters as it runs them (the ablation forces consensus off)."""
-    if settings.method == "cbm-no-consensus":
-        return dataclasses.replace(settings.params, consensus=False)
-    return settings.params
 
 
 def _map_segments(sequence: Sequence) -> dict[str, np.ndarray]:

@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 from typing import Any, Literal, Mapping
 
 from cbm import CBMParams
-from cbm.baselines import PARAMS
+from cbm.methods import METHODS
 from cbm.scenario import ScenarioParams
 
 Layout = Literal["overlay", "after", "before", "side by side"]
@@ -19,8 +19,6 @@ LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
 LinePairs = Literal["refined", "own"]
 LINE_PAIRS = {"refined": "all pairs (after refinement)", "own": "CBM's own pairs"}
 """What the match lines show for CBM: the final pairs, or CBM's own before the guided re-association."""
-METHOD_NAMES = {"none": "none (no calibration)", "cbm": "CBM", "cbm-no-consensus": "CBM without consensus",
-                "icp": "ICP", "ricp": "RICP", "vips": "VIPS", "oracle": "oracle (true pairs)"}
 AUTO_CAV = "auto"
 
 
@@ -54,7 +52,8 @@ SIND localization offset and mild detection noise: a wrong pose anyone can see, 
 
 
 def default_method_params() -> dict[str, Any]:
-    return {name: cls() for name, cls in PARAMS.items()}
+    """Default parameters of every method by its parameter set (methods that share one appear once)."""
+    return {m.params_key: m.params() for m in METHODS.values()}
 
 
 @dataclass(frozen=True)
@@ -67,7 +66,7 @@ class Settings:
     method: str = "cbm"
     scenario: ScenarioParams = DEFAULT_SCENARIO
     method_params: Mapping[str, Any] = field(default_factory=default_method_params)
-    """Parameters of every method by name (``cbm`` and ``cbm-no-consensus`` share CBMParams)."""
+    """Parameters of every method by ``Method.params_key`` (the CBM methods share one set)."""
     view: ViewOptions = ViewOptions()
 
     @property
@@ -76,12 +75,12 @@ class Settings:
 
     @property
     def params(self) -> Any:
-        """The parameters of the selected method."""
-        return self.method_params["cbm" if self.method == "cbm-no-consensus" else self.method]
+        """The parameters of the selected method (as set; ``Method.resolved`` adds what it forces)."""
+        return self.method_params[METHODS[self.method].params_key]
 
     def with_params(self, method: str, **changes: Any) -> "Settings":
         """These settings with some parameters of ``method`` changed."""
-        key = "cbm" if method == "cbm-no-consensus" else method
+        key = METHODS[method].params_key
         params = dict(self.method_params)
         params[key] = dataclasses.replace(params[key], **changes)
         return dataclasses.replace(self, method_params=params)
@@ -89,8 +88,7 @@ class Settings:
 
 def to_preset(settings: Settings) -> dict[str, Any]:
     """The TOML-ready form of ``settings`` (frame and CAV left out: they belong to the dataset)."""
-    params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items()
-              if name != "cbm-no-consensus" and dataclasses.fields(p)}
+    params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items() if dataclasses.fields(p)}
     return {"method": settings.method, "scenario": dataclasses.asdict(settings.scenario),
             "view": dataclasses.asdict(settings.view), **params}
 
@@ -100,15 +98,15 @@ def from_preset(data: Mapping[str, Any], base: Settings | None = None) -> Settin
     naming an unknown table or key, ``TypeError``/``ValueError`` naming a field of the wrong type."""
     base = base or Settings()
     method_params = dict(base.method_params)
-    known = {"method", "scenario", "view", *[n for n in PARAMS if n != "cbm-no-consensus"]}
+    known = {"method", "scenario", "view", *base.method_params}
     for table in data:
         if table not in known:
             raise KeyError(f"unknown table [{table}]; expected one of {sorted(known)}")
     method = data.get("method", base.method)
-    if method not in METHOD_NAMES:
-        raise ValueError(f"method must be one of {sorted(METHOD_NAMES)}, got {method!r}")
-    for name in PARAMS:
-        if name in data and name != "cbm-no-consensus":
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    for name in base.method_params:
+        if name in data:
             method_params[name] = _replaced(name, method_params[name], data[name])
     return Settings(frame=base.frame, cav=base.cav, method=method,
                     scenario=_replaced("scenario", base.scenario, data.get("scenario", {})),

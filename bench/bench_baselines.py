@@ -1,4 +1,4 @@
-"""Median runtime of the baselines (cbm.baselines) at 50 and 100 objects per agent.
+"""Median runtime of every method (cbm.methods) at 50 and 100 objects per agent.
 
 Street-like scenes: vehicles in the lanes of a street grid, headings along their lanes, 60 % of each
 agent's objects co-visible, detection noise 0.2 m / 2 degrees with random heading flips, and the
@@ -11,7 +11,7 @@ from time import perf_counter
 import numpy as np
 
 from cbm import se2
-from cbm.baselines import METHODS, TAKES_TRUTH, run
+from cbm.methods import METHODS, run
 
 SEED = 2024
 SIZES = (50, 100)
@@ -70,7 +70,7 @@ def _mean(values: list[float]) -> str:
 
 def truth_for(name: str, truth: set[tuple[int, int]]) -> dict[str, np.ndarray]:
     """The true pairs as the methods that take them want them (the oracle)."""
-    return {"true_pairs": np.array(sorted(truth)).reshape(-1, 2)} if name in TAKES_TRUTH else {}
+    return {"true_pairs": np.array(sorted(truth)).reshape(-1, 2)} if METHODS[name].takes_truth else {}
 
 
 def main() -> None:

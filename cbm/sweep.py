@@ -5,8 +5,8 @@ row of metrics per (frame, grid point, method).
     sweep = Sweep(methods=("cbm", "icp"), grid={"eta": [0.2, 0.6], "sigma2": [2.0, 3.0]}, seed=0)
     rows = run(sweep, [FrameInputs(0, {"boxes": boxes, "ids": ids})], workers=2)
 
-A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or of the
-parameters of one or more methods (``cbm.baselines.PARAMS``; it changes only those methods' runs).
+A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or a tunable
+parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
 Every trial of frame ``k`` draws from ``trial_rng(seed, k)``, as the app does, so any row can be
 reproduced there from its frame, parameters and seed. Rows come in task order -- frame, scenario
 grid point, method, method grid point, each in the order given -- whatever the number of workers.
@@ -22,7 +22,7 @@ from typing import Any, Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 
-from .baselines import METHODS, PARAMS, TAKES_LABELS, TAKES_TRUTH
+from .methods import METHODS
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
 from .scenario import ScenarioParams, Trial, make_trial, trial_rng
 
@@ -35,8 +35,6 @@ METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precisi
 RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
 TIMING_COLUMNS = ("runtime_s",)
 """Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
-FORCED = {"cbm-no-consensus": {"consensus": False}}
-"""Parameters a method always runs with, whatever the grid (recorded as run)."""
 
 
 @dataclass(frozen=True)
@@ -83,8 +81,8 @@ class Sweep:
             raise ValueError("seed is the sweep's own argument, not a grid parameter")
         if name in SCENARIO_FIELDS:
             return
-        if not any(name in method_fields(m) for m in self.methods):
-            owners = [m for m in METHODS if name in method_fields(m)]
+        if not any(name in METHODS[m].tunable for m in self.methods):
+            owners = [m for m in METHODS if name in METHODS[m].tunable]
             where = (f"a parameter of {', '.join(owners)}, none of which is selected" if owners
                      else "not a parameter of the scenario or of any method")
             raise ValueError(f"grid parameter {name!r} is {where}")
@@ -97,9 +95,10 @@ class Sweep:
                 for values in itertools.product(*(self.grid[n] for n in names))]
 
     def method_points(self, method: str) -> list[Any]:
-        """``method``'s parameters at every point of its part of the grid, in grid order."""
-        names = [n for n in self.grid if n in method_fields(method)]
-        return [PARAMS[method](**dict(zip(names, values)), **FORCED.get(method, {}))
+        """``method``'s parameters at every point of its part of the grid, in grid order, as it runs
+        them (forced parameters applied, so the table records what ran)."""
+        names = [n for n in self.grid if n in METHODS[method].tunable]
+        return [METHODS[method].resolved(METHODS[method].params(**dict(zip(names, values))))
                 for values in itertools.product(*(self.grid[n] for n in names))]
 
     def trial_count(self, n_frames: int) -> int:
@@ -108,7 +107,7 @@ class Sweep:
 
     def parameter_columns(self) -> list[str]:
         """Scenario fields, then every field of the selected methods' parameters (first use first)."""
-        method_columns = dict.fromkeys(f.name for m in self.methods for f in dataclasses.fields(PARAMS[m]))
+        method_columns = dict.fromkeys(f.name for m in self.methods for f in dataclasses.fields(METHODS[m].params))
         return [*SCENARIO_FIELDS, *method_columns]
 
     def columns(self) -> list[str]:
@@ -116,16 +115,12 @@ class Sweep:
         return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *METRIC_COLUMNS, *TIMING_COLUMNS]
 
 
-def method_fields(method: str) -> tuple[str, ...]:
-    """The parameters of ``method`` a grid may vary (those it does not force)."""
-    return tuple(f.name for f in dataclasses.fields(PARAMS[method]) if f.name not in FORCED.get(method, {}))
-
-
 def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
     """Every parameter a grid over ``methods`` may name, with its default (its type parses values)."""
     defaults = {f.name: f.default for f in dataclasses.fields(ScenarioParams) if f.name != "seed"}
     for method in methods:
-        defaults.update({f.name: f.default for f in dataclasses.fields(PARAMS[method]) if f.name in method_fields(method)})
+        defaults.update({f.name: f.default for f in dataclasses.fields(METHODS[method].params)
+                         if f.name in METHODS[method].tunable})
     return defaults
 
 
@@ -164,16 +159,15 @@ def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list
 
 
 def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs) -> Any:
-    """``method`` on ``trial``; methods that take labels get the objects' labels when the frame has
-    them, the oracle gets the trial's true pairs."""
-    kwargs: dict[str, Any] = {}
-    if frame.labels is not None and method in TAKES_LABELS:
+    """``method`` on ``trial`` with what it takes: the objects' labels (when the frame has them)
+    and the trial's true pairs."""
+    labels = None
+    if frame.labels is not None:
         label_of = dict(zip(np.asarray(frame.trial["ids"]).tolist(), np.asarray(frame.labels).tolist()))
-        kwargs = {"ego_labels": np.array([label_of[i] for i in trial.ego_ids.tolist()]),
-                  "cav_labels": np.array([label_of[i] for i in trial.cav_ids.tolist()])}
-    if method in TAKES_TRUTH:
-        kwargs["true_pairs"] = trial.gt_pairs
-    return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, **kwargs)
+        labels = (np.array([label_of[i] for i in trial.ego_ids.tolist()]),
+                  np.array([label_of[i] for i in trial.cav_ids.tolist()]))
+    return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, labels=labels,
+                           true_pairs=trial.gt_pairs)
 
 
 def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, metrics: TrialMetrics,

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from cbm import se2
-from cbm.baselines import METHODS, PARAMS, TAKES_TRUTH, ICPParams, RICPParams, VIPSParams, run
+from cbm.baselines import ICPParams, RICPParams, VIPSParams
+from cbm.methods import METHODS, run
 from cbm.estimate import weighted_procrustes
 from cbm.result import MatchResult
 
@@ -108,9 +109,9 @@ def test_icp_fails_with_large_translation_error() -> None:
 def test_vips_uses_categories_when_given() -> None:
     ego, cav, init, T_true, truth = make_scene(3)
     ego_labels = np.zeros(len(ego), dtype=int)
-    matched = run("vips", ego, cav, init, ego_labels=ego_labels, cav_labels=np.zeros(len(cav), dtype=int))
+    matched = run("vips", ego, cav, init, labels=(ego_labels, np.zeros(len(cav), dtype=int)))
     assert precision_recall_rte(matched, truth, T_true)[0] >= 0.9
-    apart = run("vips", ego, cav, init, ego_labels=ego_labels, cav_labels=np.ones(len(cav), dtype=int))
+    apart = run("vips", ego, cav, init, labels=(ego_labels, np.ones(len(cav), dtype=int)))
     assert len(apart.pairs) == 0 and not apart.estimated
 
 
@@ -213,7 +214,7 @@ def test_bad_input_raises_value_error_naming_the_argument(name: str, argument: s
 def test_vips_labels_must_match_their_boxes() -> None:
     ego, cav, init, _, _ = make_scene(9, n=8)
     with pytest.raises(ValueError, match="cav_labels"):
-        run("vips", ego, cav, init, ego_labels=np.zeros(len(ego)), cav_labels=np.zeros(len(cav) + 1))
+        run("vips", ego, cav, init, labels=(np.zeros(len(ego)), np.zeros(len(cav) + 1)))
 
 
 @pytest.mark.parametrize("cls, field, value", [
@@ -233,12 +234,12 @@ def test_bad_parameters_raise_value_error_naming_the_field(cls: type, field: str
 
 
 def test_registry_runs_each_method_with_its_defaults() -> None:
-    assert set(METHODS) == set(PARAMS) == set(NAMES) | {"cbm", "cbm-no-consensus", "none", "oracle"}
+    assert set(METHODS) == set(NAMES) | {"cbm", "cbm-no-consensus", "none", "oracle"}
     ego, cav, init, _, pairs = make_scene(0, n=10)
-    for name in METHODS:
-        truth = {"true_pairs": np.array(sorted(pairs))} if name in TAKES_TRUTH else {}
-        assert isinstance(run(name, ego, cav, init, PARAMS[name](), **truth), MatchResult)
-    with pytest.raises(ValueError, match="name"):
+    for name, method in METHODS.items():
+        truth = {"true_pairs": np.array(sorted(pairs))} if method.takes_truth else {}
+        assert isinstance(run(name, ego, cav, init, method.params(), **truth), MatchResult)
+    with pytest.raises(ValueError, match="method"):
         run("cmb", ego, cav, init)
     with pytest.raises(TypeError, match="params"):
         run("icp", ego, cav, init, VIPSParams())

@@ -1,0 +1,101 @@
+"""Every calibration method, one record each: the app's method list and panels, the evaluation's
+``--methods``, sweeps and search all read this registry. Adding a method is one module (its run
+function and parameter class) and one entry in ``METHODS``.
+
+    from cbm.methods import METHODS, run
+    result = run("vips", ego_boxes, cav_boxes, init, labels=(ego_labels, cav_labels))
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+from typing import Any, Callable, Mapping
+
+import numpy as np
+
+from .baselines import (ICPParams, ReferenceParams, RICPParams, VIPSParams, match_icp, match_none, match_oracle,
+                        match_ricp, match_vips)
+from .params import CBMParams
+from .pipeline import match
+from .result import MatchResult
+
+
+@dataclass(frozen=True)
+class Method:
+    """One method: how it is named and shown, its parameters, how it runs and what it can explain."""
+
+    name: str
+    """Key used on the command line, in tables and in presets."""
+    label: str
+    """Name shown to people (the app's method list)."""
+    params: type
+    """Its parameter dataclass; ``params()`` are the defaults."""
+    function: Callable[..., MatchResult]
+    """``function(ego_boxes, cav_boxes, init, params, **inputs) -> MatchResult``."""
+    forced: Mapping[str, Any] = field(default_factory=dict)
+    """Parameters it always runs with, whatever is asked (the ablation: consensus off)."""
+    shares: str | None = None
+    """Another method whose parameter set it uses in the app (one set of CBM thresholds for both)."""
+    takes_labels: bool = False
+    """Needs the objects' class labels (``ego_labels=``, ``cav_labels=``)."""
+    takes_truth: bool = False
+    """Needs the true pairs (``true_pairs=``): only a simulation can run it."""
+    explains: bool = False
+    """Builds CBM's sets: consensus margin, diagnosis, context inspector and CBM's own pairs apply."""
+
+    @property
+    def params_key(self) -> str:
+        """The name under which the app keeps this method's parameter set."""
+        return self.shares or self.name
+
+    @property
+    def tunable(self) -> tuple[str, ...]:
+        """The parameters a user or a grid may set (its GUI controls): every field not forced."""
+        return tuple(f.name for f in dataclasses.fields(self.params) if f.name not in self.forced)
+
+    def resolved(self, params: Any = None) -> Any:
+        """``params`` (or the defaults) with the forced parameters applied: what it runs with."""
+        params = self.params() if params is None else params
+        if not isinstance(params, self.params):
+            raise TypeError(f"params of {self.name} must be {self.params.__name__}, got {type(params).__name__}")
+        return dataclasses.replace(params, **self.forced) if self.forced else params
+
+    def __call__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None, *,
+                 labels: tuple[np.ndarray, np.ndarray] | None = None,
+                 true_pairs: np.ndarray | None = None) -> MatchResult:
+        """Run on one trial's boxes; ``labels`` (ego, CAV) and ``true_pairs`` reach the methods that
+        take them (the oracle cannot run without ``true_pairs``)."""
+        inputs: dict[str, Any] = {}
+        if self.takes_labels and labels is not None:
+            inputs = {"ego_labels": labels[0], "cav_labels": labels[1]}
+        if self.takes_truth:
+            if true_pairs is None:
+                raise ValueError(f"{self.name} needs true_pairs: it fits the true pairs")
+            inputs["true_pairs"] = true_pairs
+        return self.function(ego_boxes, cav_boxes, init, self.resolved(params), **inputs)
+
+
+METHODS: dict[str, Method] = {m.name: m for m in (
+    Method("none", "none (no calibration)", ReferenceParams, match_none),
+    Method("cbm", "CBM", CBMParams, match, explains=True),
+    Method("cbm-no-consensus", "CBM without consensus", CBMParams, match, forced={"consensus": False},
+           shares="cbm", explains=True),
+    Method("icp", "ICP", ICPParams, match_icp),
+    Method("ricp", "RICP", RICPParams, match_ricp),
+    Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),
+    Method("oracle", "oracle (true pairs)", ReferenceParams, match_oracle, takes_truth=True),
+)}
+"""The methods in the order tables and lists show them: the references bound the others."""
+
+
+def method(name: str) -> Method:
+    """The method ``name``; ``ValueError`` naming the choices for an unknown one."""
+    if name not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {name!r}")
+    return METHODS[name]
+
+
+def run(name: str, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None,
+        **inputs: Any) -> MatchResult:
+    """Run the method ``name`` (``labels=``, ``true_pairs=`` as it needs them)."""
+    return method(name)(ego_boxes, cav_boxes, init, params, **inputs)
