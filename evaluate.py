@@ -13,10 +13,11 @@ The same arguments give the same table byte for byte except the ``runtime_s`` co
 wall-clock time: with ``--no-timing`` the table (CSV and Parquet) and the summary leave it out and
 are byte-identical between runs.
 
-Protocols (``cbm.scenario``): ``sind`` deals the frame's objects out to two abstract agents;
-``range`` and ``opv2v`` need an ego and a CAV per frame, chosen by ``loaders.agents`` (the
-dataset's ego, and the vehicle nearest ``--cav-distance`` metres from it); frames without a CAV are
-skipped. For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg std-devs).
+Trials come from the trial builder the app uses (``loaders.trials``): the dataset's ego and the
+sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a
+frame without it, the vehicle nearest that distance). ``sind`` deals the frame's objects out to the
+two agents; ``range`` and ``opv2v`` need an ego and a CAV per frame (frames without are skipped).
+For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg std-devs).
 """
 from __future__ import annotations
 
@@ -38,8 +39,10 @@ from tqdm import tqdm  # noqa: E402
 import loaders  # noqa: E402
 from cbm.methods import METHODS  # noqa: E402
 from cbm.scenario import ScenarioParams  # noqa: E402
-from cbm.sweep import SCENARIO_FIELDS, TIMING_COLUMNS, TRIAL_COLUMNS, FrameInputs, Sweep, grid_defaults, run, summarise  # noqa: E402
-from loaders.agents import TARGET_DISTANCE, choose_cav, choose_ego, frame_trial_inputs  # noqa: E402
+from cbm.scenario import FrameInputs  # noqa: E402
+from cbm.sweep import SCENARIO_FIELDS, TIMING_COLUMNS, TRIAL_COLUMNS, Sweep, grid_defaults, run, summarise  # noqa: E402
+from loaders import trials  # noqa: E402
+from loaders.agents import TARGET_DISTANCE  # noqa: E402
 
 DEFAULT_METHODS = tuple(METHODS)
 TABLE_ROWS = (
@@ -84,7 +87,7 @@ def build_parser() -> Parser:
     parser.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
     parser.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
     parser.add_argument("--cav-distance", type=float, default=TARGET_DISTANCE,
-                        help=f"range/opv2v: preferred ego-CAV distance in metres (default: {TARGET_DISTANCE:g})")
+                        help=f"preferred ego-CAV distance in metres (default: {TARGET_DISTANCE:g})")
     parser.add_argument("--no-timing", action="store_true",
                         help="leave the runtime out of the table and summary (then they are byte-identical run to run)")
     return parser
@@ -169,22 +172,16 @@ class Source:
 
 def frame_inputs(seq: loaders.Sequence, frames: Sequence[int], protocol: str,
                  cav_distance: float) -> tuple[list[FrameInputs], list[int]]:
-    """What the sweep needs of each frame, and the frames skipped for want of an ego or a CAV."""
+    """What the sweep needs of each frame (``loaders.trials.frame_inputs``, as the app builds its
+    trials), and the frames skipped for want of an ego or a CAV."""
+    if protocol == "opv2v" and seq.visibility is None:
+        raise CliError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
     inputs, skipped = [], []
     for k in frames:
-        frame = seq[k]
-        if protocol == "sind":
-            inputs.append(FrameInputs(k, {"boxes": frame.boxes(), "ids": frame.track_ids}, frame.categories))
-            continue
-        ego = choose_ego(frame)
-        cav = None if ego is None else choose_cav(frame, ego, cav_distance)
-        if cav is None:
+        try:
+            inputs.append(trials.frame_inputs(seq[k], protocol, target_distance=cav_distance))
+        except trials.NoTrial:
             skipped.append(k)
-            continue
-        trial = frame_trial_inputs(frame, ego, cav)
-        if protocol == "opv2v" and trial["visibility"] is None:
-            raise CliError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
-        inputs.append(FrameInputs(k, trial, frame.categories))
     return inputs, skipped
 
 

@@ -241,7 +241,7 @@ def metrics_markdown(outcome: Outcome) -> str:
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHODS[outcome.settings.method].label
     lines = [
-        f"**Frame {outcome.frame_index}** · ego `{outcome.ego_id[:8]}` · CAV `{outcome.cav_id[:8]}` ({outcome.cav_note})",
+        f"**Frame {outcome.frame_index}** · ego `{str(outcome.ego_id)[:8]}` · CAV `{str(outcome.cav_id)[:8]}` ({outcome.cav_note})",
         "",
         "| | |",
         "|---|---|",

@@ -1,8 +1,8 @@
 """Sequence runs: a tab's settings over every frame of the sequence, through the evaluation's sweep.
 
 The frames' inputs come from ``Explorer.trial_inputs`` -- the same ego, CAV and visibility the tab
-uses -- and every trial draws from ``trial_rng(seed, frame)`` inside ``cbm.sweep``, so each row is
-the number the tab shows on that frame. Frames run in chunks; a cancel stops at the next chunk and
+uses -- and every trial is built by ``FrameInputs.build`` inside ``cbm.sweep``, so each row is the
+number the tab shows on that frame. Frames run in chunks; a cancel stops at the next chunk and
 keeps the rows done so far.
 """
 from __future__ import annotations
@@ -14,7 +14,8 @@ from typing import Any, Iterable, Sequence
 import numpy as np
 
 from cbm.methods import METHODS
-from cbm.sweep import FrameInputs, Sweep, run, summarise
+from cbm.scenario import FrameInputs
+from cbm.sweep import Sweep, run, summarise
 
 from .background import Task
 from .drawing import number
@@ -38,7 +39,7 @@ def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) 
     inputs, skipped = [], []
     for index in frames:
         try:
-            inputs.append(explorer.trial_inputs(settings, index).frame)
+            inputs.append(explorer.trial_inputs(settings, index))
         except ValueError:
             skipped.append(index)
     return inputs, skipped

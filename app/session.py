@@ -1,14 +1,13 @@
 """A tab's computation, free of any GUI: settings -> trial -> method result -> metrics -> drawing.
 
 ``Explorer`` holds what all tabs share (the loaded sequence, its map); ``compute`` makes one
-outcome from one ``Settings`` value, reproducibly: the trial draws from
-``trial_rng(seed, frame)``, as the evaluation command does.
+outcome from one ``Settings`` value, reproducibly: the trial comes from the one trial builder
+(``loaders.trials``), as the evaluation's do.
 """
 from __future__ import annotations
 
 import time
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -19,12 +18,13 @@ from cbm.inspect import Inspection
 from cbm.methods import METHODS
 from cbm.metrics import TrialMetrics, evaluate
 from cbm.result import MatchResult
-from cbm.scenario import Trial, in_range, make_trial, trial_rng
-from cbm.sweep import FrameInputs, run_method
+from cbm.scenario import FrameInputs, Trial
+from cbm.sweep import run_method
 from loaders import Sequence, is_vehicle
-from loaders.agents import agent_pose, choose_cav, choose_ego, frame_trial_inputs
+from loaders.agents import agent_pose, choose_ego
+from loaders.trials import frame_inputs
 
-from .settings import AUTO_CAV, Settings
+from .settings import Settings
 
 
 @dataclass(frozen=True)
@@ -40,23 +40,14 @@ class CavChoice:
 
 
 @dataclass(frozen=True)
-class TrialInputs:
-    """One frame's inputs as a tab makes its trial: the sweep's ``FrameInputs`` and the agents."""
-
-    frame: FrameInputs
-    ego_id: str
-    cav_id: str
-    cav_note: str
-
-
-@dataclass(frozen=True)
 class Outcome:
     """Everything one recompute produced."""
 
     settings: Settings
     frame_index: int
-    ego_id: str
-    cav_id: str
+    ego_id: str | None
+    cav_id: str | None
+    """The agents (None under the SIND protocol in a frame without two vehicles: abstract agents)."""
     cav_note: str
     """Why the CAV is the one it is (auto choice, or the chosen one missing from this frame)."""
     trial: Trial
@@ -78,8 +69,6 @@ class Explorer:
     def __init__(self, sequence: Sequence) -> None:
         self.sequence = sequence
         self.map_segments = _map_segments(sequence)
-        self.steady_cav = steady_cav(sequence)
-        """The automatic CAV where present: the vehicle most often 15-40 m from the ego."""
 
     def __len__(self) -> int:
         return len(self.sequence)
@@ -97,67 +86,27 @@ class Explorer:
         order = np.lexsort((ids, distance))[:limit]
         return [CavChoice(str(ids[k]), float(distance[k])) for k in order]
 
-    def trial_inputs(self, settings: Settings, index: int) -> TrialInputs:
-        """Frame ``index``'s trial inputs under ``settings`` (ego, CAV, visibility), as ``compute``
-        and the sequence runs use them; ``ValueError`` when the frame has no ego or no CAV."""
-        frame = self.sequence[index]
-        ego = choose_ego(frame)
-        if ego is None:
-            raise ValueError(f"frame {index} has no vehicle that could be the ego")
-        cav, note = self._cav(frame, ego, settings.cav)
-        inputs = frame_trial_inputs(frame, ego, cav)
-        if settings.scenario.protocol == "opv2v" and inputs["visibility"] is None:
-            inputs["visibility"] = _visibility_by_range(inputs, settings.scenario.sensor_range)
-            note += "; no per-agent visibility in this dataset: sensor range used"
-        return TrialInputs(FrameInputs(index, inputs, labels=frame.categories), ego, cav, note)
+    def trial_inputs(self, settings: Settings, index: int) -> FrameInputs:
+        """Frame ``index``'s trial inputs under ``settings`` (``loaders.trials.frame_inputs``), as
+        ``compute`` and the sequence runs use them; ``ValueError`` when the frame makes no trial."""
+        scenario = settings.scenario
+        return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range)
 
     def compute(self, settings: Settings) -> Outcome:
         """Trial, method result, metrics and diagnosis for ``settings``."""
         started = time.perf_counter()
         index = min(max(settings.frame, 0), len(self.sequence) - 1)
-        prepared = self.trial_inputs(settings, index)
-        inputs, ego, cav, note = prepared.frame.trial, prepared.ego_id, prepared.cav_id, prepared.cav_note
-        trial = make_trial(**inputs, params=settings.scenario, rng=trial_rng(settings.scenario.seed, index))
-        result, findings = _run(settings, trial, prepared.frame)
+        inputs = self.trial_inputs(settings, index)
+        trial = inputs.build(settings.scenario, settings.scenario.seed)
+        result, findings = _run(settings, trial, inputs)
         metrics = evaluate(result, trial)
         limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
-        return Outcome(settings=settings, frame_index=index, ego_id=ego, cav_id=cav, cav_note=note, trial=trial,
-                       world_boxes=se2.apply_boxes(world_to_ego, inputs["boxes"]), world_ids=np.asarray(inputs["ids"]),
-                       result=result, metrics=metrics, limit=limit, findings=findings,
-                       seconds=time.perf_counter() - started)
-
-    def _cav(self, frame, ego: str, wanted: str) -> tuple[str, str]:
-        present = set(frame.track_ids.tolist())
-        if wanted != AUTO_CAV and wanted != ego and wanted in present:
-            return wanted, "chosen"
-        if wanted == AUTO_CAV and self.steady_cav not in (None, ego) and self.steady_cav in present:
-            return self.steady_cav, "auto"
-        cav = choose_cav(frame, ego)
-        if cav is None:
-            raise ValueError(f"frame {frame.index} has no other vehicle to act as the CAV")
-        return cav, "auto" if wanted == AUTO_CAV else f"auto ({wanted[:8]} is not in this frame)"
-
-def steady_cav(sequence: Sequence, near: float = 15.0, far: float = 40.0) -> str | None:
-    """The vehicle that is ``near``-``far`` metres from the ego in the most frames (ties to the
-    smallest id); None when no vehicle ever is."""
-    counts: dict[str, int] = {}
-    for frame in sequence:
-        ego = choose_ego(frame)
-        if ego is None:
-            continue
-        vehicles = is_vehicle(frame.categories) & (frame.track_ids != ego)
-        distance = np.linalg.norm(frame.boxes()[vehicles, :2] - se2.translation_of(agent_pose(frame, ego)), axis=1)
-        for track in frame.track_ids[vehicles][(distance >= near) & (distance <= far)]:
-            counts[str(track)] = counts.get(str(track), 0) + 1
-    return min(counts, key=lambda track: (-counts[track], track)) if counts else None
-
-
-def _visibility_by_range(inputs: dict[str, Any], sensor_range: float) -> dict[str, np.ndarray]:
-    """What each agent sees when the dataset does not say: the objects within sensor range."""
-    boxes, ids = inputs["boxes"], np.asarray(inputs["ids"])
-    return {"ego": ids[in_range(boxes, inputs["ego_pose"], sensor_range)],
-            "cav": ids[in_range(boxes, inputs["cav_pose"], sensor_range)]}
+        objects = inputs.trial
+        return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
+                       cav_note=inputs.note, trial=trial, world_boxes=se2.apply_boxes(world_to_ego, objects["boxes"]),
+                       world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
+                       findings=findings, seconds=time.perf_counter() - started)
 
 
 def _run(settings: Settings, trial: Trial, frame: FrameInputs) -> tuple[MatchResult, list[Finding]]:

@@ -17,7 +17,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import loaders  # noqa: E402
-from cbm.sweep import FrameInputs, Sweep, run, summarise  # noqa: E402
+from cbm.scenario import FrameInputs  # noqa: E402
+from cbm.sweep import Sweep, run, summarise  # noqa: E402
 
 VARIANTS = {"heading": ("align", "fold"), "consensus_rule": ("released", "paper"), "sigma3": (1.0, 3.0)}
 NOTES = {("align", "released", 1.0): " (default)", ("fold", "released", 1.0): " (released code)"}

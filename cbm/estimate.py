@@ -11,6 +11,7 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.special import fdtri
 
 from . import se2
 
@@ -21,11 +22,19 @@ WELSCH_EFFICIENT_SCALE = 2.9846 / math.sqrt(2.0)
 """nu / sigma at which Welsch's estimator is 95 % as efficient as least squares on Gaussian noise:
 Holland and Welsch (1977) give the tuning constant c = 2.9846 sigma for rho(r) ~ 1 - exp(-(r/c)^2),
 and our weight exp(-r^2 / (2 nu^2)) has c = sqrt(2) nu."""
+GOLDEN = (math.sqrt(5.0) - 1.0) / 2.0
 LMEDS_HYPOTHESES = 256
 """Most two-pair hypotheses the least-median start tries."""
 INLIER_GATE = 3.0
 """Pairs within this many sigma_0 of the least-median fit are inliers (for 2-D Gaussian noise a
 true pair falls outside with probability exp(-4.5) = 1.1 %)."""
+MIN_TO_REJECT = 4
+"""Fewest pairs among which a wrong one can be singled out: with three, any two fit exactly and
+the third cannot be told from noise, so every pair counts."""
+READMIT_ALPHA = 1e-3
+"""A pair left out comes back unless a true pair would lie as far out with at most this probability."""
+READMIT_CAP = 10.0
+"""A pair more than this many sigma off stays out, however few the inliers that read sigma."""
 
 
 @dataclass(frozen=True)
@@ -121,38 +130,32 @@ def two_point_fits(src: np.ndarray, dst: np.ndarray, a: np.ndarray,
 
 def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs (a, b), a != b, of the two-pair hypotheses: all of them when there are at most
-    ``limit``, else ``limit`` of them spread evenly (a runs over every pair, b at varying strides)."""
+    ``limit``, else ``limit`` of them spread evenly: round after round every pair is an ``a``,
+    its ``b`` a fixed offset ahead, the offsets spread by the golden ratio."""
     if k * (k - 1) // 2 <= limit:
         a, b = np.triu_indices(k, 1)
         return a, b
     h = np.arange(limit)
-    a = h % k
-    return a, (a + 1 + (h * 7919) % (k - 1)) % k
+    a, rounds = h % k, h // k + 1
+    offset = 1 + np.floor(rounds * GOLDEN * (k - 1)).astype(np.intp) % (k - 1)
+    return a, (a + offset) % k
 
 
 def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, float]:
     """Least median of squares (Rousseeuw, JASA 1984) over rigid fits through two pairs
-    (``hypothesis_pairs``): the fit whose median residual over the *other* pairs is smallest, and
-    that median (lower median; 0 for two pairs). The two pairs a fit passes through are left out
-    of its median, which would otherwise start from two near-zero residuals and claim too little
-    noise. The answer stands while fewer than half of the other pairs are wrong. The pairs are put
-    in order of their distances from the centroids first, so the answer depends neither on the
-    input order nor on where either frame lies."""
+    (``hypothesis_pairs``): the fit whose ``h``-th smallest residual, ``h = floor(K/2) + 1``, is
+    smallest, and that residual. It stands while fewer than half of the pairs are wrong. The pairs
+    are put in order of their distances from the centroids first, so the answer depends neither on
+    the input order nor on where either frame lies."""
     order = np.lexsort((np.linalg.norm(src - src.mean(axis=0), axis=1), np.linalg.norm(dst - dst.mean(axis=0), axis=1)))
     src, dst = src[order], dst[order]
-    k = len(src)
-    a, b = hypothesis_pairs(k)
+    a, b = hypothesis_pairs(len(src))
     theta, tx, ty = two_point_fits(src, dst, a, b)
-    if k == 2:
-        return se2.make(tx[0], ty[0], theta[0]), 0.0
     c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
     dx = c * src[:, 0] - s * src[:, 1] + tx[:, None] - dst[:, 0]
     dy = s * src[:, 0] + c * src[:, 1] + ty[:, None] - dst[:, 1]
-    squared = dx * dx + dy * dy
-    hypothesis = np.arange(len(a))
-    squared[hypothesis, a] = squared[hypothesis, b] = np.inf
-    middle = (k - 3) // 2
-    median = np.partition(squared, middle, axis=1)[:, middle]
+    h = len(src) // 2
+    median = np.partition(dx * dx + dy * dy, h, axis=1)[:, h]
     best = int(np.argmin(median))
     return se2.make(tx[best], ty[best], theta[best]), math.sqrt(median[best])
 
@@ -164,14 +167,23 @@ def least_median_sigma(median: float, k: int) -> float:
     return median / RAYLEIGH_MEDIAN * (1.0 + 5.0 / max(2 * k - 3, 1))
 
 
+def readmit_bound(inliers: int) -> float:
+    """How many sigma (read from ``inliers`` pairs) a true pair's residual stays below with
+    probability 1 - ``READMIT_ALPHA``: ``sqrt(2 F(2, 2K - 3))`` at that level (the noise estimate of
+    few pairs is itself uncertain), at most ``READMIT_CAP``."""
+    return min(math.sqrt(2.0 * float(fdtri(2, max(2 * inliers - 3, 1), 1.0 - READMIT_ALPHA))), READMIT_CAP)
+
+
 def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     """Robust SE(2) fit of eq. 14 with Welsch weights and a scale that follows the data (>= 2 pairs).
 
-    1. Start where fewer than half of the pairs can pull: the least-median fit
-       (``least_median_fit``) and its scale sigma_0 (``least_median_sigma``).
-    2. Read the noise from the pairs within ``INLIER_GATE`` sigma_0 of it: their least-squares
-       fit and its residual std-dev sigma (``inlier_sigma``, never below ``nu_floor / c``) --
-       Rousseeuw and Leroy's reweighted least squares (1987, ch. 5).
+    1. Single out wrong pairs where fewer than half of them can pull (from ``MIN_TO_REJECT``
+       pairs on): the least-median fit (``least_median_fit``) and its scale sigma_0
+       (``least_median_sigma``); pairs within ``INLIER_GATE`` sigma_0 of it are the inliers.
+    2. Read the noise from the inliers: their least-squares fit and its residual std-dev sigma
+       (``inlier_sigma``, never below ``nu_floor / c``) -- Rousseeuw and Leroy's reweighted least
+       squares (1987, ch. 5); a pair left out comes back when it lies within ``readmit_bound``
+       sigma of that fit (few inliers know their noise only roughly), then the fit is repeated.
     3. Minimise eq. 14 by iteratively reweighted Procrustes (the majorise-minimise step of Zhang,
        Yao, Deng, TPAMI 2022) at nu = c sigma, ``c = WELSCH_EFFICIENT_SCALE``: Holland and Welsch's
        95 %-efficiency constant.
@@ -182,12 +194,20 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     read from the robust fit's own residuals it would shrink on few pairs, round after round.
     """
     floor = nu_floor / WELSCH_EFFICIENT_SCALE
-    T, median = least_median_fit(src, dst)
+    inlier = np.ones(len(src), dtype=bool)
+    if len(src) >= MIN_TO_REJECT:
+        T, median = least_median_fit(src, dst)
+        inlier = residuals(T, src, dst) <= INLIER_GATE * max(least_median_sigma(median, len(src)), floor)
+        if np.count_nonzero(inlier) < 2:
+            inlier[:] = True
+    T = weighted_procrustes(src[inlier], dst[inlier])
     r = residuals(T, src, dst)
-    inlier = r <= INLIER_GATE * max(least_median_sigma(median, len(r)), floor)
-    if np.count_nonzero(inlier) >= 2:
-        T = weighted_procrustes(src[inlier], dst[inlier])
-        r = residuals(T, src, dst)
+    if not inlier.all():
+        back = r <= readmit_bound(int(np.count_nonzero(inlier))) * max(inlier_sigma(r, inlier), floor)
+        if (back != inlier).any():
+            inlier = back
+            T = weighted_procrustes(src[inlier], dst[inlier])
+            r = residuals(T, src, dst)
     sigma = max(inlier_sigma(r, inlier), floor)
     nu = WELSCH_EFFICIENT_SCALE * sigma
     T = _reweighted(src, dst, T, nu)

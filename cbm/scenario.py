@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Literal, Mapping
+from typing import Any, Literal, Mapping
 
 import numpy as np
 
@@ -123,6 +123,27 @@ class Trial:
 def trial_rng(seed: int, frame_index: int) -> np.random.Generator:
     """The generator of frame ``frame_index`` under ``seed``: the app and the evaluation share it."""
     return np.random.default_rng([seed, frame_index])
+
+
+@dataclass(frozen=True)
+class FrameInputs:
+    """What one frame gives every trial made from it: its objects and agents as ``make_trial`` takes
+    them (``loaders.trials.frame_inputs`` makes them from a dataset frame)."""
+
+    index: int
+    """Frame index: the trials of this frame draw from ``trial_rng(seed, index)``."""
+    trial: Mapping[str, Any]
+    """``make_trial`` keyword arguments: ``boxes``, ``ids`` and, as the protocol needs them,
+    ``ego_pose``, ``cav_pose``, ``ego_id``, ``cav_id``, ``visibility``."""
+    labels: np.ndarray | None = None
+    """Class label of each object (same order as ``ids``), for the methods that take labels (VIPS)."""
+    note: str = ""
+    """How the agents were chosen (e.g. ``auto``), for the people reading the result."""
+
+    def build(self, params: ScenarioParams, seed: int) -> Trial:
+        """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
+        evaluation, sweeps and search is made here."""
+        return make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index))
 
 
 def make_trial(

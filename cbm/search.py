@@ -12,8 +12,8 @@ import math
 from dataclasses import dataclass
 from typing import Any, Callable, Mapping, Sequence
 
-from .scenario import ScenarioParams
-from .sweep import FrameInputs, Sweep, run, summarise
+from .scenario import FrameInputs, ScenarioParams
+from .sweep import Sweep, run, summarise
 
 SEARCHABLE = ("sigma1", "sigma2", "sigma3", "distance_limit")
 DEFAULT_SPACE: dict[str, tuple[float, ...]] = {

@@ -1,14 +1,15 @@
 """Parameter sweeps: trials over frames and a grid of parameters, every method on every trial, one
 row of metrics per (frame, grid point, method).
 
-    from cbm.sweep import FrameInputs, Sweep, run
+    from cbm.scenario import FrameInputs
+    from cbm.sweep import Sweep, run
     sweep = Sweep(methods=("cbm", "icp"), grid={"eta": [0.2, 0.6], "sigma2": [2.0, 3.0]}, seed=0)
     rows = run(sweep, [FrameInputs(0, {"boxes": boxes, "ids": ids})], workers=2)
 
 A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or a tunable
 parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
-Every trial of frame ``k`` draws from ``trial_rng(seed, k)``, as the app does, so any row can be
-reproduced there from its frame, parameters and seed. Rows come in task order -- frame, scenario
+Every trial is built by ``FrameInputs.build`` (frame ``k`` draws from ``trial_rng(seed, k)``), as
+the app builds its trials, so any row can be reproduced there from its frame, parameters and seed. Rows come in task order -- frame, scenario
 grid point, method, method grid point, each in the order given -- whatever the number of workers.
 """
 from __future__ import annotations
@@ -24,7 +25,7 @@ import numpy as np
 
 from .methods import METHODS
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
-from .scenario import ScenarioParams, Trial, make_trial, trial_rng
+from .scenario import FrameInputs, ScenarioParams, Trial
 
 SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
 """Scenario parameter columns, ``seed`` included (it is the sweep's seed)."""
@@ -35,19 +36,6 @@ METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precisi
 RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
 TIMING_COLUMNS = ("runtime_s",)
 """Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
-
-
-@dataclass(frozen=True)
-class FrameInputs:
-    """One frame's world-frame objects, as ``make_trial`` takes them."""
-
-    index: int
-    """Frame index: the trials of this frame draw from ``trial_rng(seed, index)``."""
-    trial: Mapping[str, Any]
-    """``make_trial`` keyword arguments: ``boxes``, ``ids`` and, as the protocol needs them,
-    ``ego_pose``, ``cav_pose``, ``ego_id``, ``cav_id``, ``visibility``."""
-    labels: np.ndarray | None = None
-    """Class label of each object (same order as ``ids``), for the methods that take labels (VIPS)."""
 
 
 @dataclass(frozen=True)
@@ -146,7 +134,7 @@ def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
 
 def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list[dict[str, Any]]:
     """The rows of one frame at one scenario point: one trial, every method at each of its grid points."""
-    trial = make_trial(**frame.trial, params=scenario, rng=trial_rng(sweep.seed, frame.index))
+    trial = frame.build(scenario, sweep.seed)
     base = {"frame": frame.index, **dataclasses.asdict(scenario),
             "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
     init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}

@@ -1,19 +1,24 @@
 """Which agents make a trial in a frame: the ego, the CAV, their poses and what each sees.
 
-One deterministic rule, shared by the evaluation command and the app, so both pick the same pair:
+One deterministic rule, used by the trial builder (``loaders.trials``) for the app and the
+evaluation alike:
 
 - **ego**: the dataset's own ego (``Sequence.ego``) when it is present in the frame; otherwise (e.g.
   synthetic scenes, drone recordings) the vehicle nearest the centroid of the frame's objects.
-- **CAV**: among the frame's agents other than the ego when there are any (OPV2V, DAIR-V2X: they
-  carry the per-agent visibility); otherwise among the frame's vehicles (``is_vehicle``) other than
-  the ego: the one whose distance from the ego is closest to ``target_distance``.
+- **CAV candidates**: the frame's agents other than the ego when there are any (OPV2V, DAIR-V2X:
+  they carry the per-agent visibility); otherwise the frame's vehicles (``is_vehicle``) other than
+  the ego.
+- **steady CAV** of a sequence: the candidate that is ``STEADY_BAND`` times the target distance
+  from the ego (15 to 40 m for 25 m) in the most frames, so that stepping through the frames keeps
+  one CAV; **CAV** of a frame: the steady CAV where it is present, else the candidate whose distance
+  from the ego is closest to the target distance.
 
 Ties go to the smallest id (string order), so the choice never depends on row order. An agent that
 is not in the frame's agent table is an object of the frame, and its pose is its box (centre, yaw).
 """
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Iterable
 
 import numpy as np
 
@@ -24,6 +29,8 @@ from .scene import Frame
 
 TARGET_DISTANCE = 25.0
 """Metres. Default distance from the ego of the CAV ``choose_cav`` prefers."""
+STEADY_BAND = (0.6, 1.6)
+"""The steady CAV is counted in a frame when it lies between these multiples of the target distance."""
 
 
 def choose_ego(frame: Frame) -> str | None:
@@ -48,6 +55,22 @@ def choose_cav(frame: Frame, ego_id: str, target_distance: float = TARGET_DISTAN
         return None
     gap = np.abs(np.linalg.norm(xy - se2.translation_of(agent_pose(frame, ego_id)), axis=1) - target_distance)
     return _nearest(ids, gap)
+
+
+def steady_cav(frames: Iterable[Frame], target_distance: float = TARGET_DISTANCE) -> str | None:
+    """The CAV candidate that lies within ``STEADY_BAND`` times ``target_distance`` of the ego in
+    the most of ``frames`` (ties to the smallest id); None when none ever does."""
+    near, far = (factor * target_distance for factor in STEADY_BAND)
+    counts: dict[str, int] = {}
+    for frame in frames:
+        ego = choose_ego(frame)
+        if ego is None:
+            continue
+        ids, xy = _cav_candidates(frame, ego)
+        distance = np.linalg.norm(xy - se2.translation_of(agent_pose(frame, ego)), axis=1)
+        for track in ids[(distance >= near) & (distance <= far)]:
+            counts[str(track)] = counts.get(str(track), 0) + 1
+    return min(counts, key=lambda track: (-counts[track], track)) if counts else None
 
 
 def agent_pose(frame: Frame, agent_id: str) -> np.ndarray:

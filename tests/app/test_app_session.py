@@ -10,9 +10,10 @@ import pytest
 import loaders
 from app import drawing
 from app.coalesce import Coalescer
-from app.session import Explorer, steady_cav
+from app.session import Explorer
 from app.settings import AUTO_CAV, Settings, ViewOptions
 from cbm import se2
+from loaders.trials import sequence_cav
 
 
 def _view(settings: Settings, **changes) -> Settings:
@@ -23,7 +24,7 @@ def test_default_frame_is_repaired_and_drawn(explorer: Explorer) -> None:
     outcome = explorer.compute(Settings())
     picture = drawing.draw(outcome, explorer.map_segments)
     m = outcome.metrics
-    assert outcome.ego_id == "ego" and outcome.cav_id == explorer.steady_cav
+    assert outcome.ego_id == "ego" and outcome.cav_id == sequence_cav(explorer.sequence)
     assert m.n_ego > 10 and m.n_cav > 10 and m.n_true > 5
     assert m.precision == 1.0 and m.rte < 0.5 and m.rre < 1.0
     assert {"ego_boxes", "cav_boxes", "ego_vehicle", "cav_vehicle", "cav_before"} <= set(picture.meshes)
@@ -91,12 +92,6 @@ def test_cav_choice_and_fallback(explorer: Explorer) -> None:
     assert explorer.compute(dataclasses.replace(Settings(), cav=chosen)).cav_id == chosen
     absent = explorer.compute(dataclasses.replace(Settings(), cav="no-such-vehicle"))
     assert absent.cav_id != "no-such-vehicle" and "not in this frame" in absent.cav_note
-
-
-def test_steady_cav_is_present_in_many_frames(explorer: Explorer) -> None:
-    cav = steady_cav(explorer.sequence)
-    present = sum(cav in set(explorer.sequence[k].track_ids.tolist()) for k in range(len(explorer.sequence)))
-    assert present > len(explorer.sequence) // 2
 
 
 def test_clicking_a_box_names_it_and_its_match(explorer: Explorer) -> None:

@@ -6,7 +6,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
-from cbm.estimate import WELSCH_EFFICIENT_SCALE, least_squares_fit, robust_fit, weighted_procrustes
+from cbm.estimate import (WELSCH_EFFICIENT_SCALE, hypothesis_pairs, least_squares_fit, robust_fit,
+                          weighted_procrustes)
 
 pytestmark = pytest.mark.filterwarnings("error")
 NU_FLOOR = 0.3
@@ -42,12 +43,13 @@ def test_three_correct_pairs_are_fitted_like_least_squares():
     assert worst < 0.2
 
 
-@settings(max_examples=60, deadline=None)
-@given(seed=st.integers(0, 2**32 - 1), k=st.integers(5, 40), extent=st.floats(5.0, 60.0),
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(seed=st.integers(0, 2**32 - 1), k=st.integers(2, 40), extent=st.floats(5.0, 60.0),
        sigma=st.sampled_from([0.05, 0.1, 0.3, 0.6, 1.0]))
 def test_on_gaussian_inliers_never_meaningfully_worse_than_least_squares(seed, k, extent, sigma):
     """Over 30 noise draws of one layout, the robust pose error (RMS) stays within 1.35 times least
-    squares' (Welsch at 95 % efficiency would give 1.03 with the noise known; it is estimated)."""
+    squares' (Welsch at 95 % efficiency would give 1.03 with the noise known; it is estimated; the
+    worst of 500 layouts measured 1.27)."""
     src, T, clean, rng = scene(seed, k, extent, sigma)
     robust, plain = [], []
     for _ in range(30):
@@ -57,11 +59,12 @@ def test_on_gaussian_inliers_never_meaningfully_worse_than_least_squares(seed, k
     assert np.sqrt(np.mean(np.square(robust))) <= 1.35 * np.sqrt(np.mean(np.square(plain))) + 1e-9
 
 
-@settings(max_examples=80, deadline=None)
+@settings(max_examples=80, deadline=None, derandomize=True)
 @given(seed=st.integers(0, 2**32 - 1), k=st.integers(5, 40), extent=st.floats(20.0, 60.0),
        sigma=st.sampled_from([0.01, 0.1, 0.3, 0.6]), share=st.floats(0.0, 0.4))
 def test_rejects_up_to_40_percent_gross_outliers(seed, k, extent, sigma, share):
-    """Wrong pairs 15 sigma and 5 m or more off weigh nothing, and the pose is the inliers' own."""
+    """Wrong pairs 15 sigma and 5 m or more off weigh nothing, and the pose is the inliers' own
+    (from 5 pairs on: with 40 % wrong that leaves 3 right ones)."""
     src, T, dst, rng = scene(seed, k, extent, sigma)
     dst = dst + rng.normal(0, sigma, dst.shape)
     wrong = rng.choice(k, int(share * k), replace=False)
@@ -73,6 +76,17 @@ def test_rejects_up_to_40_percent_gross_outliers(seed, k, extent, sigma, share):
     assert np.all(fit.weights[wrong] < 0.05)
     noise = max(sigma, NU_FLOOR / WELSCH_EFFICIENT_SCALE)
     assert displacement(fit.transform, weighted_procrustes(src[right], dst[right]), src) < 2.0 * noise
+
+
+def test_many_pairs_are_sampled_evenly_and_survive_many_wrong_ones():
+    """More pairs than hypotheses: 60 pairs, 40 % wrong, every pair in some hypothesis."""
+    src, T, dst, rng = scene(8, 60, 50.0, 0.1)
+    dst = dst + rng.normal(0, 0.1, dst.shape)
+    dst[:24] += rng.uniform(5, 20, (24, 2))
+    fit = robust_fit(src, dst, NU_FLOOR)
+    assert np.all(fit.weights[:24] < 0.05) and displacement(fit.transform, T, src) < 0.1
+    a, b = hypothesis_pairs(60)
+    assert len(set(zip(a.tolist(), b.tolist()))) == len(a) and set(a.tolist()) | set(b.tolist()) == set(range(60))
 
 
 def test_input_order_does_not_change_the_fit():

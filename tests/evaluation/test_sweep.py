@@ -7,7 +7,8 @@ import pytest
 from cbm import CBMParams, match
 from cbm.metrics import TrialMetrics, aggregate, evaluate
 from cbm.scenario import ScenarioParams, make_trial, trial_rng
-from cbm.sweep import TIMING_COLUMNS, FrameInputs, Sweep, run, run_task, summarise
+from cbm.scenario import FrameInputs
+from cbm.sweep import TIMING_COLUMNS, Sweep, run, run_task, summarise
 from support.scenes import street_scene
 
 METHODS = ("cbm", "cbm-no-consensus", "icp", "ricp", "vips")

@@ -1,0 +1,97 @@
+"""The one trial builder: from a dataset frame, a protocol and a CAV choice to the inputs of every
+trial made from that frame (``cbm.scenario.FrameInputs``), and from (frame, scenario, seed) to the
+trial itself. The app, ``evaluate.py``, sequence runs and the parameter search all build their
+trials here, so what a user tunes in the app is what the evaluation measures.
+
+    from loaders.trials import build_trial
+    trial = build_trial(sequence[12], ScenarioParams(protocol="range", sigma_p=0.3), seed=0)
+
+Agents (``loaders.agents``): the dataset's ego, and the CAV asked for or else the sequence's steady
+CAV (else the vehicle nearest the target distance). Under the SIND protocol the two agents are
+abstract (the protocol deals the objects out); the chosen ones set the frame of reference and do
+not detect themselves, and a frame without two vehicles uses the objects' centroid. The range and
+OPV2V protocols need an ego and a CAV; a dataset that does not say what each agent sees gets the
+objects within the sensor range under OPV2V (and a note saying so).
+"""
+from __future__ import annotations
+
+import weakref
+
+import numpy as np
+
+from cbm.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
+
+from .agents import TARGET_DISTANCE, choose_cav, choose_ego, frame_trial_inputs, steady_cav
+from .scene import Frame, Sequence
+
+AUTO_CAV = "auto"
+"""The CAV choice that lets the builder pick (the steady CAV, else the nearest the target distance)."""
+
+_STEADY: weakref.WeakKeyDictionary[Sequence, dict[float, str | None]] = weakref.WeakKeyDictionary()
+"""Steady CAV of each loaded sequence by target distance (forgotten with the sequence)."""
+
+
+class NoTrial(ValueError):
+    """A frame that cannot make a trial under the protocol; the message says why."""
+
+
+def sequence_cav(sequence: Sequence, target_distance: float = TARGET_DISTANCE) -> str | None:
+    """The sequence's steady CAV (``loaders.agents.steady_cav``), computed once per sequence."""
+    known = _STEADY.setdefault(sequence, {})
+    if target_distance not in known:
+        known[target_distance] = steady_cav(sequence, target_distance)
+    return known[target_distance]
+
+
+def agents_of(frame: Frame, cav: str = AUTO_CAV,
+              target_distance: float = TARGET_DISTANCE) -> tuple[str, str, str] | None:
+    """(ego, CAV, note) of ``frame``: ``cav`` when it is in the frame, else the automatic choice
+    (the note says which); None when the frame has no ego or no other vehicle."""
+    ego = choose_ego(frame)
+    if ego is None:
+        return None
+    present = set(frame.track_ids.tolist()) | set(_agent_ids(frame))
+    if cav != AUTO_CAV and cav != ego and cav in present:
+        return ego, cav, "chosen"
+    steady = sequence_cav(frame.sequence, target_distance)
+    note = "auto" if cav == AUTO_CAV else f"auto ({cav[:8]} is not in this frame)"
+    if steady not in (None, ego) and steady in present:
+        return ego, steady, note
+    nearest = choose_cav(frame, ego, target_distance)
+    return None if nearest is None else (ego, nearest, note)
+
+
+def frame_inputs(frame: Frame, protocol: Protocol, cav: str = AUTO_CAV, target_distance: float = TARGET_DISTANCE,
+                 sensor_range: float = ScenarioParams.sensor_range) -> FrameInputs:
+    """The inputs of every trial of ``frame`` under ``protocol``; ``NoTrial`` when it has none."""
+    agents = agents_of(frame, cav, target_distance)
+    if agents is None:
+        if protocol != "sind":
+            raise NoTrial(f"frame {frame.index} has no ego and CAV for the {protocol} protocol")
+        inputs = {"boxes": frame.boxes(), "ids": frame.track_ids}
+        return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents")
+    ego, chosen, note = agents
+    inputs = frame_trial_inputs(frame, ego, chosen)
+    if protocol == "opv2v" and inputs["visibility"] is None:
+        inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
+        note += "; no per-agent visibility in this dataset: sensor range used"
+    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note)
+
+
+def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AUTO_CAV,
+                target_distance: float = TARGET_DISTANCE) -> Trial:
+    """The trial of ``frame`` under ``scenario`` and ``seed``: ``frame_inputs`` then
+    ``FrameInputs.build`` (draws from ``trial_rng(seed, frame.index)``)."""
+    inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range)
+    return inputs.build(scenario, seed)
+
+
+def _agent_ids(frame: Frame) -> list[str]:
+    return [] if frame.agents is None else frame.agents["agent_id"].cast(str).to_list()
+
+
+def _visibility_by_range(inputs: dict, sensor_range: float) -> dict[str, np.ndarray]:
+    """What each agent sees when the dataset does not say: the objects within sensor range."""
+    boxes, ids = inputs["boxes"], np.asarray(inputs["ids"])
+    return {"ego": ids[in_range(boxes, inputs["ego_pose"], sensor_range)],
+            "cav": ids[in_range(boxes, inputs["cav_pose"], sensor_range)]}
