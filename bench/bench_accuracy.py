@@ -11,7 +11,7 @@ Conditions (every detection's heading turned by pi with probability 0.5):
 Methods: the released code's CBM (headings folded, least-squares fit, no re-association), CBM as
 published (eq. 14 fit, no re-association), CBM with this project's defaults (noise-aware fit and
 guided re-association), the oracle (least squares on the true pairs), ICP, RICP, VIPS and none.
-Trials come from ``cbm.sweep`` (the trial builder ``evaluate.py`` and the app use), seeds 0..S-1.
+Trials come from ``evaluation`` (the trial builder the app uses too), seeds 0..S-1.
 Prints, per condition and dataset, micro-averaged precision and recall, the success rate (RTE < 1 m
 and RRE < 1 deg) and the median runtime per call of one worker process.
 
@@ -30,9 +30,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-import evaluate  # noqa: E402
 import loaders  # noqa: E402
 from cbm.scenario import ScenarioParams  # noqa: E402
+from evaluation.cli import parse_frames  # noqa: E402
+from evaluation.run import frame_inputs  # noqa: E402
 from cbm.sweep import Sweep, run, summarise  # noqa: E402
 
 CONDITIONS = {
@@ -66,9 +67,9 @@ class Row:
 
 
 def frames_of(name: str, frames: str, protocol: str) -> list:
-    """The sweep's inputs of one sequence (``evaluate.frame_inputs``: the same agents as there)."""
+    """The sweep's inputs of one sequence (the evaluation's, as the app builds its trials)."""
     seq = loaders.open(name)
-    inputs, _ = evaluate.frame_inputs(seq, evaluate.parse_frames(frames, len(seq)), protocol, 25.0)
+    inputs, _ = frame_inputs(seq, parse_frames(frames, len(seq)), protocol, 25.0)
     return inputs
 
 

@@ -5,7 +5,6 @@ single anchors with plain numpy, so the app can show why a pair was kept or drop
 """
 from __future__ import annotations
 
-import functools
 import time
 from dataclasses import dataclass
 
@@ -74,6 +73,8 @@ class Inspection:
         self._timings: dict[str, float] = {}
         self.sets: Sets = build_sets(ego, cav, init, params, self._timings)
         self.init, self.n_cav, self._started = init, len(cav), started
+        self._anchors: dict[tuple[int, int], AnchorDetail] = {}
+        """Anchors explained so far: kept with this inspection and forgotten with it."""
 
     def match(self) -> MatchResult:
         """What ``cbm.match`` returns on the same input, from the sets already built."""
@@ -92,9 +93,14 @@ class Inspection:
             vectors = vectors * self.sets.signs[against, index]
         return context.member[rows], vectors
 
-    @functools.lru_cache(maxsize=4096)
     def anchor(self, i: int, j: int) -> AnchorDetail:
         """Anchor (i, j) through candidate set, consensus, one-to-one rule and distance limit."""
+        key = (int(i), int(j))
+        if key not in self._anchors:
+            self._anchors[key] = self._explain(*key)
+        return self._anchors[key]
+
+    def _explain(self, i: int, j: int) -> AnchorDetail:
         sets = self.sets
         a = i * self.n_cav + j
         members = sets.candidates.member[sets.candidates.start[a]:sets.candidates.start[a + 1]]

@@ -25,136 +25,12 @@ import numpy as np
 import polars as pl
 
 from .errors import LoaderError
-from .scene import MapGeometry, Sequence
+from .scene import Sequence
+from .synthetic_layout import DEPARTURE_START, SIDEWALK_START, STOP_LINE, Layout, Path
 
 MAX_OBJECTS = 1000
 FRAME_RATE = 10.0
-LANE = 3.5
-PARKING = 2.5
-CROSSING = (0.5, 4.5)
-STOP_LINE = 5.5
-DEPARTURE_START = 13.0
-SIDEWALK_START = 7.0
 PEDESTRIAN_SIZE = (0.6, 0.6)
-
-
-@dataclass
-class _Path:
-    """A polyline driven at constant speed; positions beyond its ends continue straight."""
-
-    points: np.ndarray
-
-    def __post_init__(self) -> None:
-        steps = np.diff(self.points, axis=0)
-        lengths = np.linalg.norm(steps, axis=1)
-        self.directions = steps / lengths[:, None]
-        self.start = np.r_[0.0, np.cumsum(lengths)]
-
-    @property
-    def length(self) -> float:
-        return float(self.start[-1])
-
-    def at(self, s: np.ndarray, lateral: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Positions ``(..., 2)`` and headings at arclength ``s``, shifted ``lateral`` to the left."""
-        segment = np.clip(np.searchsorted(self.start, s, side="right") - 1, 0, len(self.directions) - 1)
-        direction = self.directions[segment]
-        left = np.stack([-direction[..., 1], direction[..., 0]], axis=-1)
-        along = (s - self.start[segment])[..., None]
-        xy = self.points[segment] + along * direction + lateral[..., None] * left
-        return xy, np.arctan2(direction[..., 1], direction[..., 0])
-
-
-def _line(a: tuple[float, float], b: tuple[float, float]) -> _Path:
-    return _Path(np.array([a, b], dtype=float))
-
-
-@dataclass
-class _Layout:
-    """Geometry of the intersection for ``k`` lanes per direction and arms of length ``arm``."""
-
-    k: int
-    arm: float
-
-    @property
-    def edge(self) -> float:
-        """Distance from a road's centre line to its kerb (lanes and parking strip)."""
-        return self.k * LANE + PARKING
-
-    def lane_offset(self, lane: int) -> float:
-        return (lane + 0.5) * LANE
-
-    def through_path(self, direction: str, lane: int) -> _Path:
-        """Road A through lane, ``"east"`` (south side) or ``"west"`` (north side)."""
-        y, L = self.lane_offset(lane), self.arm
-        return _line((-L, -y), (L, -y)) if direction == "east" else _line((L, y), (-L, y))
-
-    def queue_path(self, direction: str, lane: int) -> _Path:
-        """Road B approach lane, from the end of the arm to the stop line."""
-        x, stop, L = self.lane_offset(lane), self.edge + STOP_LINE, self.arm
-        return _line((x, -L), (x, -stop)) if direction == "north" else _line((-x, L), (-x, stop))
-
-    def departure_path(self, direction: str, lane: int) -> _Path:
-        """Road B departing lane, ``s = 0`` at the intersection's edge."""
-        x, e, L = self.lane_offset(lane), self.edge, self.arm
-        return _line((x, e), (x, L)) if direction == "north" else _line((-x, -e), (-x, -L))
-
-    def turn_path(self) -> tuple[_Path, float, float]:
-        """Westbound kerb lane turning right into northbound kerb lane, with the arclengths where
-        the turn starts and ends."""
-        e, L = self.edge, self.arm
-        y = self.lane_offset(self.k - 1)
-        radius = e - y
-        angles = np.linspace(-np.pi / 2, -np.pi, 13)
-        arc = np.stack([e + radius * np.cos(angles), e + radius * np.sin(angles)], axis=1)
-        points = np.vstack([[L, y], arc, [y, L]])
-        path = _Path(points)
-        return path, L - e, path.start[len(arc)]
-
-    def parking_paths(self) -> list[_Path]:
-        """Parking strips on all arms, pointing along the adjacent lane's traffic."""
-        o, start, L = self.k * LANE + PARKING / 2, self.edge + SIDEWALK_START - 1.0, self.arm
-        return [_line((start, -o), (L, -o)), _line((-L, -o), (-start, -o)),
-                _line((L, o), (start, o)), _line((-start, o), (-L, o)),
-                _line((o, start), (o, L)), _line((o, -L), (o, -start)),
-                _line((-o, L), (-o, start)), _line((-o, -start), (-o, -L))]
-
-    def sidewalk_paths(self) -> list[_Path]:
-        """Two walking lines on each sidewalk, pointing away from the intersection."""
-        e, L = self.edge, self.arm
-        start = e + SIDEWALK_START
-        paths = []
-        for offset in (e + 5.0, e + 6.0):
-            for sign in (-1.0, 1.0):
-                for side in (-1.0, 1.0):
-                    paths.append(_line((sign * start, side * offset), (sign * L, side * offset)))
-                    paths.append(_line((side * offset, sign * start), (side * offset, sign * L)))
-        return paths
-
-    def crossing_paths(self) -> list[_Path]:
-        """Walking lines over the south crossing: two eastbound, one westbound."""
-        e = self.edge
-        return [_line((-e, -(e + 1.5)), (e, -(e + 1.5))),
-                _line((e, -(e + 2.5)), (-e, -(e + 2.5))),
-                _line((-e, -(e + 3.5)), (e, -(e + 3.5)))]
-
-    def map(self) -> MapGeometry:
-        e, L, k = self.edge, self.arm, self.k
-        lines = []
-        for i in range(k + 1):
-            for offset in {i * LANE, -i * LANE}:
-                for sign in (-1.0, 1.0):
-                    lines.append(np.array([[sign * e, offset], [sign * L, offset]]))
-                    lines.append(np.array([[offset, sign * e], [offset, sign * L]]))
-        polylines = [("lane_boundary", line) for line in lines]
-        near, far = e + CROSSING[0], e + CROSSING[1]
-        for flip in (np.array([1.0, 1.0]), np.array([-1.0, -1.0])):
-            for swap in (False, True):
-                corners = np.array([[-e, near], [e, near], [e, far], [-e, far], [-e, near]]) * flip
-                polylines.append(("crossing", corners[:, ::-1] if swap else corners))
-        outline = np.array([[L, -e], [e, -e], [e, -L], [-e, -L], [-e, -e], [-L, -e],
-                            [-L, e], [-e, e], [-e, L], [e, L], [e, e], [L, e], [L, -e]])
-        polylines.append(("drivable_area", outline))
-        return MapGeometry(polylines)
 
 
 def _lanes_per_direction(n_objects: int) -> int:
@@ -216,14 +92,14 @@ def generate(n_objects: int = 200, n_frames: int = 50, seed: int = 0) -> Sequenc
         "departing": _vehicle_groups(rng, _split(rng, n_departing, 2 * k)),
         "parked": _vehicle_groups(rng, _split(rng, n_parked, 8), only_cars=True, gap=(1.5, 3.0)),
     }
-    probe = _Layout(k, 0.0)
+    probe = Layout(k, 0.0)
     crossing_room = 2 * probe.edge - 1.0
     per_crossing_line = _split(rng, n_pedestrians, 3)
     on_crossings = np.minimum(per_crossing_line, int(crossing_room // 1.8))
     walkers = _pedestrian_groups(rng, on_crossings, gap=(0.6, 1.2))
     strollers = _pedestrian_groups(rng, _split(rng, int(n_pedestrians - on_crossings.sum()), 16),
                                    gap=(0.8, 4.0))
-    layout = _Layout(k, _arm_length(probe.edge, groups, strollers))
+    layout = Layout(k, _arm_length(probe.edge, groups, strollers))
     speeds = {d: rng.uniform(7.0, 12.0) for d in ("east", "west", "south")}
 
     placed = [
@@ -285,14 +161,14 @@ def _arm_length(edge: float, groups: dict[str, list[_Group]], strollers: list[_G
 class _Placed:
     """Objects on one path: their arclengths at time 0, speed, lateral offsets."""
 
-    path: _Path
+    path: Path
     group: _Group
     s: np.ndarray
     speed: float
     lateral: np.ndarray
 
 
-def _through(rng, layout: _Layout, groups: list[_Group], speeds: dict) -> list[_Placed]:
+def _through(rng, layout: Layout, groups: list[_Group], speeds: dict) -> list[_Placed]:
     """Road A's moving lanes; in the westbound kerb lane, cars near the corner turn right."""
     placed = []
     k = layout.k
@@ -307,7 +183,7 @@ def _through(rng, layout: _Layout, groups: list[_Group], speeds: dict) -> list[_
     return placed
 
 
-def _turning(rng, layout: _Layout, group: _Group, speed: float) -> list[_Placed]:
+def _turning(rng, layout: Layout, group: _Group, speed: float) -> list[_Placed]:
     """The westbound kerb lane: its foremost car before the corner is part-way round the turn;
     up to three cars (category car) within 30 m of it turn right, the rest go straight."""
     turn, turn_start, turn_end = layout.turn_path()
@@ -332,7 +208,7 @@ def _subset(group: _Group, keep: np.ndarray) -> _Group:
     return _Group(group.categories[keep], group.sizes[keep], np.zeros(0))
 
 
-def _queued(layout: _Layout, groups: list[_Group], rng) -> list[_Placed]:
+def _queued(layout: Layout, groups: list[_Group], rng) -> list[_Placed]:
     """Road B's approach lanes: stopped queues behind the stop lines."""
     placed = []
     for index, group in enumerate(groups):
@@ -346,7 +222,7 @@ def _queued(layout: _Layout, groups: list[_Group], rng) -> list[_Placed]:
     return placed
 
 
-def _departing(rng, layout: _Layout, groups: list[_Group], speeds: dict) -> list[_Placed]:
+def _departing(rng, layout: Layout, groups: list[_Group], speeds: dict) -> list[_Placed]:
     """Road B's departing lanes: cars driving away, beyond the crossings and clear of turners."""
     placed = []
     for index, group in enumerate(groups):
@@ -360,7 +236,7 @@ def _departing(rng, layout: _Layout, groups: list[_Group], speeds: dict) -> list
     return placed
 
 
-def _along(rng, paths: list[_Path], groups: list[_Group], speed: float, from_start: bool) -> list[_Placed]:
+def _along(rng, paths: list[Path], groups: list[_Group], speed: float, from_start: bool) -> list[_Placed]:
     """Objects spread along each path (one group per path)."""
     placed = []
     for path, group in zip(paths, groups):
@@ -370,7 +246,7 @@ def _along(rng, paths: list[_Path], groups: list[_Group], speed: float, from_sta
     return placed
 
 
-def _walking(rng, paths: list[_Path], groups: list[_Group], from_start: bool) -> list[_Placed]:
+def _walking(rng, paths: list[Path], groups: list[_Group], from_start: bool) -> list[_Placed]:
     """Pedestrians on walking lines, each line at its own walking speed."""
     placed = _along(rng, paths, groups, 0.0, from_start)
     for p in placed:
@@ -378,7 +254,7 @@ def _walking(rng, paths: list[_Path], groups: list[_Group], from_start: bool) ->
     return placed
 
 
-def _sequence(rng, placed: list[_Placed], n_frames: int, layout: _Layout, seed: int) -> Sequence:
+def _sequence(rng, placed: list[_Placed], n_frames: int, layout: Layout, seed: int) -> Sequence:
     times = np.arange(n_frames) / FRAME_RATE
     xy, yaw, categories, sizes = [], [], [], []
     for p in placed:

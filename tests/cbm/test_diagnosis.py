@@ -112,3 +112,19 @@ def test_context_of_a_cav_object_turns_with_its_sign():
     _, cav_vectors = inspection.context("cav", 0, against=0)
     np.testing.assert_allclose(cav_vectors, ego_vectors, atol=1e-9)
     assert list(members) == list(range(1, 10))
+
+
+def test_an_inspection_is_freed_when_dropped():
+    """Explained anchors are cached with their inspection, not process-wide (a tab recomputes
+    hundreds of times: every old inspection must go)."""
+    import gc
+    import weakref
+
+    trial = make_trial(street_scene(40, np.random.default_rng(0)), np.arange(40), ScenarioParams(eta=0.6, sigma_p=0.2))
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init)
+    first = inspection.best_anchor_among(trial.gt_pairs)
+    assert inspection.best_anchor_among(trial.gt_pairs) is first
+    alive = weakref.ref(inspection)
+    del inspection
+    gc.collect()
+    assert alive() is None

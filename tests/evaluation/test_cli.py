@@ -7,6 +7,9 @@ from pathlib import Path
 import polars as pl
 import pytest
 
+import evaluation
+from evaluation.outputs import write_atomic
+
 REPO = Path(__file__).resolve().parents[2]
 TINY = ["--dataset", "synthetic:40", "synthetic:40:seed=1", "--frames", "0:20:10", "--methods", "cbm,icp,vips",
         "--grid", "eta=0.4,0.8", "sigma_p=0,0.3", "sigma2=2,3", "--seed", "3"]
@@ -109,7 +112,7 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
         raise OSError("disk full")
 
     with pytest.raises(OSError):
-        evaluate_cli.write_atomic(target, crash)
+        write_atomic(target, crash)
     assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["trials.csv"]
 
 
@@ -124,3 +127,15 @@ def test_reference_methods_bound_the_default_table(tmp_path):
     oracle, none = table.filter(pl.col("method") == "oracle"), table.filter(pl.col("method") == "none")
     assert (oracle["precision"] == 1.0).all() and (oracle["recall"] == 1.0).all()
     assert (none["rte"] == none["init_rte"]).all() and (none["n_matched"] == 0).all()
+
+
+def test_the_evaluation_is_an_importable_package_and_the_command_is_thin(two_runs):
+    """``evaluation.run`` returns the same per-trial table the command writes; evaluate.py only
+    hands over to ``evaluation.cli``."""
+    table = evaluation.run(["synthetic:40", "synthetic:40:seed=1"], methods=("cbm", "icp", "vips"),
+                           grid={"eta": (0.4, 0.8), "sigma_p": (0.0, 0.3), "sigma2": (2.0, 3.0)}, seed=3,
+                           frames=lambda n: range(0, 20, 10))
+    assert isinstance(table, pl.DataFrame) and "runtime_s" in table.columns
+    written = pl.read_parquet(two_runs[0] / "trials.parquet")
+    assert evaluation.without_timing(table).equals(written)
+    assert len((REPO / "evaluate.py").read_text().splitlines()) <= 40

@@ -1,7 +1,5 @@
 """One trial builder: the app's session and the evaluation build the same trial from the same
 frame, scenario and seed, and the automatic CAV stays one vehicle through the sequence."""
-import importlib.util
-import sys
 from pathlib import Path
 
 import numpy as np
@@ -11,19 +9,12 @@ import loaders
 from app.session import Explorer
 from app.settings import Settings
 from cbm.scenario import ScenarioParams
+from evaluation.run import frame_inputs as evaluation_inputs
 from loaders.trials import AUTO_CAV, NoTrial, build_trial, frame_inputs, sequence_cav
 
 REPO = Path(__file__).resolve().parents[2]
 FIELDS = ("ego_boxes", "cav_boxes", "ego_ids", "cav_ids", "T_true", "init", "gt_pairs", "ego_true_xy",
           "cav_true_xy", "ego_pose", "cav_pose")
-
-
-def load_evaluate():
-    spec = importlib.util.spec_from_file_location("evaluate_for_trials", REPO / "evaluate.py")
-    module = importlib.util.module_from_spec(spec)
-    sys.modules[spec.name] = module
-    spec.loader.exec_module(module)
-    return module
 
 
 @pytest.fixture(scope="module")
@@ -33,9 +24,8 @@ def scene() -> Explorer:
 
 @pytest.mark.parametrize("protocol", ["sind", "range"])
 def test_app_and_evaluation_build_identical_trials_on_every_frame(scene: Explorer, protocol: str) -> None:
-    evaluate = load_evaluate()
     frames = range(len(scene))
-    inputs, skipped = evaluate.frame_inputs(scene.sequence, frames, protocol, 25.0)
+    inputs, skipped = evaluation_inputs(scene.sequence, frames, protocol, 25.0)
     assert not skipped and [f.index for f in inputs] == list(frames)
     for seed in (0, 1, 7):
         scenario = ScenarioParams(protocol=protocol, eta=0.4, sigma_p=0.3, sigma_theta=5.0, seed=seed)

@@ -1,0 +1,12 @@
+"""Evaluation of calibration methods on datasets, in the spirit of evo: running gives a per-trial
+table, reports and plots read it, the command line is thin.
+
+    import evaluation
+    table = evaluation.run(["argoverse2"], methods=("cbm", "oracle"), grid={"sigma_p": (0.3, 0.6)}, seed=0)
+
+Modules: ``run`` (datasets and a sweep into the table), ``report`` (Markdown summary), ``plots``
+(the paper's figures), ``outputs`` (the files, written atomically), ``cli`` (``evaluate.py``).
+"""
+from .run import DEFAULT_METHODS, Plan, Source, plan, run, run_plan, trial_table, without_timing
+
+__all__ = ["DEFAULT_METHODS", "Plan", "Source", "plan", "run", "run_plan", "trial_table", "without_timing"]

@@ -1,0 +1,46 @@
+"""The files of an evaluation, each written to a temporary file beside it and moved into place:
+``trials.parquet``, ``trials.csv``, ``summary.md``, ``rre_rte.png`` and, when the grid varies eta,
+``precision_vs_eta.png``."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Callable
+
+import polars as pl
+
+from .plots import plot_precision_vs_eta, plot_rre_rte, plt
+from .report import summary_markdown, variant_names
+from .run import Plan, without_timing
+
+
+def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
+    """Call ``write(temporary path)`` beside ``path``, then move the result onto ``path``."""
+    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
+    try:
+        write(tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+
+
+def write_outputs(out: Path, plan: Plan, table: pl.DataFrame, timing: bool = True) -> str:
+    """Write the table, the summary and the plots into ``out``; return the summary. Without
+    ``timing`` the table and the summary leave the runtime out (then they are byte-identical run
+    to run)."""
+    out.mkdir(parents=True, exist_ok=True)
+    written = table if timing else without_timing(table)
+    write_atomic(out / "trials.parquet", lambda p: written.write_parquet(p))
+    write_atomic(out / "trials.csv", lambda p: written.write_csv(p))
+    summary = summary_markdown(plan, table, timing)
+    write_atomic(out / "summary.md", lambda p: p.write_text(summary))
+    rows = table.to_dicts()
+    variants = variant_names(rows, plan.sweep)
+    figures = {"rre_rte.png": plot_rre_rte(rows, variants)}
+    if len(plan.sweep.grid.get("eta", ())) > 1:
+        figures["precision_vs_eta.png"] = plot_precision_vs_eta(rows, variants, plan.sweep)
+    for name, fig in figures.items():
+        write_atomic(out / name, lambda p: fig.savefig(p, format="png", dpi=120))
+        plt.close(fig)
+    return summary

@@ -1,0 +1,118 @@
+"""Reports of an evaluation: the Table-I-shaped summary and precision against eta, in Markdown,
+read from the per-trial table (``evaluation.run``)."""
+from __future__ import annotations
+
+import math
+from typing import Any, Sequence
+
+import polars as pl
+
+from cbm.sweep import SCENARIO_FIELDS, Sweep, summarise
+
+from .run import Plan
+
+TABLE_ROWS = (
+    ("Pre. (%)", "precision", 100.0),
+    ("Rec. (%)", "recall", 100.0),
+    ("AD (m)", "ad", 1.0),
+    ("median RRE (deg)", "rre_median", 1.0),
+    ("median RTE (m)", "rte_median", 1.0),
+    ("success (%)", "success_rate", 100.0),
+)
+RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
+GNSS = "GNSS (init)"
+
+
+def variant_names(rows: Sequence[dict[str, Any]], sweep: Sweep) -> list[str]:
+    """Each row's method, with the method parameters the grid varies (``cbm sigma2=2``)."""
+    varied = [name for name, values in sweep.grid.items() if len(values) > 1 and name not in SCENARIO_FIELDS]
+    return [" ".join([row["method"], *(f"{n}={fmt(row[n])}" for n in varied if row[n] is not None)]) for row in rows]
+
+
+def levels(sweep: Sweep) -> list[str]:
+    """The scenario parameters the grid varies, ``eta`` excepted: what makes a noise level."""
+    return [n for n, v in sweep.grid.items() if len(v) > 1 and n in SCENARIO_FIELDS and n != "eta"]
+
+
+def fmt(value: Any) -> str:
+    return f"{value:g}" if isinstance(value, float) else str(value)
+
+
+def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> str:
+    """Markdown: one row per metric, one column per method variant (the paper's Table I), plus the
+    RRE/RTE of the uncalibrated ``init`` unless the method ``none`` (which reports it) is a column."""
+    keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
+    stats = dict(summarise(keyed, ["variant"]))
+    names = [key[0] for key in stats]
+    columns = [stats[(n,)] for n in names]
+    if "none" not in names:
+        first = [row for row in keyed if row["variant"] == names[0]]
+        names.append(GNSS)
+        columns.append({"rre_median": _median([r["init_rre"] for r in first]),
+                        "rte_median": _median([r["init_rte"] for r in first])})
+    lines = [f"| metric | {' | '.join(names)} |", "|---|" + "---:|" * len(names)]
+    for label, key, scale in (*TABLE_ROWS, *([RUNTIME_ROW] if timing else [])):
+        lines.append(f"| {label} | {' | '.join(_cell(column.get(key, math.nan), scale) for column in columns)} |")
+    return "\n".join(lines)
+
+
+def eta_table(rows: list[dict[str, Any]], variants: list[str], sweep: Sweep) -> str:
+    """Markdown: micro-averaged precision (%) per noise level and method variant (rows) and eta (columns)."""
+    by = levels(sweep)
+    keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
+    stats = dict(summarise(keyed, [*by, "variant", "eta"]))
+    etas = sweep.grid["eta"]
+    lines = [f"| {' | '.join([*by, 'method'])} | {' | '.join(f'eta={fmt(e)}' for e in etas)} |",
+             "|" + "---|" * (len(by) + 1) + "---:|" * len(etas)]
+    for key in dict.fromkeys(k[:-1] for k in stats):
+        cells = [_cell(stats[(*key, e)]["precision"], 100.0) for e in etas]
+        lines.append(f"| {' | '.join(fmt(v) for v in key)} | {' | '.join(cells)} |")
+    return "\n".join(lines)
+
+
+def _cell(value: float, scale: float) -> str:
+    return "-" if math.isnan(value) else f"{value * scale:.2f}" if scale == 1.0 else f"{value * scale:.1f}"
+
+
+def _median(values: list[float]) -> float:
+    finite = sorted(v for v in values if not math.isnan(v))
+    if not finite:
+        return math.nan
+    mid = len(finite) // 2
+    return finite[mid] if len(finite) % 2 else 0.5 * (finite[mid - 1] + finite[mid])
+
+
+def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> str:
+    """The whole summary page: what was run, the Table-I-shaped table and, when eta varies,
+    precision by eta (``timing``: with the median runtime row)."""
+    sweep, rows = plan.sweep, table.to_dicts()
+    variants = variant_names(rows, sweep)
+    grid = " ".join(f"{n}={','.join(fmt(v) for v in values)}" for n, values in sweep.grid.items()) or "(none)"
+    parts = [
+        "# Evaluation summary", "",
+        f"protocol `{sweep.scenario.protocol}`, seed {sweep.seed}, grid: `{grid}`, {len(rows) // len(set(variants))} trials x {len(set(variants))} methods.", "",
+    ]
+    for source in plan.sources:
+        frames = [f.index for f in source.inputs]
+        skipped = f"; skipped {len(source.skipped)} without an ego or a CAV: {_ranges(source.skipped)}" if source.skipped else ""
+        parts.append(f"- `{source.name}`: {len(frames)} frames ({_ranges(frames)}){skipped}")
+    parts += ["", "## Association and pose (micro-averaged over all trials)", "",
+              table_one(rows, variants, timing=timing), "",
+              "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
+              "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
+              "Success: RTE < 1 m and RRE < 1 deg. none / GNSS (init): the error before calibration; "
+              "oracle: least squares on the true pairs, the limit of association-based calibration."]
+    if len(sweep.grid.get("eta", ())) > 1:
+        parts += ["", "## Precision (%) against the co-visibility rate eta", "", eta_table(rows, variants, sweep)]
+    return "\n".join(parts) + "\n"
+
+
+def _ranges(frames: list[int]) -> str:
+    """``0-4, 7, 9-10`` for a sorted list of integers."""
+    runs: list[list[int]] = []
+    for f in frames:
+        if runs and f == runs[-1][-1] + 1:
+            runs[-1].append(f)
+        else:
+            runs.append([f])
+    return ", ".join(str(r[0]) if len(r) == 1 else f"{r[0]}-{r[-1]}" for r in runs)

@@ -1,0 +1,112 @@
+"""Running an evaluation: the datasets' frames (through the one trial builder, ``loaders.trials``)
+and a sweep of methods and parameters (``cbm.sweep``) into one per-trial table.
+
+    import evaluation
+    table = evaluation.run(["argoverse2"], methods=("cbm", "icp"), grid={"eta": (0.3, 0.6)}, seed=0)
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Iterable, Mapping, Sequence
+
+import polars as pl
+
+import loaders
+from cbm.methods import METHODS
+from cbm.scenario import FrameInputs, ScenarioParams
+from cbm.sweep import TIMING_COLUMNS, TRIAL_COLUMNS, Sweep
+from cbm.sweep import run as run_sweep
+from loaders import trials
+from loaders.agents import TARGET_DISTANCE
+
+DEFAULT_METHODS = tuple(METHODS)
+"""Every method, between the references ``none`` and ``oracle``."""
+
+
+@dataclass(frozen=True)
+class Source:
+    """One dataset's part of a run: what the sweep needs of each frame, and the frames skipped."""
+
+    name: str
+    inputs: list[FrameInputs]
+    skipped: list[int]
+
+
+@dataclass(frozen=True)
+class Plan:
+    """What a run does: the sweep (methods, grid, seed, protocol) over the sources' frames."""
+
+    sweep: Sweep
+    sources: tuple[Source, ...]
+
+    @property
+    def trial_count(self) -> int:
+        """Rows the run gives."""
+        return sum(self.sweep.trial_count(len(source.inputs)) for source in self.sources)
+
+
+def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
+                 cav_distance: float = TARGET_DISTANCE) -> tuple[list[FrameInputs], list[int]]:
+    """What the sweep needs of each frame (``loaders.trials.frame_inputs``, as the app builds its
+    trials), and the frames skipped for want of an ego or a CAV. ``ValueError`` for the OPV2V
+    protocol on a dataset that does not say what each agent sees."""
+    if protocol == "opv2v" and seq.visibility is None:
+        raise ValueError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
+    inputs, skipped = [], []
+    for k in frames:
+        try:
+            inputs.append(trials.frame_inputs(seq[k], protocol, target_distance=cav_distance))
+        except trials.NoTrial:
+            skipped.append(k)
+    return inputs, skipped
+
+
+def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]] | None = None,
+                cav_distance: float = TARGET_DISTANCE) -> Source:
+    """Open dataset ``name`` and make its frame inputs; ``frames(n)`` picks frame indices among
+    ``n`` (default: all). ``ValueError`` with one line when nothing can be run."""
+    try:
+        seq = loaders.open(name)
+    except ValueError as error:
+        raise ValueError(str(error).splitlines()[0]) from None
+    inputs, skipped = frame_inputs(seq, range(len(seq)) if frames is None else frames(len(seq)), protocol, cav_distance)
+    if not inputs:
+        raise ValueError(f"no frame of {name} has an ego and a CAV for the {protocol} protocol")
+    return Source(name, inputs, skipped)
+
+
+def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
+         grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str = "sind",
+         frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE) -> Plan:
+    """Check the run and load its datasets; ``ValueError`` naming what is wrong."""
+    sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol))
+    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance) for name in datasets))
+
+
+def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | None = None) -> pl.DataFrame:
+    """The per-trial table of ``plan``: one row per dataset, frame, grid point and method, in that
+    order, with every parameter and metric (``trial_table``)."""
+    rows: list[dict[str, Any]] = []
+    for source in plan.sources:
+        found = run_sweep(plan.sweep, source.inputs, workers=workers, progress=progress)
+        rows.extend({"dataset": source.name, **row} for row in found)
+    return trial_table(rows, plan.sweep)
+
+
+def run(datasets: Sequence[str], *, workers: int = 1, progress: Callable[[int], None] | None = None,
+        **options: Any) -> pl.DataFrame:
+    """Evaluate ``datasets`` (names or paths ``loaders.open`` reads) and return the per-trial table;
+    ``options`` are those of ``plan``."""
+    return run_plan(plan(datasets, **options), workers=workers, progress=progress)
+
+
+def trial_table(rows: list[dict[str, Any]], sweep: Sweep) -> pl.DataFrame:
+    """The tidy per-trial table: dataset, then the sweep's columns, the runtime last."""
+    columns = ["dataset", *sweep.columns()]
+    data = {c: [row[c] for row in rows] for c in columns}
+    return pl.DataFrame(data, strict=False).with_columns(pl.col(*TRIAL_COLUMNS).cast(pl.Utf8))
+
+
+def without_timing(table: pl.DataFrame) -> pl.DataFrame:
+    """The table without its wall-clock columns: what is byte-identical from run to run."""
+    return table.drop(*TIMING_COLUMNS)
