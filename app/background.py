@@ -7,7 +7,8 @@ cancelled. A failure goes to ``failed`` (the tab's notification), never up into 
 from __future__ import annotations
 
 import threading
-from typing import Callable, TypeVar
+from collections.abc import Callable
+from typing import TypeVar
 
 R = TypeVar("R")
 

@@ -9,7 +9,8 @@ from __future__ import annotations
 import dataclasses
 import re
 import threading
-from typing import TYPE_CHECKING, Callable
+from collections.abc import Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 import viser
@@ -35,7 +36,7 @@ NO_SEARCH = "(search first)"
 class ExplorePanel:
     """The controls and outputs of the Explore tab of one browser tab."""
 
-    def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, session: "ClientSession") -> None:
+    def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, session: ClientSession) -> None:
         self.gui, self.session = gui, session
         self.runner = Runner(self._progress, self._failed, self._finished, name=f"explore-{session.client.client_id}")
         self.run: SequenceRun | None = None

@@ -3,7 +3,8 @@ current settings as a preset file, and a screenshot of its view."""
 from __future__ import annotations
 
 import io
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import numpy as np
 import polars as pl

@@ -7,7 +7,8 @@ from __future__ import annotations
 
 import dataclasses
 import typing
-from typing import TYPE_CHECKING, Any, Callable
+from collections.abc import Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 import viser
@@ -45,7 +46,7 @@ CBM_SLIDERS = {
 class Panels:
     """All controls of one tab, and the outputs it shows (metrics text, plot over frames)."""
 
-    def __init__(self, gui: viser.GuiApi, session: "ClientSession", settings: Settings, n_frames: int,
+    def __init__(self, gui: viser.GuiApi, session: ClientSession, settings: Settings, n_frames: int,
                  preset_names: list[str]) -> None:
         self.gui, self.session = gui, session
         self.metrics = gui.add_markdown("Computing the first frame…")

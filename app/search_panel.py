@@ -8,8 +8,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from cbm.search import SEARCHABLE, Candidate, grid_size, search
 from cbm.methods import METHODS
+from cbm.search import SEARCHABLE, Candidate, grid_size, search
 
 from .background import Task
 from .drawing import number

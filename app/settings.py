@@ -7,8 +7,9 @@ parameter classes (angles in degrees, as everywhere at the edges).
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, Literal, Mapping
+from typing import Any, Literal
 
 from cbm import CBMParams
 from cbm.methods import METHODS
@@ -78,7 +79,7 @@ class Settings:
         """The parameters of the selected method (as set; ``Method.resolved`` adds what it forces)."""
         return self.method_params[METHODS[self.method].params_key]
 
-    def with_params(self, method: str, **changes: Any) -> "Settings":
+    def with_params(self, method: str, **changes: Any) -> Settings:
         """These settings with some parameters of ``method`` changed."""
         key = METHODS[method].params_key
         params = dict(self.method_params)

@@ -32,9 +32,9 @@ sys.path.insert(0, str(ROOT))
 
 import loaders  # noqa: E402
 from cbm.scenario import ScenarioParams  # noqa: E402
+from cbm.sweep import Sweep, run, summarise  # noqa: E402
 from evaluation.cli import parse_frames  # noqa: E402
 from evaluation.run import frame_inputs  # noqa: E402
-from cbm.sweep import Sweep, run, summarise  # noqa: E402
 
 CONDITIONS = {
     "SIND mild": ScenarioParams(protocol="sind", eta=0.5, sigma_p=0.3, sigma_theta=5.0, flip_prob=0.5),
@@ -53,7 +53,8 @@ CBM_VARIANTS = {
     "CBM, our defaults (noise-aware fit + re-association)": {"heading": "align", "estimator": "welsch", "refine": True},
 }
 OTHERS = {"oracle": "oracle (true pairs)", "icp": "ICP", "ricp": "RICP", "vips": "VIPS", "none": "none (GNSS pose)"}
-GRID = {name: tuple(dict.fromkeys(v[name] for v in CBM_VARIANTS.values())) for name in ("heading", "estimator", "refine")}
+GRID = {name: tuple(dict.fromkeys(v[name] for v in CBM_VARIANTS.values()))
+        for name in ("heading", "estimator", "refine")}
 
 
 @dataclass(frozen=True)

@@ -25,12 +25,13 @@ from websockets.sync.client import connect
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
+from viser import _messages  # noqa: E402
+
 import loaders  # noqa: E402
 from app.presets import discover  # noqa: E402
 from app.server import ExplorerServer  # noqa: E402
 from app.session import Explorer  # noqa: E402
 from app.settings import Settings  # noqa: E402
-from viser import _messages  # noqa: E402
 
 
 def headless_client(url: str):

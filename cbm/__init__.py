@@ -3,8 +3,8 @@
     from cbm import CBMParams, match
     result = match(ego_boxes, cav_boxes, init=T_tilde, params=CBMParams())
 """
-from .pipeline import match
 from .params import CBMParams
+from .pipeline import match
 from .result import MatchResult
 
 __all__ = ["CBMParams", "MatchResult", "match"]

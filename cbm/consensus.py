@@ -35,7 +35,7 @@ class PairSets:
         return np.diff(self.start)
 
     @staticmethod
-    def empty(n_pairs: int) -> "PairSets":
+    def empty(n_pairs: int) -> PairSets:
         return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int64))
 
 

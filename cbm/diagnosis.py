@@ -36,7 +36,8 @@ def no_anchor_reached_two(result: MatchResult, inspection: Inspection) -> Findin
     if inspection.sets.candidates.sizes().any():
         return Finding("no_anchor", "no anchor reached 2 pairs: every candidate set was emptied by consensus "
                                     "and the one-to-one rule or rejected by the distance limit")
-    return Finding("no_anchor", "no anchor reached 2 pairs: no context vectors agreed within sigma1 and sigma2 (eq. 7-8)")
+    return Finding("no_anchor",
+                   "no anchor reached 2 pairs: no context vectors agreed within sigma1 and sigma2 (eq. 7-8)")
 
 
 def single_pair(result: MatchResult) -> Finding | None:

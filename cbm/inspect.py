@@ -112,7 +112,8 @@ class Inspection:
         survivors = candidates[kept]
         final = survivors[one_to_one_mask(survivors)]
         final = final[np.argsort(final[:, 0], kind="stable")]
-        distance = float(np.linalg.norm(sets.ego_xy[final[:, 0]] - sets.cav_xy[final[:, 1]], axis=1).mean()) if len(final) else float("nan")
+        distance = (float(np.linalg.norm(sets.ego_xy[final[:, 0]] - sets.cav_xy[final[:, 1]], axis=1).mean())
+                    if len(final) else float("nan"))
         return AnchorDetail(anchor=(i, j), candidates=candidates, votes=votes, kept_by_consensus=kept, final=final,
                             mean_distance=distance, rejected=bool(len(final)) and distance > sets.params.distance_limit)
 

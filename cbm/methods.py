@@ -8,13 +8,23 @@ function and parameter class) and one entry in ``METHODS``.
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
-from typing import Any, Callable, Mapping
+from typing import Any
 
 import numpy as np
 
-from .baselines import (ICPParams, ReferenceParams, RICPParams, VIPSParams, match_icp, match_none, match_oracle,
-                        match_ricp, match_vips)
+from .baselines import (
+    ICPParams,
+    ReferenceParams,
+    RICPParams,
+    VIPSParams,
+    match_icp,
+    match_none,
+    match_oracle,
+    match_ricp,
+    match_vips,
+)
 from .params import CBMParams
 from .pipeline import match
 from .result import MatchResult

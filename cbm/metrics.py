@@ -6,8 +6,9 @@ has nothing to measure is NaN, never 0, so that it cannot pass for a real score.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -76,9 +76,11 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
 
     n_pairs = len(ego) * len(cav)
     candidates = sets_within(quads, params.sigma2, n_pairs)
-    voted_by = sets_within(quads, params.sigma3, n_pairs, by_member=True) if params.consensus else PairSets.empty(n_pairs)
+    voted_by = (sets_within(quads, params.sigma3, n_pairs, by_member=True) if params.consensus
+                else PairSets.empty(n_pairs))
     timings["candidate_sets"] = time.perf_counter() - t
-    return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates, voted_by)
+    return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates,
+                voted_by)
 
 
 def checked_inputs(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None,

@@ -16,8 +16,8 @@ Guard against drift: the refined answer replaces CBM's only when it holds at lea
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
@@ -79,7 +79,8 @@ def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> 
     mismatch = size_mismatch(ego[i], cav[j])
     keep = mismatch <= SIZE_GATE
     i, j, d, mismatch = i[keep], j[keep], d[keep], mismatch[keep]
-    cost = (d / sigma) ** 2 + (axis_difference(ego[i, 6], cav[j, 6]) / HEADING_SIGMA) ** 2 + (mismatch / SIZE_SIGMA) ** 2
+    cost = ((d / sigma) ** 2 + (axis_difference(ego[i, 6], cav[j, 6]) / HEADING_SIGMA) ** 2
+            + (mismatch / SIZE_SIGMA) ** 2)
     return np.stack([i, j], axis=1), cost
 
 

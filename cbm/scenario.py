@@ -17,8 +17,9 @@ noise level, ``eta``, the protocol) rescales or re-deals the same draws instead 
 from __future__ import annotations
 
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass
-from typing import Any, Literal, Mapping
+from typing import Any, Literal
 
 import numpy as np
 

@@ -9,8 +9,9 @@ on a sampler's history, and every point it tried is in the table for the user to
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any
 
 from .scenario import FrameInputs, ScenarioParams
 from .sweep import Sweep, run, summarise
@@ -52,8 +53,9 @@ def _score(value: float) -> float:
     return value if math.isfinite(value) else -math.inf
 
 
-def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *, space: Mapping[str, Sequence[float]] | None = None,
-           objective: str = "success", base: Mapping[str, Any] | None = None, seed: int = 0, workers: int = 1,
+def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *,
+           space: Mapping[str, Sequence[float]] | None = None, objective: str = "success",
+           base: Mapping[str, Any] | None = None, seed: int = 0, workers: int = 1,
            progress: Callable[[int], None] | None = None) -> list[Candidate]:
     """Every grid point of ``space`` scored on ``frames``, best first.
 

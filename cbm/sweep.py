@@ -9,17 +9,19 @@ row of metrics per (frame, grid point, method).
 A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or a tunable
 parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
 Every trial is built by ``FrameInputs.build`` (frame ``k`` draws from ``trial_rng(seed, k)``), as
-the app builds its trials, so any row can be reproduced there from its frame, parameters and seed. Rows come in task order -- frame, scenario
-grid point, method, method grid point, each in the order given -- whatever the number of workers.
+the app builds its trials, so any row can be reproduced there from its frame, parameters and seed.
+Rows come in task order -- frame, scenario grid point, method, method grid point, each in the order
+given -- whatever the number of workers.
 """
 from __future__ import annotations
 
 import dataclasses
 import itertools
 import multiprocessing
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any
 
 import numpy as np
 

@@ -24,8 +24,9 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from collections.abc import Sequence
 from pathlib import Path
-from typing import Any, NoReturn, Sequence
+from typing import Any, NoReturn
 
 from tqdm import tqdm
 
@@ -52,7 +53,8 @@ def build_parser() -> Parser:
     """The command line of ``evaluate.py``."""
     parser = Parser(prog="evaluate.py", description=__doc__.splitlines()[0])
     parser.add_argument("--dataset", nargs="+", default=["argoverse2"],
-                        help="one or more of argoverse2, synthetic[:count[:seed=S]] or a dataset path (default: argoverse2)")
+                        help="one or more of argoverse2, synthetic[:count[:seed=S]] or a dataset path "
+                             "(default: argoverse2)")
     parser.add_argument("--frames", default="all",
                         help="frame indices: all, or a comma list of N and A:B[:STEP] ranges (end excluded)")
     parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default="sind")
@@ -85,7 +87,8 @@ def parse_frames(text: str, n_frames: int) -> list[int]:
         frames.update(numbers if len(numbers) == 1 else range(*numbers))
     outside = sorted(f for f in frames if f >= n_frames)
     if outside:
-        raise CliError(f"--frames: frame {outside[0]} is out of range: the dataset has {n_frames} frames (0 to {n_frames - 1})")
+        raise CliError(f"--frames: frame {outside[0]} is out of range: "
+                       f"the dataset has {n_frames} frames (0 to {n_frames - 1})")
     if not frames:
         raise CliError(f"--frames: {text!r} selects no frame")
     return sorted(frames)

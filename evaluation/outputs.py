@@ -4,8 +4,8 @@
 from __future__ import annotations
 
 import os
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import polars as pl
 
@@ -41,6 +41,6 @@ def write_outputs(out: Path, plan: Plan, table: pl.DataFrame, timing: bool = Tru
     if len(plan.sweep.grid.get("eta", ())) > 1:
         figures["precision_vs_eta.png"] = plot_precision_vs_eta(rows, variants, plan.sweep)
     for name, fig in figures.items():
-        write_atomic(out / name, lambda p: fig.savefig(p, format="png", dpi=120))
+        write_atomic(out / name, lambda p, fig=fig: fig.savefig(p, format="png", dpi=120))
         plt.close(fig)
     return summary

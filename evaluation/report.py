@@ -3,7 +3,8 @@ read from the per-trial table (``evaluation.run``)."""
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from collections.abc import Sequence
+from typing import Any
 
 import polars as pl
 
@@ -90,11 +91,13 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
     grid = " ".join(f"{n}={','.join(fmt(v) for v in values)}" for n, values in sweep.grid.items()) or "(none)"
     parts = [
         "# Evaluation summary", "",
-        f"protocol `{sweep.scenario.protocol}`, seed {sweep.seed}, grid: `{grid}`, {len(rows) // len(set(variants))} trials x {len(set(variants))} methods.", "",
+        f"protocol `{sweep.scenario.protocol}`, seed {sweep.seed}, grid: `{grid}`, "
+        f"{len(rows) // len(set(variants))} trials x {len(set(variants))} methods.", "",
     ]
     for source in plan.sources:
         frames = [f.index for f in source.inputs]
-        skipped = f"; skipped {len(source.skipped)} without an ego or a CAV: {_ranges(source.skipped)}" if source.skipped else ""
+        skipped = (f"; skipped {len(source.skipped)} without an ego or a CAV: {_ranges(source.skipped)}"
+                   if source.skipped else "")
         parts.append(f"- `{source.name}`: {len(frames)} frames ({_ranges(frames)}){skipped}")
     parts += ["", "## Association and pose (micro-averaged over all trials)", "",
               table_one(rows, variants, timing=timing), "",

@@ -6,8 +6,9 @@ and a sweep of methods and parameters (``cbm.sweep``) into one per-trial table.
 """
 from __future__ import annotations
 
+from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Callable, Iterable, Mapping, Sequence
+from typing import Any
 
 import polars as pl
 

@@ -11,8 +11,8 @@ See ``loaders/README.md`` for the datasets, the generic table schema and the bad
 """
 from . import synthetic
 from .categories import is_vehicle
-from .errors import LoaderError
 from .dispatch import open, repository_data
+from .errors import LoaderError
 from .scene import AGENT_COLUMNS, BOX_COLUMNS, OBJECT_COLUMNS, Frame, MapGeometry, Sequence
 
 __all__ = [

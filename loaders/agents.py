@@ -18,7 +18,8 @@ is not in the frame's agent table is an object of the frame, and its pose is its
 """
 from __future__ import annotations
 
-from typing import Any, Iterable
+from collections.abc import Iterable
+from typing import Any
 
 import numpy as np
 

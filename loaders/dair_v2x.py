@@ -155,7 +155,8 @@ def _labels(path: Path, pose: np.ndarray) -> list[dict]:
         location = field(path, label, "3d_location", where)
         centre = np.array([number(path, field(path, location, a, f"{where}.3d_location"), f"{where}.3d_location.{a}")
                            for a in "xyz"] + [1.0])
-        length, width, height = (number(path, field(path, size, a, f"{where}.3d_dimensions"), f"{where}.3d_dimensions.{a}")
+        length, width, height = (number(path, field(path, size, a, f"{where}.3d_dimensions"),
+                                        f"{where}.3d_dimensions.{a}")
                                  for a in "lwh")
         yaw = number(path, field(path, label, "rotation", where), f"{where}.rotation")
         x, y, z, _ = pose @ centre

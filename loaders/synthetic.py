@@ -13,8 +13,9 @@ pedestrian crossing on every arm. The signal is green for road A:
 
 Every object moves along a fixed path at a fixed speed (the same speed for every object on a
 lane), and the paths only meet where the turning cars join an emptied departing lane, so objects
-placed apart in the first frame stay apart in every frame (the tests check this). The road arms grow with the object count (and the
-lanes per direction, from 1 to 4), so up to 1000 objects fit without overlap.
+placed apart in the first frame stay apart in every frame (the tests check this). The road arms
+grow with the object count (and the lanes per direction, from 1 to 4), so up to 1000 objects fit
+without overlap.
 Every random draw comes from ``numpy.random.default_rng(seed)``.
 """
 from __future__ import annotations

@@ -39,7 +39,8 @@ def load(path: str | Path) -> Sequence:
     reader = read_csv if path.suffix.lower() == ".csv" else read_arrow
     rows = reader(path, types, optional=tuple(OPTIONAL))
     require_rows(path, rows)
-    rows, dropped = drop_unusable(path, rows, [c for c in types if c in rows.columns and c not in ("agent", "category")])
+    rows, dropped = drop_unusable(path, rows,
+                                  [c for c in types if c in rows.columns and c not in ("agent", "category")])
     rows = _with_defaults(rows)
     frame_values = np.unique(rows["frame"].to_numpy())
     rows = rows.with_columns(pl.Series("frame", np.searchsorted(frame_values, rows["frame"].to_numpy())))

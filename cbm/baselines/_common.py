@@ -1,11 +1,12 @@
 """Input checks, association and result assembly shared by the baselines."""
 from __future__ import annotations
 
+from collections.abc import Callable
+from time import perf_counter
+from typing import Any
+
 import numpy as np
 from scipy.spatial import cKDTree
-
-from time import perf_counter
-from typing import Any, Callable
 
 from .. import se2
 from ..inputs import checked_boxes, checked_transform

@@ -7,10 +7,10 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from .. import se2
-from ..result import MatchResult
 from ..estimate import weighted_procrustes
 from ..inputs import check_positive
-from ._common import closest_point_match, check_count, check_params
+from ..result import MatchResult
+from ._common import check_count, check_params, closest_point_match
 
 
 @dataclass(frozen=True)

@@ -13,9 +13,9 @@ from scipy.spatial import cKDTree
 from scipy.spatial.distance import cdist
 
 from .. import se2
-from ..result import MatchResult
 from ..estimate import weighted_procrustes
 from ..inputs import check_positive, checked_boxes, checked_transform
+from ..result import MatchResult
 from ._common import as_labels, check_count, check_params, make_result, sort_pairs
 
 _DENSE_EIGEN_LIMIT = 2

@@ -11,12 +11,12 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-from support import browser as ui
 
 from app.presets import discover
 from app.server import ExplorerServer
 from app.session import Explorer
 from app.settings import Settings
+from support import browser as ui
 
 REPO = Path(__file__).resolve().parents[2]
 

@@ -6,11 +6,11 @@ import time
 
 import polars as pl
 import pytest
-from support import browser as ui
 
 import app.sequence
 from app.server import ExplorerServer
 from app.session import Explorer
+from support import browser as ui
 
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]

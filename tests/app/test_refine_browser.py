@@ -4,10 +4,10 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from support import browser as ui
 
 from app.server import ExplorerServer
 from app.session import Explorer
+from support import browser as ui
 
 pytestmark = [pytest.mark.browser,
               pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]

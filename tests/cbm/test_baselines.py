@@ -6,8 +6,8 @@ import pytest
 
 from cbm import se2
 from cbm.baselines import ICPParams, RICPParams, VIPSParams
-from cbm.methods import METHODS, run
 from cbm.estimate import weighted_procrustes
+from cbm.methods import METHODS, run
 from cbm.result import MatchResult
 
 NAMES = ["icp", "ricp", "vips"]

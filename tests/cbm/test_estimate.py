@@ -6,8 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
-from cbm.estimate import (WELSCH_EFFICIENT_SCALE, hypothesis_pairs, least_squares_fit, robust_fit,
-                          weighted_procrustes)
+from cbm.estimate import WELSCH_EFFICIENT_SCALE, hypothesis_pairs, least_squares_fit, robust_fit, weighted_procrustes
 
 pytestmark = pytest.mark.filterwarnings("error")
 NU_FLOOR = 0.3
@@ -69,7 +68,8 @@ def test_rejects_up_to_40_percent_gross_outliers(seed, k, extent, sigma, share):
     dst = dst + rng.normal(0, sigma, dst.shape)
     wrong = rng.choice(k, int(share * k), replace=False)
     angle = rng.uniform(0, 2 * np.pi, len(wrong))
-    dst[wrong] += np.stack([np.cos(angle), np.sin(angle)], axis=1) * rng.uniform(max(15 * sigma, 5.0), 20.0, (len(wrong), 1))
+    dst[wrong] += (np.stack([np.cos(angle), np.sin(angle)], axis=1)
+                   * rng.uniform(max(15 * sigma, 5.0), 20.0, (len(wrong), 1)))
     right = np.setdiff1d(np.arange(k), wrong)
 
     fit = robust_fit(src, dst, NU_FLOOR)

@@ -6,8 +6,7 @@ import numpy as np
 import pytest
 
 from cbm import se2
-from cbm.metrics import (TrialMetrics, aggregate, average_distance, count_correct, evaluate, precision, recall,
-                         rre, rte)
+from cbm.metrics import TrialMetrics, aggregate, average_distance, count_correct, evaluate, precision, recall, rre, rte
 from cbm.result import MatchResult
 from cbm.scenario import ScenarioParams, make_trial
 

@@ -5,7 +5,6 @@ import pytest
 
 from cbm import CBMParams, match
 from cbm.scenario import ScenarioParams, make_trial
-
 from support.oracle import oracle
 from support.scenes import street_scene
 
@@ -34,9 +33,9 @@ def test_fast_pairs_equal_oracle_pairs(seed, setting):
                        distance_limit=float(rng.choice([5.0, 20.0, 20.0])), **setting)
     assert len(trial.ego_boxes) <= 12 and len(trial.cav_boxes) <= 12
     result = match(trial.ego_boxes, trial.cav_boxes, init=trial.init, params=params)
-    pairs, candidate_count, runner_up = oracle(trial.ego_boxes, trial.cav_boxes, trial.init, params.sigma1, params.sigma2,
-                            params.sigma3, params.distance_limit, params.consensus, params.consensus_rule,
-                            params.heading)
+    pairs, candidate_count, runner_up = oracle(trial.ego_boxes, trial.cav_boxes, trial.init, params.sigma1,
+                                               params.sigma2, params.sigma3, params.distance_limit, params.consensus,
+                                               params.consensus_rule, params.heading)
     np.testing.assert_array_equal(result.context_pairs, pairs)
     assert result.candidate_count == candidate_count
     assert result.runner_up_count == runner_up

@@ -34,9 +34,11 @@ def test_same_seed_gives_the_same_trial_bit_for_bit_and_another_seed_does_not():
     boxes, ids = scene(30)
     params = ScenarioParams(sigma_p=0.3, sigma_theta=5.0, localization="gaussian", seed=7)
     assert same(make_trial(boxes, ids, params), make_trial(boxes, ids, params))
-    assert same(make_trial(boxes, ids, params, rng=trial_rng(7, 3)), make_trial(boxes, ids, params, rng=trial_rng(7, 3)))
+    assert same(make_trial(boxes, ids, params, rng=trial_rng(7, 3)),
+                make_trial(boxes, ids, params, rng=trial_rng(7, 3)))
     assert not same(make_trial(boxes, ids, params), make_trial(boxes, ids, replace(params, seed=8)))
-    assert not same(make_trial(boxes, ids, params, rng=trial_rng(7, 3)), make_trial(boxes, ids, params, rng=trial_rng(7, 4)))
+    assert not same(make_trial(boxes, ids, params, rng=trial_rng(7, 3)),
+                    make_trial(boxes, ids, params, rng=trial_rng(7, 4)))
 
 
 @settings(max_examples=60, deadline=None)
@@ -79,7 +81,8 @@ def test_fixed_localization_error_is_exactly_the_offset_added_to_the_cav_world_p
     np.testing.assert_allclose(trial.init, se2.make(3.0, 3.0, math.radians(5.0)), atol=1e-12)
 
     ego_pose, cav_pose = se2.make(10, 20, 1.0), se2.make(-4, 7, 3.1)
-    trial = make_trial(boxes, ids, ScenarioParams(loc_x=3.0, loc_y=-2.0, loc_yaw=5.0), ego_pose=ego_pose, cav_pose=cav_pose)
+    trial = make_trial(boxes, ids, ScenarioParams(loc_x=3.0, loc_y=-2.0, loc_yaw=5.0),
+                       ego_pose=ego_pose, cav_pose=cav_pose)
     np.testing.assert_allclose(trial.T_true, se2.inverse(ego_pose) @ cav_pose, atol=1e-12)
     perturbed = ego_pose @ trial.init
     np.testing.assert_allclose(se2.translation_of(perturbed), [-1.0, 5.0], atol=1e-12)

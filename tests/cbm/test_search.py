@@ -4,9 +4,8 @@ import pytest
 
 from cbm import CBMParams, match
 from cbm.metrics import aggregate, evaluate
-from cbm.scenario import ScenarioParams, make_trial, trial_rng
+from cbm.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
 from cbm.search import f1, grid_size, search
-from cbm.scenario import FrameInputs
 from support.scenes import street_scene
 
 SCENARIO = ScenarioParams(eta=0.5, sigma_p=0.4, sigma_theta=4.0)

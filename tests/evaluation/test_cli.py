@@ -119,7 +119,8 @@ def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
 def test_reference_methods_bound_the_default_table(tmp_path):
     """By default every method runs between the references: ``none`` (the GNSS error, which then
     needs no column of its own) and ``oracle`` (least squares on the true pairs)."""
-    assert evaluate_cli.main(["--dataset", "synthetic:40", "--frames", "0:2", "--no-timing", "--out", str(tmp_path)]) == 0
+    assert evaluate_cli.main(["--dataset", "synthetic:40", "--frames", "0:2", "--no-timing",
+                              "--out", str(tmp_path)]) == 0
     summary = (tmp_path / "summary.md").read_text()
     assert "| metric | none | cbm | cbm-no-consensus | icp | ricp | vips | oracle |" in summary
     assert "GNSS (init) |" not in summary

@@ -6,8 +6,7 @@ import pytest
 
 from cbm import CBMParams, match
 from cbm.metrics import TrialMetrics, aggregate, evaluate
-from cbm.scenario import ScenarioParams, make_trial, trial_rng
-from cbm.scenario import FrameInputs
+from cbm.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
 from cbm.sweep import TIMING_COLUMNS, Sweep, run, run_task, summarise
 from support.scenes import street_scene
 
@@ -61,7 +60,8 @@ def test_summarise_gives_the_micro_averages_of_cbm_metrics_per_group():
     rows = run(Sweep(methods=("cbm", "icp"), grid={"eta": [0.3, 0.7]}, seed=1), frames())
     groups = dict(summarise(rows, ["method"]))
     assert list(groups) == [("cbm",), ("icp",)]
-    icp = [TrialMetrics(**{f.name: r[f.name] for f in dataclasses.fields(TrialMetrics)}) for r in rows if r["method"] == "icp"]
+    icp = [TrialMetrics(**{f.name: r[f.name] for f in dataclasses.fields(TrialMetrics)})
+           for r in rows if r["method"] == "icp"]
     assert groups[("icp",)]["precision"] == aggregate(icp)["precision"]
 
 

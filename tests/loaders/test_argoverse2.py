@@ -35,7 +35,8 @@ def test_real_frame_matches_the_feather_file(shipped_log):
     raw = pl.read_ipc(shipped_log / "annotations.feather")
     sweep = sorted(raw["timestamp_ns"].unique())[k]
     rows = raw.filter(pl.col("timestamp_ns") == sweep)
-    pose = pl.read_ipc(shipped_log / "city_SE3_egovehicle.feather").filter(pl.col("timestamp_ns") == sweep).row(0, named=True)
+    pose = (pl.read_ipc(shipped_log / "city_SE3_egovehicle.feather")
+            .filter(pl.col("timestamp_ns") == sweep).row(0, named=True))
     assert frame.frame_id == sweep
     assert list(frame.track_ids) == rows["track_uuid"].to_list()
     assert list(frame.categories) == rows["category"].to_list()
@@ -64,7 +65,8 @@ def test_one_box_by_hand(shipped_log):
     np.testing.assert_allclose([length], [0.593010], atol=1e-5)
     # ego pose at that sweep: (1468.8715, 211.5118), yaw 0.33473; box at (-49.0585, 8.3747) in the car frame
     c, s = np.cos(0.33473), np.sin(0.33473)
-    np.testing.assert_allclose([x, y], [1468.8715 + c * -49.0585 - s * 8.3747, 211.5118 + s * -49.0585 + c * 8.3747], atol=0.01)
+    np.testing.assert_allclose([x, y], [1468.8715 + c * -49.0585 - s * 8.3747, 211.5118 + s * -49.0585 + c * 8.3747],
+                               atol=0.01)
 
 
 def test_without_poses_frames_stay_in_the_car_frame(tmp_path, shipped_log):
@@ -111,7 +113,8 @@ def test_malformed_annotations(copy_fixture, change, message):
 def test_nan_rows_are_dropped_and_counted(copy_fixture):
     log = copy_fixture("argoverse2/adcf7d18-0510-35b0-a2fa-b4cea13a6d76")
     table = pl.read_ipc(log / "annotations.feather")
-    table = table.with_columns(pl.when(pl.int_range(pl.len()) < 3).then(float("nan")).otherwise(pl.col("tx_m")).alias("tx_m"))
+    table = table.with_columns(
+        pl.when(pl.int_range(pl.len()) < 3).then(float("nan")).otherwise(pl.col("tx_m")).alias("tx_m"))
     table.write_ipc(log / "annotations.feather")
     with pytest.warns(UserWarning, match="dropped 3 row"):
         seq = loaders.open(log)

@@ -28,7 +28,8 @@ CASES = {
                             "infrastructure-side/calib/virtuallidar_to_world/000020.json"]),
     "table": ("table", "boxes.csv", ["boxes.csv"]),
 }
-TOKENS = ["", ",", "\n", "nan", "inf", "-inf", "1e309", "abc", '"', "-", "{", "]", ":", "null", "\x00", "999999999999999999999"]
+TOKENS = ["", ",", "\n", "nan", "inf", "-inf", "1e309", "abc", '"', "-", "{", "]", ":", "null", "\x00",
+          "999999999999999999999"]
 
 
 def mangle(data: bytes, draw) -> bytes:

@@ -44,7 +44,8 @@ def _rigid_rms(pairs, ego_xy, cav_xy):
         return 0.0, dst, src
     sm, dm = src.mean(axis=0), dst.mean(axis=0)
     s, d = src - sm, dst - dm
-    yaw = math.atan2(float(np.sum(s[:, 0] * d[:, 1] - s[:, 1] * d[:, 0])), float(np.sum(s[:, 0] * d[:, 0] + s[:, 1] * d[:, 1])))
+    yaw = math.atan2(float(np.sum(s[:, 0] * d[:, 1] - s[:, 1] * d[:, 0])),
+                     float(np.sum(s[:, 0] * d[:, 0] + s[:, 1] * d[:, 1])))
     c, n = math.cos(yaw), math.sin(yaw)
     moved = np.stack([c * s[:, 0] - n * s[:, 1], n * s[:, 0] + c * s[:, 1]], axis=1)
     return float(np.sqrt(np.mean(np.sum((moved - d) ** 2, axis=1)))), dst, src
