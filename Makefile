@@ -1,17 +1,20 @@
 # Two commands do all set-up on a fresh machine (Python >= 3.10 with venv and pip):
 #   make run    start the app on the shipped default scene
-#   make test   run the whole test suite, the browser tests included
+#   make test   run the whole test suite, the browser tests included (make lint: ruff alone)
 VENV   ?= .venv
 PY     := $(VENV)/bin/python
 ARGS   ?=
 
-.PHONY: run test bench install chromium
+.PHONY: run test lint bench install chromium
 
 run: $(VENV)/.installed
 	$(PY) serve.py $(ARGS)
 
 test: $(VENV)/.installed-test chromium
 	$(PY) -m pytest $(ARGS)
+
+lint: $(VENV)/.installed-test
+	$(PY) -m ruff check .
 
 bench: $(VENV)/.installed
 	$(PY) bench/bench_match.py

@@ -9,10 +9,10 @@ import sys
 import time
 
 import loaders
-from app.presets import PresetError, discover
 from app.server import ExplorerServer
-from app.session import Explorer
-from app.settings import Settings
+from app.session.explorer import Explorer
+from app.session.presets import PresetError, discover
+from app.session.settings import Settings
 
 
 class _Parser(argparse.ArgumentParser):

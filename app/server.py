@@ -5,9 +5,9 @@ import threading
 
 import viser
 
-from .client import ClientSession
-from .session import Explorer
-from .settings import Settings
+from .session.explorer import Explorer
+from .session.settings import Settings
+from .tab import ClientSession
 
 
 class ExplorerServer:

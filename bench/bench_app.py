@@ -2,9 +2,9 @@
 
 Starts the app's server on a free loopback port and connects one headless websocket client (no
 browser: it announces a camera, as a browser does on connecting, and drains what the server sends).
-Then it moves that tab's controls the way a user does, by assigning the GUI handles' values, which
-runs the same callbacks as a browser's slider, and times each change until the tab's worker has
-computed the trial, run CBM, built the drawing and flushed the messages to the socket.
+Then it moves that tab's controls the way a browser does, by sending the GUI update messages a
+moved slider sends, and times each change until the tab's worker has computed the trial, run CBM,
+built the drawing and flushed the messages to the socket.
 
     python bench/bench_app.py [--dataset argoverse2] [--changes 60]
 """
@@ -28,10 +28,10 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from viser import _messages  # noqa: E402
 
 import loaders  # noqa: E402
-from app.presets import discover  # noqa: E402
 from app.server import ExplorerServer  # noqa: E402
-from app.session import Explorer  # noqa: E402
-from app.settings import Settings  # noqa: E402
+from app.session.explorer import Explorer  # noqa: E402
+from app.session.presets import discover  # noqa: E402
+from app.session.settings import Settings  # noqa: E402
 
 
 def headless_client(url: str):
@@ -54,15 +54,24 @@ def headless_client(url: str):
     return socket, received
 
 
-def timed_changes(session, control, values, settle) -> list[float]:
-    """Milliseconds from assigning each value to ``control`` until the worker has sent the result."""
+def send_edit(socket, control, value) -> None:
+    """What a browser sends when a person moves ``control`` to ``value``."""
+    message = _messages.GuiUpdateMessage(control._impl.uuid, {"value": value})
+    socket.send(msgspec.msgpack.encode(message.as_serializable_dict()))
+
+
+def timed_changes(session, socket, control, values, settle) -> list[float]:
+    """Milliseconds from sending each value of ``control`` until the worker has sent the result."""
     times = []
     for value in values:
         start = time.perf_counter()
-        control.value = value
+        send_edit(socket, control, value)
+        deadline = time.monotonic() + 30
+        while not settle(session, value):
+            assert time.monotonic() < deadline, "the edit never reached the tab"
+            time.sleep(0.0005)
         assert session.worker.wait_idle(timeout=30), "recompute did not finish"
         times.append(1000 * (time.perf_counter() - start))
-        assert settle(session, value), "the drawn state is not the one asked for"
     return times
 
 
@@ -87,16 +96,16 @@ def main() -> None:
             assert time.monotonic() < deadline, "the headless client never got its first frame"
             time.sleep(0.05)
         session = next(iter(server.sessions.values()))
-        sigma2 = session.panels.method_controls[("cbm", "sigma2")]
-        frame = session.panels.frame
-        timed_changes(session, sigma2, [2.0, 3.0], lambda s, v: True)
+        sigma2 = session.controls.method.params[("cbm", "sigma2")]
+        frame = session.controls.frame.frame
+        timed_changes(session, socket, sigma2, [2.0, 3.0], lambda s, v: s.settings.cbm.sigma2 == v)
 
         grid = [0.25 * k for k in range(2, 25)]
         values = [grid[i % len(grid)] for i in range(args.changes)]
-        sigma_times = timed_changes(session, sigma2, values, lambda s, v: s.last.settings.cbm.sigma2 == v)
+        sigma_times = timed_changes(session, socket, sigma2, values, lambda s, v: s.settings.cbm.sigma2 == v)
         frames = [int(k) for k in np.linspace(1, len(explorer) - 1, args.changes)]
         frames = [k for i, k in enumerate(frames) if i == 0 or k != frames[i - 1]]
-        frame_times = timed_changes(session, frame, frames, lambda s, v: s.last.frame_index == v)
+        frame_times = timed_changes(session, socket, frame, frames, lambda s, v: s.settings.frame == v)
 
         print(f"scene: {explorer.sequence.name}, {len(explorer)} frames; one headless tab; "
               f"{received[0] / 1e6:.1f} MB sent to it")

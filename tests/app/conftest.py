@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 import loaders
-from app.session import Explorer
+from app.session.explorer import Explorer
 
 
 @pytest.fixture(scope="session")

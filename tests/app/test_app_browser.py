@@ -12,16 +12,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from app.presets import discover
 from app.server import ExplorerServer
-from app.session import Explorer
-from app.settings import Settings
+from app.session.explorer import Explorer
+from app.session.presets import discover
+from app.session.settings import Settings
 from support import browser as ui
 
 REPO = Path(__file__).resolve().parents[2]
 
 pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
+              ui.requires_chromium]
 
 
 @pytest.fixture(scope="module")
@@ -51,7 +51,8 @@ def _type_into(page, label: str, value: str) -> None:
 def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     page = ui.open_page(browser, server)
     session = ui.session(server, 1)
-    assert {"/scene/ego_vehicle", "/scene/cav_vehicle", "/scene/ego_boxes", "/scene/cav_boxes"} <= session.view.node_names
+    nodes = {"/scene/ego_vehicle", "/scene/cav_vehicle", "/scene/ego_boxes", "/scene/cav_boxes"}
+    assert nodes <= session.view.node_names
 
     first = ui.metrics(page)
     page.get_by_role("tab", name="Method").click()
@@ -63,7 +64,7 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
 
     for k in range(1, 6):
         _type_into(page, "frame", str(k))
-        ui.wait_until(lambda: session.last.frame_index == k)
+        ui.wait_until(lambda k=k: session.last.frame_index == k)
     ui.wait_until(lambda: ui.header(page).startswith("Frame 5"))
 
     page.get_by_role("tab", name="View").click()
@@ -92,7 +93,7 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     ui.wait_until(lambda: session.last.settings.cbm.sigma2 == 3.0)
     for k in range(6, 16):
         _type_into(page, "frame", str(k))
-        ui.wait_until(lambda: session.last.frame_index == k)
+        ui.wait_until(lambda k=k: session.last.frame_index == k)
     assert len(session.history.rows) >= 10
     ui.close_notifications(page)
     time.sleep(1.0)
@@ -115,7 +116,7 @@ def test_a_failing_recompute_is_notified_and_the_server_lives_on(browser, server
     session = ui.session(server, 1)
     frames = len(server.explorer)
     session.explorer = _Broken(server.explorer)
-    session.change(lambda s: s.with_params("cbm", sigma1=12.0))
+    session.apply(lambda s: s.with_params("cbm", sigma1=12.0))
     page.get_by_text("Recompute failed").wait_for(timeout=15_000)
     session.explorer = server.explorer
     other = ui.open_page(browser, server)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import threading
 import time
 
-from app.coalesce import Coalescer
+from app.session.coalesce import Coalescer
 
 
 def _collecting(compute_seconds: float = 0.005):

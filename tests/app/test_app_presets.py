@@ -7,8 +7,8 @@ from pathlib import Path
 
 import pytest
 
-from app.presets import SHIPPED_DIR, PresetError, discover, read, save_preset
-from app.settings import Settings, from_preset, to_preset
+from app.session.presets import SHIPPED_DIR, PresetError, discover, read, save_preset
+from app.session.settings import Settings, from_preset, to_preset
 
 
 def test_shipped_presets_load_and_cover_the_required_cases(tmp_path: Path) -> None:

@@ -8,10 +8,10 @@ import numpy as np
 import pytest
 
 import loaders
-from app import drawing
-from app.coalesce import Coalescer
-from app.session import Explorer
-from app.settings import AUTO_CAV, Settings, ViewOptions
+from app.scene import drawing, picking
+from app.session.coalesce import Coalescer
+from app.session.explorer import Explorer
+from app.session.settings import AUTO_CAV, Settings, ViewOptions
 from cbm import se2
 from loaders.trials import sequence_cav
 
@@ -98,11 +98,11 @@ def test_clicking_a_box_names_it_and_its_match(explorer: Explorer) -> None:
     outcome = explorer.compute(Settings())
     picture = drawing.draw(outcome, {})
     boxes, _ = picture.objects["ego"]
-    group, row = drawing.pick(picture, boxes[0, :2])
-    text = drawing.describe(outcome, picture, group, row)
+    group, row = picking.pick(picture, boxes[0, :2])
+    text = picking.describe(outcome, picture, group, row)
     assert text.startswith(group.upper()) and ("right" in text or "wrong" in text or "missed" in text
                                               or "one agent" in text)
-    assert drawing.pick(picture, np.array([1e4, 1e4])) is None
+    assert picking.pick(picture, np.array([1e4, 1e4])) is None
 
 
 def test_synthetic_scene_without_map_or_agents() -> None:

@@ -7,13 +7,13 @@ import time
 import polars as pl
 import pytest
 
-import app.sequence
+import app.session.sequence
 from app.server import ExplorerServer
-from app.session import Explorer
+from app.session.explorer import Explorer
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
+              ui.requires_chromium]
 
 
 @pytest.fixture(scope="module")
@@ -25,13 +25,13 @@ def small_server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFact
 
 def test_sequence_run_jump_to_a_worst_frame_and_download(browser, small_server: ExplorerServer,
                                                          monkeypatch: pytest.MonkeyPatch) -> None:
-    sweep_run = app.sequence.run
+    sweep_run = app.session.sequence.run
 
     def slowed(*args, **kwargs):
         time.sleep(0.15)
         return sweep_run(*args, **kwargs)
 
-    monkeypatch.setattr(app.sequence, "run", slowed)
+    monkeypatch.setattr(app.session.sequence, "run", slowed)
     page = ui.open_page(browser, small_server)
     tab = ui.session(small_server, 1)
     page.get_by_role("tab", name="Explore").click()

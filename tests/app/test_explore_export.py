@@ -7,11 +7,12 @@ import io
 import numpy as np
 import polars as pl
 
-from app import export
-from app.presets import read
-from app.sequence import run_sequence
-from app.session import Explorer
-from app.settings import Settings
+from app.panels.explore import png
+from app.session import export
+from app.session.explorer import Explorer
+from app.session.presets import read
+from app.session.sequence import run_sequence
+from app.session.settings import Settings
 
 
 def test_metrics_csv_and_parquet_read_back(small_explorer: Explorer) -> None:
@@ -39,5 +40,5 @@ def test_png_encodes_an_image() -> None:
 
     image = np.zeros((4, 6, 3), np.uint8)
     image[1, 2] = (255, 0, 0)
-    decoded = np.asarray(Image.open(io.BytesIO(export.png(image))))
+    decoded = np.asarray(Image.open(io.BytesIO(png(image))))
     assert decoded.shape == (4, 6, 3) and tuple(decoded[1, 2]) == (255, 0, 0)

@@ -5,9 +5,9 @@ import dataclasses
 
 import numpy as np
 
-from app import drawing, inspector
-from app.session import Explorer
-from app.settings import Settings
+from app.scene import drawing, inspector
+from app.session.explorer import Explorer
+from app.session.settings import Settings
 
 
 def _outcome(explorer: Explorer):
@@ -37,16 +37,17 @@ def test_the_winning_anchor_is_drawn_and_explained(small_explorer: Explorer) -> 
     i, j = map(int, outcome.result.anchor)
     shown = inspector.inspect(outcome, picture, i, j)
     n_ego, n_cav = len(outcome.trial.ego_boxes) - 1, len(outcome.trial.cav_boxes) - 1
-    lines = {name: len(l.segments) for name, l in shown.lines.items()}
+    lines = {name: len(drawn.segments) for name, drawn in shown.lines.items()}
     assert lines["inspector_ego_vectors"] == n_ego and lines["inspector_cav_vectors"] == n_cav
     assert lines["inspector_ego_bands"] == n_ego * (2 + inspector.ARC_SEGMENTS)
     assert lines["inspector_ego_regions"] == 4 * n_ego and lines["inspector_cav_regions"] == 4 * n_cav
     detail = inspector.inspection_of(outcome).anchor(i, j)
     assert lines["inspector_ego_kept"] > 0
     assert f"L_ij holds {len(detail.candidates)} pairs" in shown.markdown
-    for (a, b), votes, kept in zip(detail.candidates.tolist()[:5], detail.votes.tolist(), detail.kept_by_consensus.tolist()):
+    rows = zip(detail.candidates.tolist()[:5], detail.votes.tolist(), detail.kept_by_consensus.tolist())
+    for (a, b), votes, kept in rows:
         assert f"| {a} | {b} | {votes} | {'kept' if kept else 'removed'} |" in shown.markdown
-    drawn = np.concatenate([l.segments for l in shown.lines.values() if len(l.segments)])
+    drawn = np.concatenate([part.segments for part in shown.lines.values() if len(part.segments)])
     scene_right = min(boxes[:, 1].min() for boxes, _ in picture.objects.values())
     assert drawn[..., 1].max() < scene_right, "the panels sit right of the scene"
     assert drawn[..., 1].min() >= shown.centre[1] - shown.span / 2 - 1e-6
@@ -63,6 +64,7 @@ def test_a_click_finds_the_counterpart(small_explorer: Explorer) -> None:
     assert inspector.counterpart(outcome, "ego", alone[0]) == (alone[0], None)
     shown = inspector.inspect(outcome, picture, alone[0], None)
     assert len(shown.lines["inspector_ego_vectors"].segments) > 0
-    assert len(shown.lines["inspector_ego_bands"].segments) == 0 and len(shown.lines["inspector_cav_vectors"].segments) == 0
+    assert len(shown.lines["inspector_ego_bands"].segments) == 0
+    assert len(shown.lines["inspector_cav_vectors"].segments) == 0
     assert "seen by one agent only" in shown.markdown
     assert set(inspector.empty().lines) == set(shown.lines)

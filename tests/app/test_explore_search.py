@@ -3,9 +3,10 @@ from __future__ import annotations
 
 import dataclasses
 
-from app.search_panel import run_search
-from app.session import Explorer
-from app.settings import Settings
+from app.panels.reports import search_markdown
+from app.session.explorer import Explorer
+from app.session.search import run_search
+from app.session.settings import Settings
 
 
 def test_search_scores_the_grid_and_the_current_setting(small_explorer: Explorer) -> None:
@@ -17,4 +18,4 @@ def test_search_scores_the_grid_and_the_current_setting(small_explorer: Explorer
     assert result.current.params == {"sigma1": 10.0, "sigma2": 3.0, "sigma3": 1.0, "distance_limit": 20.0}
     match = [c for c in result.candidates if c.params == {"sigma1": 10.0, "sigma2": 3.0, "sigma3": 1.0}]
     assert match and match[0].score == result.current.score
-    assert "| current | 10 | 3 | 1 | 20 |" in result.markdown() and result.option(0).startswith("#1 sigma1 ")
+    assert "| current | 10 | 3 | 1 | 20 |" in search_markdown(result) and result.option(0).startswith("#1 sigma1 ")

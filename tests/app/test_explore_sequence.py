@@ -6,10 +6,11 @@ import math
 
 import pytest
 
-from app.background import Task
-from app.sequence import CHUNK, run_sequence, sweep_for
-from app.session import Explorer
-from app.settings import Settings
+from app.panels.reports import sequence_markdown
+from app.session.background import Task
+from app.session.explorer import Explorer
+from app.session.sequence import CHUNK, run_sequence, sweep_for
+from app.session.settings import Settings
 
 COMPARED = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad", "rre", "rte",
             "margin", "estimated")
@@ -59,12 +60,12 @@ def test_cancel_stops_at_the_next_chunk(small_explorer: Explorer) -> None:
     task.report = report_then_cancel
     run = run_sequence(small_explorer, sind(), task, frames=range(3 * CHUNK))
     assert run.cancelled and len(run.rows) == CHUNK and len(reports) == 1
-    assert "cancelled after 8 of 24 frames" in run.markdown()
+    assert "cancelled after 8 of 24 frames" in sequence_markdown(run)
 
 
 def test_summary_table_and_plot(small_explorer: Explorer) -> None:
     run = run_sequence(small_explorer, sind(), frames=range(4))
-    text = run.markdown()
+    text = sequence_markdown(run)
     assert "over 4 of 4 frames" in text and "precision / recall" in text and "success" in text
     frames, *values = run.plot_data()
     assert frames.tolist() == [0, 1, 2, 3] and [len(v) for v in values] == [4, 4, 4, 4]

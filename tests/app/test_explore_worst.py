@@ -4,10 +4,11 @@ from __future__ import annotations
 import dataclasses
 import math
 
-from app import worst
-from app.sequence import run_sequence
-from app.session import Explorer
-from app.settings import Settings
+from app.panels.reports import worst_markdown
+from app.session import worst
+from app.session.explorer import Explorer
+from app.session.sequence import run_sequence
+from app.session.settings import Settings
 
 
 def _row(frame: int, **values) -> dict:
@@ -53,7 +54,7 @@ def test_worst_list_shows_each_frames_diagnosis(small_explorer: Explorer) -> Non
     findings = worst.diagnoses(small_explorer, run, frames)
     assert set(findings) == set(frames) and any(findings.values())
     rows = worst.rank(run.rows, "recall", count=2)
-    text = worst.markdown(rows, "recall", findings)
+    text = worst_markdown(rows, "recall", findings)
     assert "Worst frames by recall" in text
     for row in rows:
         for finding in findings[row["frame"]]:

@@ -6,11 +6,11 @@ import numpy as np
 import pytest
 
 from app.server import ExplorerServer
-from app.session import Explorer
+from app.session.explorer import Explorer
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser,
-              pytest.mark.skipif(ui.CHROMIUM is None, reason="Debian's chromium is not installed (make test installs it)")]
+              ui.requires_chromium]
 
 
 @pytest.fixture(scope="module")

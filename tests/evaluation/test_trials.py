@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import loaders
-from app.session import Explorer
-from app.settings import Settings
+from app.session.explorer import Explorer
+from app.session.settings import Settings
 from cbm.scenario import ScenarioParams
 from evaluation.run import frame_inputs as evaluation_inputs
 from loaders.trials import AUTO_CAV, NoTrial, build_trial, frame_inputs, sequence_cav

@@ -11,7 +11,11 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 from typing import Any
 
+import pytest
+
 CHROMIUM = shutil.which("chromium")
+requires_chromium = pytest.mark.skipif(CHROMIUM is None,
+                                       reason="Debian's chromium is not installed (make test installs it)")
 ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-first-run",
         "--disable-background-networking", "--disable-component-update", "--disable-sync",
         "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
@@ -80,10 +84,8 @@ def close_notifications(page) -> None:
 def scenario_server(explorer, presets_folder: Path, **scenario: Any) -> Iterator:
     """A running app on ``explorer`` whose tabs start with the default settings' scenario changed by
     ``scenario``, user presets in ``presets_folder``; stopped after."""
-    import pytest
-
     from app.server import ExplorerServer
-    from app.settings import Settings
+    from app.session.settings import Settings
 
     with pytest.MonkeyPatch.context() as patch:
         patch.setenv("CBM_EXPLORER_PRESETS", str(presets_folder))

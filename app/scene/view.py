@@ -82,6 +82,7 @@ class SceneView:
         handle = self.lines.get(name)
         if handle is None:
             self.lines[name] = self.client.scene.add_line_segments(
-                f"/scene/{name}", points, colors, thickness=lines.thickness, thickness_units="screen", visible=not empty)
+                f"/scene/{name}", points, colors, thickness=lines.thickness, thickness_units="screen",
+                visible=not empty)
             return
         handle.points, handle.colors, handle.visible = points, colors, not empty

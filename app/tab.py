@@ -1,92 +1,86 @@
-"""One browser tab: its settings, its recompute worker, its scene and panels, its play loop."""
+"""One browser tab: its settings, the one place that changes them and recomputes, its scene, its
+panels and its play loop."""
 from __future__ import annotations
 
 import dataclasses
 import threading
 import time
-from collections.abc import Callable
 
 import numpy as np
 import viser
 
-from . import drawing
-from .coalesce import Coalescer
-from .explore import ExplorePanel
-from .panels import Panels
-from .presets import PresetError, discover, save_preset
-from .scene_view import SceneView
-from .session import CavChoice, Explorer, Outcome
-from .settings import AUTO_CAV, Settings, ViewOptions
-
-
-class FrameHistory:
-    """Per-frame metrics of the current settings, for the plot over frames; forgotten when any
-    setting other than the frame, the CAV or the view changes."""
-
-    def __init__(self) -> None:
-        self.key: Settings | None = None
-        self.rows: dict[int, tuple[float, float, float]] = {}
-
-    @staticmethod
-    def _key(settings: Settings) -> Settings:
-        return dataclasses.replace(settings, frame=0, cav=AUTO_CAV, view=ViewOptions())
-
-    def add(self, outcome: Outcome) -> None:
-        key = self._key(outcome.settings)
-        if key != self.key:
-            self.key, self.rows = key, {}
-        m = outcome.metrics
-        self.rows[outcome.frame_index] = (m.precision, m.recall, m.rte)
-
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        frames = np.array(sorted(self.rows), dtype=float)
-        values = np.array([self.rows[int(f)] for f in frames], dtype=float).reshape(-1, 3)
-        return (frames, *(np.where(np.isfinite(values[:, k]), values[:, k], np.nan) for k in range(3)))
+from . import panels
+from .panels.actions import Edit
+from .panels.explore import ExplorePanel
+from .scene import picking
+from .scene.drawing import Drawing, draw
+from .scene.view import SceneView
+from .session.coalesce import Coalescer
+from .session.explorer import CavChoice, Explorer, Outcome
+from .session.history import FrameHistory
+from .session.presets import PresetError, discover, save_preset
+from .session.settings import AUTO_CAV, Settings
 
 
 class ClientSession:
-    """Everything one tab has; nothing in it is shared with other tabs but the ``Explorer``."""
+    """Everything one tab has; nothing in it is shared with other tabs but the ``Explorer``.
+
+    ``settings`` is one immutable value, replaced as a whole by ``apply``; a worker recomputes the
+    latest value (``Coalescer``) and shows it."""
 
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings) -> None:
         self.client, self.explorer = client, explorer
         self._lock = threading.Lock()
-        self.settings = settings
+        self._settings = settings
         self.last: Outcome | None = None
+        self.last_drawing: Drawing | None = None
         self.history = FrameHistory()
         self._choices: list[CavChoice] = []
         self._choices_frame = -1
-        presets, problems = discover()
-        self.presets = presets
+        self.presets, problems = discover()
         self.view = SceneView(client)
         self.view.reset_camera()
-        self.panels = Panels(client.gui, self, settings, len(explorer), list(presets))
-        self.explore = ExplorePanel(client.gui, self.panels.tabs, self)
+        self.controls = panels.build(client.gui, settings, len(explorer), list(self.presets))
+        self.explore = ExplorePanel(client.gui, self.controls.tabs, self)
+        panels.bind(self.controls, self)
         for problem in problems:
             self.notify("Preset skipped", problem, "yellow")
         self._playing = threading.Event()
         self._closed = threading.Event()
-        self.worker: Coalescer[Settings, tuple[Outcome, drawing.Drawing]] = Coalescer(
+        self.worker: Coalescer[Settings, tuple[Outcome, Drawing]] = Coalescer(
             self._compute, self._deliver, self._failed, name=f"recompute-{client.client_id}")
         self._player = threading.Thread(target=self._play, name=f"play-{client.client_id}", daemon=True)
         self._player.start()
-        self.last_drawing: drawing.Drawing | None = None
         self.worker.submit(settings)
 
-    def change(self, edit: Callable[[Settings], Settings]) -> None:
-        """Apply ``edit`` to the settings and recompute (coalesced); no-op edits compute nothing.
-        Submitting under the lock keeps the worker's latest value the latest settings."""
+    @property
+    def settings(self) -> Settings:
+        return self._settings
+
+    def current(self) -> tuple[Outcome | None, Drawing | None]:
+        return self.last, self.last_drawing
+
+    def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
+        """Replace the settings by ``edit(settings)`` and recompute (coalesced); an edit that
+        changes nothing computes nothing. Controls that apply to the new settings are shown;
+        ``move_controls`` also moves every control to them (a preset, a jump, a step)."""
         try:
             with self._lock:
-                current = edit(self.settings)
-                if current == self.settings:
+                new = edit(self._settings)
+                if new == self._settings:
                     return
-                self.settings = current
-                self.worker.submit(current)
+                self._settings = new
+                self.worker.submit(new)
         except (ValueError, TypeError) as error:
             self.notify("Setting refused", str(error), "red")
+            return
+        if move_controls:
+            self.controls.show(new)
+        else:
+            self.controls.reflect(new)
 
     def step(self, delta: int) -> None:
-        self.panels.frame.value = (self.settings.frame + delta) % len(self.explorer)
+        self.apply(lambda s: dataclasses.replace(s, frame=(s.frame + delta) % len(self.explorer)), move_controls=True)
 
     def set_playing(self, playing: bool) -> None:
         (self._playing.set if playing else self._playing.clear)()
@@ -100,22 +94,21 @@ class ClientSession:
             self.notify("No such preset", f"{name!r} is not among the presets", "red")
             return
         try:
-            settings = preset.apply(self.settings)
+            loaded = preset.apply(self._settings)
         except (KeyError, TypeError, ValueError) as error:
             self.notify("Preset not loaded", f"{name}: {error}", "red")
             return
-        self.panels.set_values(settings)
-        self.change(lambda s: dataclasses.replace(settings, frame=s.frame, cav=s.cav))
+        self.apply(lambda s: dataclasses.replace(loaded, frame=s.frame, cav=s.cav), move_controls=True)
         self.notify("Preset loaded", preset.description or name, "green")
 
     def save_preset(self, name: str) -> None:
         try:
-            path = save_preset(name.strip(), self.settings)
+            path = save_preset(name.strip(), self._settings)
         except (PresetError, OSError) as error:
             self.notify("Preset not saved", str(error), "red")
             return
         self.presets, _ = discover()
-        self.panels.preset.options = tuple(self.presets)
+        self.controls.presets.preset.options = tuple(self.presets)
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self) -> None:
@@ -131,11 +124,11 @@ class ClientSession:
         self.explore.close()
         self.worker.close()
 
-    def _compute(self, settings: Settings) -> tuple[Outcome, drawing.Drawing]:
+    def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
         outcome = self.explorer.compute(settings)
-        return outcome, drawing.draw(outcome, self.explorer.map_segments)
+        return outcome, draw(outcome, self.explorer.map_segments)
 
-    def _deliver(self, computed: tuple[Outcome, drawing.Drawing], generation: int) -> None:
+    def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
         outcome, picture = computed
         self.history.add(outcome)
         first = not self.view.meshes
@@ -147,8 +140,8 @@ class ClientSession:
             for name in ("ego_boxes", "cav_boxes"):
                 self.view.meshes[name].on_click(self._picked)
         self.last, self.last_drawing = outcome, picture
-        self.panels.metrics.content = picture.metrics_markdown
-        self.panels.plot.data = self.history.arrays()
+        self.controls.metrics.text.content = picture.metrics_markdown
+        self.controls.metrics.plot.data = self.history.arrays()
         self._refresh_cav_choices(outcome)
         self.explore.refresh(outcome, picture)
 
@@ -160,10 +153,9 @@ class ClientSession:
             return
         self._choices_frame = outcome.frame_index
         self._choices = self.explorer.cav_choices(outcome.frame_index)
-        labels = (AUTO_CAV, *[c.label for c in self._choices])
-        chosen = next((c.label for c in self._choices if c.id == outcome.settings.cav), AUTO_CAV)
-        self.panels.cav.options = labels
-        self.panels.cav.value = chosen
+        cav = self.controls.frame.cav
+        cav.options = (AUTO_CAV, *[c.label for c in self._choices])
+        cav.value = next((c.label for c in self._choices if c.id == outcome.settings.cav), AUTO_CAV)
 
     def _play(self) -> None:
         while not self._closed.is_set():
@@ -171,7 +163,7 @@ class ClientSession:
             if self._closed.is_set():
                 return
             self.step(1)
-            time.sleep(1.0 / max(1, int(self.panels.speed.value)))
+            time.sleep(1.0 / max(1, int(self.controls.frame.speed.value)))
 
     def _picked(self, event: viser.SceneNodePointerEvent) -> None:
         """Label the object under a click (the ray meets the plane at mid box height) and show its
@@ -181,7 +173,7 @@ class ClientSession:
         if outcome is None or picture is None or abs(direction[2]) < 1e-9:
             return
         point = origin + direction * (0.8 - origin[2]) / direction[2]
-        found = drawing.pick(picture, point[:2])
+        found = picking.pick(picture, point[:2])
         if found is None or not outcome.settings.view.labels:
             self.view.hide_label("picked")
         if found is None:
@@ -191,5 +183,5 @@ class ClientSession:
         if not outcome.settings.view.labels:
             return
         boxes, _ = picture.objects[group]
-        self.view.label("picked", drawing.describe(outcome, picture, group, index),
+        self.view.label("picked", picking.describe(outcome, picture, group, index),
                         (float(boxes[index, 0]), float(boxes[index, 1]), float(boxes[index, 5]) + 1.0))

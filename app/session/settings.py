@@ -14,13 +14,13 @@ from typing import Any, Literal
 from cbm import CBMParams
 from cbm.methods import METHODS
 from cbm.scenario import ScenarioParams
+from loaders.trials import AUTO_CAV
 
 Layout = Literal["overlay", "after", "before", "side by side"]
 LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
 LinePairs = Literal["refined", "own"]
 LINE_PAIRS = {"refined": "all pairs (after refinement)", "own": "CBM's own pairs"}
 """What the match lines show for CBM: the final pairs, or CBM's own before the guided re-association."""
-AUTO_CAV = "auto"
 
 
 @dataclass(frozen=True)
@@ -79,6 +79,14 @@ class Settings:
         """The parameters of the selected method (as set; ``Method.resolved`` adds what it forces)."""
         return self.method_params[METHODS[self.method].params_key]
 
+    def with_scenario(self, **changes: Any) -> Settings:
+        """These settings with some scenario parameters changed."""
+        return dataclasses.replace(self, scenario=dataclasses.replace(self.scenario, **changes))
+
+    def with_view(self, **changes: Any) -> Settings:
+        """These settings with some view options changed."""
+        return dataclasses.replace(self, view=dataclasses.replace(self.view, **changes))
+
     def with_params(self, method: str, **changes: Any) -> Settings:
         """These settings with some parameters of ``method`` changed."""
         key = METHODS[method].params_key
@@ -123,7 +131,8 @@ def _replaced(table: str, value: Any, changes: Any) -> Any:
             raise KeyError(f"[{table}] unknown key {key!r}; expected one of {sorted(fields)}")
         old = getattr(value, key)
         expected = float if isinstance(old, float) and not isinstance(old, bool) else type(old)
-        if isinstance(new, bool) != isinstance(old, bool) or not isinstance(new, (int, float) if expected is float else expected):
+        allowed = (int, float) if expected is float else expected
+        if isinstance(new, bool) != isinstance(old, bool) or not isinstance(new, allowed):
             raise TypeError(f"[{table}] {key} must be {expected.__name__}, got {new!r}")
     try:
         return dataclasses.replace(value, **{k: float(v) if isinstance(getattr(value, k), float) else v

@@ -19,8 +19,7 @@ from cbm.scenario import FrameInputs
 from cbm.sweep import Sweep, run, summarise
 
 from .background import Task
-from .drawing import number
-from .session import Explorer
+from .explorer import Explorer
 from .settings import Settings
 
 CHUNK = 8
@@ -68,26 +67,6 @@ class SequenceRun:
     def summary(self) -> dict[str, float]:
         """Micro-averaged metrics over the rows (``cbm.metrics.aggregate``); empty without rows."""
         return summarise(self.rows, by=("method",))[0][1] if self.rows else {}
-
-    def markdown(self) -> str:
-        """The aggregate table shown after a run."""
-        s = self.summary()
-        state = "cancelled after" if self.cancelled else "over"
-        head = (f"**{METHODS[self.settings.method].label}**, {state} {len(self.rows)} of {self.n_frames} frames "
-                f"(seed {self.settings.scenario.seed}, {self.settings.scenario.protocol} protocol)")
-        if not s:
-            return head + "\n\nNo frame was run."
-        lines = [head, "", "| | |", "|---|---|",
-                 f"| success (RTE < 1 m, RRE < 1°) | {number(100 * s['success_rate'], ' %', 1)} |",
-                 f"| precision / recall | {number(s['precision'])} / {number(s['recall'])} |",
-                 f"| AD | {number(s['ad'], ' m')} |",
-                 f"| RTE mean / median | {number(s['rte_mean'], ' m')} / {number(s['rte_median'], ' m')} |",
-                 f"| RRE mean / median | {number(s['rre_mean'], '°')} / {number(s['rre_median'], '°')} |",
-                 f"| frames with an estimate | {int(s['n_estimated'])} |",
-                 f"| median time per frame | {number(1000 * s['runtime_median_s'], ' ms', 1)} |"]
-        if self.skipped:
-            lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, self.skipped))}")
-        return "\n".join(lines)
 
     def plot_data(self) -> tuple[np.ndarray, ...]:
         """(frames, precision, recall, RTE, RRE) arrays for the per-frame plot (NaN where undefined)."""

@@ -17,9 +17,10 @@ from cbm import CBMParams
 from cbm.inspect import AnchorDetail, Inspection
 from cbm.methods import METHODS
 
+from ..session.explorer import Outcome
 from . import geometry
-from .drawing import CAV_BOXES, EGO_BOXES, RIGHT, WRONG, Drawing, Lines
-from .session import Outcome
+from .colours import CAV_BOXES, EGO_BOXES, RIGHT, WRONG
+from .drawing import Drawing, Lines, no_lines
 
 ARC_SEGMENTS = 6
 """Segments of the arc closing each sigma1 band."""
@@ -74,7 +75,7 @@ def band_segments(origin: np.ndarray, vectors: np.ndarray, sigma1_deg: float, re
     """(n * (2 + ARC_SEGMENTS), 2, 3): for each vector, the two rays at +-sigma1 from ``origin`` out
     to its length plus ``reach``, and the arc joining their ends."""
     if len(vectors) == 0:
-        return np.zeros((0, 2, 3), np.float32)
+        return no_lines()
     angle = np.arctan2(vectors[:, 1], vectors[:, 0])
     radius = np.linalg.norm(vectors, axis=1) + reach
     sweep = angle[:, None] + np.radians(sigma1_deg) * np.linspace(-1.0, 1.0, ARC_SEGMENTS + 1)[None, :]
@@ -87,7 +88,7 @@ def band_segments(origin: np.ndarray, vectors: np.ndarray, sigma1_deg: float, re
 def region_segments(origin: np.ndarray, vectors: np.ndarray, sigma2: float) -> np.ndarray:
     """(4n, 2, 3): the L1 ball of radius ``sigma2`` (a diamond) around each vector's tip."""
     if len(vectors) == 0:
-        return np.zeros((0, 2, 3), np.float32)
+        return no_lines()
     corners = np.array([[sigma2, 0.0], [0.0, sigma2], [-sigma2, 0.0], [0.0, -sigma2]])
     tips = origin + vectors
     points = tips[:, None, :] + corners[None]
@@ -128,16 +129,20 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
         labels[f"inspector_{agent}"] = (f"{agent.upper()} {str(ids[index])[:8]}: context in its own frame",
                                         (float(origin[0] + reach + 3.0), float(origin[1]), 1.0))
         if detail is not None:
-            lines[f"inspector_{agent}_bands"] = Lines(band_segments(origin, vectors, params.sigma1, params.sigma2), BAND, 1.0)
+            bands = band_segments(origin, vectors, params.sigma1, params.sigma2)
+            lines[f"inspector_{agent}_bands"] = Lines(bands, BAND, 1.0)
             lines[f"inspector_{agent}_regions"] = Lines(region_segments(origin, vectors, params.sigma2), REGION, 1.5)
             column = 0 if agent == "ego" else 1
-            for name, mask, colour in (("kept", detail.kept_by_consensus, RIGHT), ("removed", ~detail.kept_by_consensus, WRONG)):
+            kept = detail.kept_by_consensus
+            for name, mask, colour in (("kept", kept, RIGHT), ("removed", ~kept, WRONG)):
                 chosen = np.isin(members, detail.candidates[mask, column])
                 lines[f"inspector_{agent}_{name}"] = Lines(vector_segments(origin, vectors[chosen]), colour, 4.0)
     shown = [origins[agent] for agent in contexts]
     centre = np.mean(shown, axis=0)
-    return ContextPicture(ego=ego, cav=cav, lines=lines, labels=labels, markdown=_markdown(outcome, ego, cav, detail, params),
-                          centre=(float(centre[0]), float(centre[1])), span=2 * reach * len(shown) + PANEL_GAP * (len(shown) - 1))
+    return ContextPicture(ego=ego, cav=cav, lines=lines, labels=labels,
+                          markdown=_markdown(outcome, ego, cav, detail, params),
+                          centre=(float(centre[0]), float(centre[1])),
+                          span=2 * reach * len(shown) + PANEL_GAP * (len(shown) - 1))
 
 
 def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: AnchorDetail | None,
@@ -150,17 +155,20 @@ def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: Anchor
     truth = {tuple(p) for p in np.asarray(trial.gt_pairs).reshape(-1, 2).tolist()}
     final = {tuple(p) for p in detail.final.tolist()}
     kind = "a true pair" if (ego, cav) in truth else "not a true pair"
-    lines = [f"**Anchor ({ego}, {cav})**: ego `{str(trial.ego_ids[ego])[:8]}` ↔ CAV `{str(trial.cav_ids[cav])[:8]}`, {kind}.",
+    pair = f"ego `{str(trial.ego_ids[ego])[:8]}` ↔ CAV `{str(trial.cav_ids[cav])[:8]}`"
+    lines = [f"**Anchor ({ego}, {cav})**: {pair}, {kind}.",
              "",
-             (f"Grey wedges: σ1 = {params.sigma1:g}° around each context vector; purple diamonds: σ2 = {params.sigma2:g} m "
-              f"(L1). Thick green: in L_ij and kept by consensus; thick red: removed by consensus."),
+             (f"Grey wedges: σ1 = {params.sigma1:g}° around each context vector; purple diamonds: "
+              f"σ2 = {params.sigma2:g} m (L1). Thick green: in L_ij and kept by consensus; thick red: removed by "
+              f"consensus."),
              "",
              f"L_ij holds {len(detail.candidates)} pairs; consensus kept {int(detail.kept_by_consensus.sum())}; "
              f"{len(detail.final)} are left after the one-to-one rule"
              + (f" ({detail.mean_distance:.1f} m apart on average, limit {params.distance_limit:g} m"
                 f"{': rejected' if detail.rejected else ''})" if len(detail.final) else "") + "."]
     if outcome.result.anchor is not None:
-        lines.append(f"The winning anchor is {tuple(outcome.result.anchor)} with {outcome.result.consensus_count} pairs.")
+        result = outcome.result
+        lines.append(f"The winning anchor is {tuple(result.anchor)} with {result.consensus_count} pairs.")
     if len(detail.candidates):
         lines += ["", "| ego | CAV | votes | consensus | final | true |", "|---|---|---|---|---|---|"]
         for (i, j), votes, kept in list(zip(detail.candidates.tolist(), detail.votes.tolist(),
@@ -177,6 +185,6 @@ def empty() -> Drawing:
     labels it is not given)."""
     names = [f"inspector_{agent}_{part}" for agent in ("ego", "cav")
              for part in ("vectors", "bands", "regions", "kept", "removed")]
-    return Drawing(meshes={}, lines={name: Lines(np.zeros((0, 2, 3), np.float32), BAND) for name in names},
+    return Drawing(meshes={}, lines={name: Lines(no_lines(), BAND) for name in names},
                    labels={}, metrics_markdown="")
 

@@ -24,7 +24,7 @@ if sys.version_info >= (3, 11):
 else:
     import tomli as tomllib
 
-SHIPPED_DIR = Path(__file__).resolve().parent.parent / "presets"
+SHIPPED_DIR = Path(__file__).resolve().parents[2] / "presets"
 ENV_VAR = "CBM_EXPLORER_PRESETS"
 
 

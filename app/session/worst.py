@@ -12,9 +12,8 @@ from typing import Any
 
 from cbm.diagnosis import Finding
 
-from .drawing import number
+from .explorer import Explorer
 from .sequence import SequenceRun
-from .session import Explorer
 
 RANKINGS: dict[str, tuple[str, bool]] = {
     # label: (row column, higher is worse)
@@ -70,16 +69,3 @@ def diagnoses(explorer: Explorer, run: SequenceRun, frames: Sequence[int],
 def candidate_frames(run: SequenceRun, count: int = 10) -> list[int]:
     """Every frame that is among the ``count`` worst by some metric (each once, in frame order)."""
     return sorted({row["frame"] for metric in RANKINGS for row in rank(run.rows, metric, count)})
-
-
-def markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[int, list[Finding]]) -> str:
-    """The worst-frames table: metrics and the diagnosis of each frame."""
-    if not rows:
-        return "Run the sequence first."
-    lines = [f"**Worst frames by {metric}**", "", "| frame | P / R | RTE | RRE | margin | why it failed |",
-             "|---|---|---|---|---|---|"]
-    for row in rows:
-        why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
-        lines.append(f"| {row['frame']} | {number(row['precision'])} / {number(row['recall'])} | {number(row['rte'], ' m')} "
-                     f"| {number(row['rre'], '°')} | {number(row['margin'], '', 0)} | {why} |")
-    return "\n".join(lines)

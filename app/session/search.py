@@ -12,9 +12,8 @@ from cbm.methods import METHODS
 from cbm.search import SEARCHABLE, Candidate, grid_size, search
 
 from .background import Task
-from .drawing import number
+from .explorer import Explorer
 from .sequence import frame_inputs
-from .session import Explorer
 from .settings import Settings
 
 OBJECTIVE_LABELS = {"success": "success rate (RTE < 1 m, RRE < 1°)", "f1": "F1", "precision": "precision",
@@ -30,20 +29,6 @@ class SearchResult:
     frames: tuple[int, ...]
     candidates: tuple[Candidate, ...]
     current: Candidate
-
-    def markdown(self, top: int = 5) -> str:
-        """The table of the best settings against the current ones."""
-        lines = [(f"**Best of {len(self.candidates)} settings** by {OBJECTIVE_LABELS[self.objective]} over "
-                  f"{len(self.frames)} frames (seed {self.settings.scenario.seed})"), "",
-                 "| | σ1 | σ2 | σ3 | limit | score | success | P / R |", "|---|---|---|---|---|---|---|---|"]
-        rows = [(f"#{k + 1}", c) for k, c in enumerate(self.candidates[:top])] + [("current", self.current)]
-        for name, c in rows:
-            p = {**self.current.params, **c.params}
-            s = c.summary
-            lines.append(f"| {name} | {p['sigma1']:g} | {p['sigma2']:g} | {p['sigma3']:g} | {p['distance_limit']:g} "
-                         f"| {number(c.score, digits=3)} | {number(100 * s['success_rate'], digits=1)} % "
-                         f"| {number(s['precision'])} / {number(s['recall'])} |")
-        return "\n".join(lines)
 
     def option(self, rank: int) -> str:
         """The label of the ``rank``-th best setting (0-based) in the apply list."""

@@ -1,0 +1,68 @@
+"""The GUI of one browser tab, one module per tab of the control panel (``frame``, ``scenario``,
+``method``, ``view``, ``presets``, ``explore``) and the outputs above them (``metrics``). Each
+holds its handles in a small dataclass, built once; its callbacks write one field of the tab's
+settings through ``TabActions.apply`` and never touch another panel; ``show`` moves its controls to
+given settings (the app's own updates do not re-fire callbacks, ``actions.on_user``)."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import viser
+
+from ..session.settings import Settings
+from . import frame, method, metrics, presets, scenario, view
+from .actions import TabActions
+
+
+@dataclass
+class Controls:
+    """Every panel of the tab but the Explore tab (``explore.ExplorePanel``, which keeps state)."""
+
+    metrics: metrics.MetricsControls
+    frame: frame.FrameControls
+    tabs: viser.GuiTabGroupHandle
+    scenario: scenario.ScenarioControls
+    method: method.MethodControls
+    view: view.ViewControls
+    presets: presets.PresetControls
+
+    def show(self, settings: Settings) -> None:
+        """Move every control to ``settings`` (without re-firing callbacks)."""
+        for part in (self.frame, self.scenario, self.method, self.view):
+            part.show(settings)
+        self.reflect(settings)
+
+    def reflect(self, settings: Settings) -> None:
+        """Show the controls that apply to ``settings`` and hide the others."""
+        self.method.reflect(settings)
+        self.view.reflect(settings)
+
+
+def build(gui: viser.GuiApi, settings: Settings, n_frames: int, preset_names: list[str]) -> Controls:
+    """The panels of a new tab, in screen order (the Explore tab is added to ``Controls.tabs`` after)."""
+    shown = metrics.build(gui)
+    frames = frame.build(gui, settings, n_frames)
+    tabs = gui.add_tab_group()
+    with tabs.add_tab("Scenario"):
+        scenario_controls = scenario.build(gui, settings)
+    with tabs.add_tab("Method"):
+        method_controls = method.build(gui, settings)
+    with tabs.add_tab("View"):
+        view_controls = view.build(gui, settings)
+    with tabs.add_tab("Presets"):
+        preset_controls = presets.build(gui, preset_names)
+    controls = Controls(shown, frames, tabs, scenario_controls, method_controls, view_controls, preset_controls)
+    controls.reflect(settings)
+    return controls
+
+
+def bind(controls: Controls, tab: TabActions) -> None:
+    """Connect every control to the tab."""
+    frame.bind(controls.frame, tab)
+    scenario.bind(controls.scenario, tab)
+    method.bind(controls.method, tab)
+    view.bind(controls.view, tab)
+    presets.bind(controls.presets, tab)
+
+
+__all__ = ["Controls", "TabActions", "bind", "build"]

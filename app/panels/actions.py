@@ -1,0 +1,52 @@
+"""What a panel may ask of its browser tab, and how a control reports a person's edit."""
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, Protocol
+
+import viser
+
+from ..scene.drawing import Drawing
+from ..session.explorer import Explorer, Outcome
+from ..session.settings import Settings
+
+Edit = Callable[[Settings], Settings]
+
+
+class TabActions(Protocol):
+    """The browser tab, as its panels see it (``app.tab.ClientSession`` implements it)."""
+
+    client: viser.ClientHandle
+    explorer: Explorer
+
+    @property
+    def settings(self) -> Settings: ...
+
+    def current(self) -> tuple[Outcome | None, Drawing | None]:
+        """The outcome on screen and its drawing (None before the first frame)."""
+
+    def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
+        """Replace the settings by ``edit(settings)`` and recompute; ``move_controls`` when the
+        change did not come from the controls (a preset, a jump, a search result)."""
+
+    def step(self, delta: int) -> None: ...
+
+    def set_playing(self, playing: bool) -> None: ...
+
+    def cav_id(self, label: str) -> str:
+        """The vehicle id behind an entry of the CAV list."""
+
+    def reset_camera(self) -> None: ...
+
+    def load_preset(self, name: str) -> None: ...
+
+    def save_preset(self, name: str) -> None: ...
+
+    def notify(self, title: str, body: str, color: str) -> None: ...
+
+
+def on_user(handle: Any, react: Callable[[], None]) -> None:
+    """Call ``react()`` when a person edits ``handle`` in the browser. viser also calls update
+    callbacks when the app itself assigns a value (with no client): those are ignored, so moving
+    the controls to new settings never fires a second change."""
+    handle.on_update(lambda event: react() if event.client is not None else None)

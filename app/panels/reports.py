@@ -1,0 +1,62 @@
+"""The Explore tab's texts: a sequence run's aggregate, a search's ranking, the worst frames."""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from typing import Any
+
+from cbm.diagnosis import Finding
+from cbm.methods import METHODS
+
+from ..scene.text import number
+from ..session.search import OBJECTIVE_LABELS, SearchResult
+from ..session.sequence import SequenceRun
+
+
+def sequence_markdown(run: SequenceRun) -> str:
+    """The aggregate table shown after a run."""
+    s = run.summary()
+    state = "cancelled after" if run.cancelled else "over"
+    head = (f"**{METHODS[run.settings.method].label}**, {state} {len(run.rows)} of {run.n_frames} frames "
+            f"(seed {run.settings.scenario.seed}, {run.settings.scenario.protocol} protocol)")
+    if not s:
+        return head + "\n\nNo frame was run."
+    lines = [head, "", "| | |", "|---|---|",
+             f"| success (RTE < 1 m, RRE < 1°) | {number(100 * s['success_rate'], ' %', 1)} |",
+             f"| precision / recall | {number(s['precision'])} / {number(s['recall'])} |",
+             f"| AD | {number(s['ad'], ' m')} |",
+             f"| RTE mean / median | {number(s['rte_mean'], ' m')} / {number(s['rte_median'], ' m')} |",
+             f"| RRE mean / median | {number(s['rre_mean'], '°')} / {number(s['rre_median'], '°')} |",
+             f"| frames with an estimate | {int(s['n_estimated'])} |",
+             f"| median time per frame | {number(1000 * s['runtime_median_s'], ' ms', 1)} |"]
+    if run.skipped:
+        lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, run.skipped))}")
+    return "\n".join(lines)
+
+
+def search_markdown(result: SearchResult, top: int = 5) -> str:
+    """The table of the best settings against the current ones."""
+    lines = [(f"**Best of {len(result.candidates)} settings** by {OBJECTIVE_LABELS[result.objective]} over "
+              f"{len(result.frames)} frames (seed {result.settings.scenario.seed})"), "",
+             "| | σ1 | σ2 | σ3 | limit | score | success | P / R |", "|---|---|---|---|---|---|---|---|"]
+    rows = [(f"#{k + 1}", c) for k, c in enumerate(result.candidates[:top])] + [("current", result.current)]
+    for name, c in rows:
+        p = {**result.current.params, **c.params}
+        s = c.summary
+        lines.append(f"| {name} | {p['sigma1']:g} | {p['sigma2']:g} | {p['sigma3']:g} | {p['distance_limit']:g} "
+                     f"| {number(c.score, digits=3)} | {number(100 * s['success_rate'], digits=1)} % "
+                     f"| {number(s['precision'])} / {number(s['recall'])} |")
+    return "\n".join(lines)
+
+
+def worst_markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[int, list[Finding]]) -> str:
+    """The worst-frames table: metrics and the diagnosis of each frame."""
+    if not rows:
+        return "Run the sequence first."
+    lines = [f"**Worst frames by {metric}**", "", "| frame | P / R | RTE | RRE | margin | why it failed |",
+             "|---|---|---|---|---|---|"]
+    for row in rows:
+        why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
+        lines.append(f"| {row['frame']} | {number(row['precision'])} / {number(row['recall'])} "
+                     f"| {number(row['rte'], ' m')} | {number(row['rre'], '°')} | {number(row['margin'], '', 0)} "
+                     f"| {why} |")
+    return "\n".join(lines)

@@ -1,0 +1,54 @@
+"""The Scenario tab: protocol, localization error, detection noise, co-visibility, seed."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import viser
+
+from ..session.settings import Settings
+from .actions import TabActions, on_user
+
+SLIDERS = {
+    # field: (label, min, max, step, hint)
+    "eta": ("co-visibility eta", 0.0, 1.0, 0.05, "SIND protocol: share of objects both agents see"),
+    "sigma_p": ("position noise σp (m)", 0.0, 2.0, 0.05, "detection position noise, std-dev on x and y"),
+    "sigma_theta": ("heading noise σθ (°)", 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
+    "flip_prob": ("heading flip prob.", 0.0, 1.0, 0.05, "probability a detection faces backwards"),
+    "loc_x": ("localization x (m)", 0.0, 15.0, 0.25, "CAV pose error in x: offset (fixed) or std-dev (gaussian)"),
+    "loc_y": ("localization y (m)", 0.0, 15.0, 0.25, "CAV pose error in y"),
+    "loc_yaw": ("localization yaw (°)", 0.0, 30.0, 0.5, "CAV pose error in yaw"),
+    "sensor_range": ("sensor range (m)", 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
+}
+
+
+@dataclass
+class ScenarioControls:
+    protocol: viser.GuiDropdownHandle
+    localization: viser.GuiDropdownHandle
+    sliders: dict[str, viser.GuiSliderHandle]
+    seed: viser.GuiNumberHandle
+
+    def show(self, settings: Settings) -> None:
+        scenario = settings.scenario
+        self.protocol.value, self.localization.value = scenario.protocol, scenario.localization
+        for name, slider in self.sliders.items():
+            slider.value = getattr(scenario, name)
+        self.seed.value = scenario.seed
+
+
+def build(gui: viser.GuiApi, settings: Settings) -> ScenarioControls:
+    scenario = settings.scenario
+    return ScenarioControls(
+        protocol=gui.add_dropdown("protocol", ("range", "sind", "opv2v"), initial_value=scenario.protocol),
+        localization=gui.add_dropdown("localization error", ("fixed", "gaussian"), initial_value=scenario.localization),
+        sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
+                 for name, (label, low, high, step, hint) in SLIDERS.items()},
+        seed=gui.add_number("seed", scenario.seed, min=0, step=1))
+
+
+def bind(c: ScenarioControls, tab: TabActions) -> None:
+    on_user(c.protocol, lambda: tab.apply(lambda s: s.with_scenario(protocol=c.protocol.value)))
+    on_user(c.localization, lambda: tab.apply(lambda s: s.with_scenario(localization=c.localization.value)))
+    for name, slider in c.sliders.items():
+        on_user(slider, lambda n=name, h=slider: tab.apply(lambda s: s.with_scenario(**{n: float(h.value)})))
+    on_user(c.seed, lambda: tab.apply(lambda s: s.with_scenario(seed=max(0, int(c.seed.value)))))

@@ -1,0 +1,195 @@
+"""What one outcome looks like: the arrays of every scene node, in the ego frame (x forward, y left).
+
+A ``Drawing`` is plain data (meshes, line sets, labels, the metrics text), so the session logic can
+be tested without a browser and the viser layer (``view``) only copies arrays into nodes.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from cbm import se2
+
+from ..session.explorer import Outcome
+from . import colours, geometry
+from .layouts import LAYOUTS, TITLE_AT, Panel
+from .text import metrics_markdown
+
+LINE_HEIGHT = 1.7
+"""Metres above the ground at which match lines run (above most boxes)."""
+
+
+@dataclass(frozen=True)
+class Mesh:
+    vertices: np.ndarray
+    faces: np.ndarray
+    color: tuple[int, int, int]
+    opacity: float | None = None
+
+
+@dataclass(frozen=True)
+class Lines:
+    segments: np.ndarray
+    """(N, 2, 3) float32."""
+    color: tuple[int, int, int]
+    thickness: float = 2.0
+
+
+@dataclass(frozen=True)
+class Drawing:
+    meshes: dict[str, Mesh]
+    lines: dict[str, Lines]
+    labels: dict[str, tuple[str, tuple[float, float, float]]]
+    metrics_markdown: str
+    objects: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    """(boxes (N, 7) as drawn, index into the trial's list) by group (``ego``, ``cav``), for picking."""
+    centre_y: float = 0.0
+    """Sideways middle of the panels the layout shows (where the camera looks on reset)."""
+
+
+@dataclass
+class _Parts:
+    """Everything the copies of the scene contribute, gathered before it is joined into nodes."""
+
+    ego: list[np.ndarray] = field(default_factory=list)
+    cav: list[np.ndarray] = field(default_factory=list)
+    before: list[np.ndarray] = field(default_factory=list)
+    ghosts: list[np.ndarray] = field(default_factory=list)
+    ego_poses: list[np.ndarray] = field(default_factory=list)
+    cav_poses: list[np.ndarray] = field(default_factory=list)
+    before_poses: list[np.ndarray] = field(default_factory=list)
+    right: list[np.ndarray] = field(default_factory=list)
+    wrong: list[np.ndarray] = field(default_factory=list)
+    missed: list[np.ndarray] = field(default_factory=list)
+    maps: dict[str, list[np.ndarray]] = field(default_factory=dict)
+
+
+def placements(outcome: Outcome) -> dict[str, np.ndarray]:
+    """CAV->ego transforms: before (``init``), after (the estimate), truth."""
+    return {"before": outcome.result.init, "after": outcome.result.transform, "truth": outcome.trial.T_true}
+
+
+def shown_pairs(outcome: Outcome) -> np.ndarray:
+    """The pairs the match lines show: CBM's own (before the re-association) when the view asks
+    for them and the method has them, else the method's final pairs."""
+    result = outcome.result
+    if outcome.settings.view.line_pairs == "own" and result.context_pairs is not None:
+        return result.context_pairs
+    return result.pairs
+
+
+def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
+    """The scene of ``outcome`` under its view options."""
+    layout = LAYOUTS[outcome.settings.view.layout]
+    panels = layout.panels(outcome)
+    parts = _Parts(maps={kind: [] for kind in map_segments})
+    for panel in panels:
+        _add_panel(parts, outcome, panel, layout.before_ghosts, map_segments)
+    ego, cav = np.concatenate(parts.ego), np.concatenate(parts.cav)
+    trial, copies = outcome.trial, len(panels)
+    objects = {"ego": (ego, np.tile(np.arange(len(trial.ego_boxes)), copies)),
+               "cav": (cav, np.tile(np.arange(len(trial.cav_boxes)), copies))}
+    return Drawing(meshes=_meshes(parts, ego, cav), lines=_lines(parts), labels=_labels(parts, panels),
+                   metrics_markdown=metrics_markdown(outcome), objects=objects,
+                   centre_y=float(np.mean([panel.offset[1] for panel in panels])))
+
+
+def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool,
+               map_segments: dict[str, np.ndarray]) -> None:
+    """One copy of the scene: boxes, vehicles, ghosts, match lines and map, shifted by its offset."""
+    view, trial, offset = outcome.settings.view, outcome.trial, panel.offset
+    where = placements(outcome)
+    shift = se2.make(offset[0], offset[1], 0.0)
+    cav = se2.apply_boxes(shift @ where[panel.placement], trial.cav_boxes)
+    parts.ego.append(_shifted(trial.ego_boxes, offset))
+    parts.cav.append(cav)
+    parts.ego_poses.append(shift)
+    parts.cav_poses.append(shift @ where[panel.placement])
+    if before_ghosts:
+        parts.before.append(se2.apply_boxes(where["before"], trial.cav_boxes))
+        parts.before_poses.append(where["before"])
+    if view.ghosts:
+        seen = np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))
+        parts.ghosts.append(_shifted(outcome.world_boxes[seen], offset))
+    if view.lines:
+        right, wrong, missed = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2])
+        parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
+    to_ego = shift @ se2.inverse(trial.ego_pose)
+    for kind, segments in map_segments.items():
+        parts.maps[kind].append(se2.apply_points(to_ego, segments.reshape(-1, 2)).reshape(-1, 2, 2))
+
+
+def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray) -> dict[str, Mesh]:
+    before = _slim(np.concatenate(parts.before)) if parts.before else np.zeros((0, 7))
+    return {
+        "ego_boxes": Mesh(*geometry.box_mesh(ego), colours.EGO_BOXES),
+        "cav_boxes": Mesh(*geometry.box_mesh(_slim(cav)), colours.CAV_BOXES),
+        "cav_before": Mesh(*geometry.box_mesh(before), colours.CAV_BOXES, opacity=0.3),
+        "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), colours.EGO_VEHICLE),
+        "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), colours.CAV_VEHICLE),
+        "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), colours.CAV_VEHICLE, opacity=0.3),
+    }
+
+
+def _lines(parts: _Parts) -> dict[str, Lines]:
+    ghosts = geometry.outline_segments(np.concatenate(parts.ghosts)) if parts.ghosts else no_lines()
+    maps = {f"map_{kind}": Lines(np.concatenate([_lift(p) for p in pieces]),
+                                 colours.MAP.get(kind, colours.MAP_OTHER), 1.0)
+            for kind, pieces in parts.maps.items()}
+    return {"right": Lines(_joined(parts.right), colours.RIGHT, 3.0),
+            "wrong": Lines(_joined(parts.wrong), colours.WRONG, 3.0),
+            "missed": Lines(_joined(parts.missed), colours.MISSED, 2.0),
+            "ghosts": Lines(ghosts, colours.GHOST, 1.5), **maps}
+
+
+def _labels(parts: _Parts, panels: list[Panel]) -> dict[str, tuple[str, tuple[float, float, float]]]:
+    labels = {}
+    for panel, ego_pose, cav_pose in zip(panels, parts.ego_poses, parts.cav_poses):
+        labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(ego_pose), 2.5))
+        labels[f"cav_{panel.placement}"] = ("CAV", (*se2.translation_of(cav_pose), 2.5))
+        if panel.title:
+            labels[panel.placement] = (panel.title, (TITLE_AT[0], float(panel.offset[1]), TITLE_AT[1]))
+    return labels
+
+
+def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray,
+                 cav_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments of right pairs, wrong pairs, and true pairs the method missed (dashed)."""
+    truth = {tuple(p) for p in trial.gt_pairs.tolist()}
+    found = {tuple(p) for p in pairs.tolist()}
+    right = np.array([p for p in found if p in truth], dtype=int).reshape(-1, 2)
+    wrong = np.array([p for p in found if p not in truth], dtype=int).reshape(-1, 2)
+    missed = np.array([p for p in truth if p not in found], dtype=int).reshape(-1, 2)
+    return (geometry.segments(ego_xy[right[:, 0]], cav_xy[right[:, 1]], LINE_HEIGHT),
+            geometry.segments(ego_xy[wrong[:, 0]], cav_xy[wrong[:, 1]], LINE_HEIGHT),
+            geometry.dashed(ego_xy[missed[:, 0]], cav_xy[missed[:, 1]], LINE_HEIGHT))
+
+
+def _slim(boxes: np.ndarray) -> np.ndarray:
+    """CAV boxes drawn narrower and taller than the ego's, so a matched pair shows both colours."""
+    out = boxes.copy()
+    out[:, 3:5] *= 0.7
+    out[:, 5] *= 1.3
+    return out
+
+
+def _shifted(boxes: np.ndarray, offset: np.ndarray) -> np.ndarray:
+    out = boxes.copy()
+    out[:, :2] += offset
+    return out
+
+
+def no_lines() -> np.ndarray:
+    """An empty (0, 2, 3) segment array."""
+    return np.zeros((0, 2, 3), np.float32)
+
+
+def _joined(parts: list[np.ndarray]) -> np.ndarray:
+    return np.concatenate(parts) if parts else no_lines()
+
+
+def _lift(segments2d: np.ndarray) -> np.ndarray:
+    out = np.zeros((len(segments2d), 2, 3), np.float32)
+    out[..., :2] = segments2d
+    return out

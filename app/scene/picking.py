@@ -1,0 +1,46 @@
+"""Which drawn box a click hits, and what its label says."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..session.explorer import Outcome
+from .drawing import Drawing
+
+
+def pick(picture: Drawing, point: np.ndarray) -> tuple[str, int] | None:
+    """(group, row) of the drawn box whose footprint holds ``point``, else of the nearest centre
+    within 2 m; None when there is none."""
+    best: tuple[float, str, int] | None = None
+    for group, (boxes, _) in picture.objects.items():
+        if len(boxes) == 0:
+            continue
+        local = point[None, :2] - boxes[:, :2]
+        c, s = np.cos(boxes[:, 6]), np.sin(boxes[:, 6])
+        along, across = c * local[:, 0] + s * local[:, 1], -s * local[:, 0] + c * local[:, 1]
+        inside = (np.abs(along) <= boxes[:, 3] / 2) & (np.abs(across) <= boxes[:, 4] / 2)
+        distance = np.where(inside, 0.0, np.hypot(local[:, 0], local[:, 1]))
+        k = int(np.argmin(distance))
+        if distance[k] <= 2.0 and (best is None or distance[k] < best[0]):
+            best = (float(distance[k]), group, k)
+    return None if best is None else (best[1], best[2])
+
+
+def describe(outcome: Outcome, picture: Drawing, group: str, row: int) -> str:
+    """Label text of one drawn box: whose detection, its id, and what it was matched to."""
+    trial, pairs = outcome.trial, outcome.result.pairs
+    index = int(picture.objects[group][1][row])
+    ids = trial.ego_ids if group == "ego" else trial.cav_ids
+    column = 0 if group == "ego" else 1
+    partner = pairs[pairs[:, column] == index]
+    truth = trial.gt_pairs[trial.gt_pairs[:, column] == index]
+    text = f"{group.upper()} {str(ids[index])[:8]}"
+    if len(partner):
+        other = int(partner[0, 1 - column])
+        right = len(truth) and int(truth[0, 1 - column]) == other
+        other_ids = trial.cav_ids if group == "ego" else trial.ego_ids
+        text += f" -> {str(other_ids[other])[:8]} ({'right' if right else 'wrong'})"
+    elif len(truth):
+        text += " (co-visible, missed)"
+    else:
+        text += " (seen by one agent)"
+    return text

@@ -1,0 +1,59 @@
+"""Text the app shows: numbers with units, and the metrics panel of one outcome."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from cbm import se2
+from cbm.methods import METHODS
+from cbm.result import MatchResult
+
+from ..session.explorer import Outcome
+
+
+def number(value: float, unit: str = "", digits: int = 2) -> str:
+    """``value`` with ``digits`` decimals and ``unit``; a dash when it is undefined (None, NaN)."""
+    return "—" if value is None or (isinstance(value, float) and math.isnan(value)) else f"{value:.{digits}f}{unit}"
+
+
+def own_pairs(result: MatchResult) -> str:
+    """How many of the pairs CBM found itself, when the re-association changed them."""
+    own = result.context_pairs
+    if own is None or np.array_equal(own, result.pairs):
+        return ""
+    return f"; CBM's own {len(own)}"
+
+
+def metrics_markdown(outcome: Outcome) -> str:
+    """The metrics panel's text for one frame."""
+    m, result, trial, limit = outcome.metrics, outcome.result, outcome.trial, outcome.limit
+    init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
+    init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
+    method = METHODS[outcome.settings.method].label
+    agents = f"ego `{str(outcome.ego_id)[:8]}` · CAV `{str(outcome.cav_id)[:8]}` ({outcome.cav_note})"
+    lines = [
+        f"**Frame {outcome.frame_index}** · {agents}",
+        "",
+        "| | |",
+        "|---|---|",
+        f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
+        f"| co-visible | {m.n_true} |",
+        f"| matches ({method}) | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",
+        f"| precision / recall | {number(m.precision)} / {number(m.recall)} |",
+        f"| AD | {number(m.ad, ' m')} |",
+        f"| RRE / RTE | {number(m.rre, '°')} / {number(m.rte, ' m')} |",
+        f"| before calibration | {number(init_rre, '°')} / {number(init_rte, ' m')} |",
+        f"| limit (oracle: true pairs) | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
+    ]
+    if result.anchor is not None:
+        lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")
+    lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
+    if not result.estimated:
+        lines.append("")
+        lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")
+    if outcome.findings:
+        lines.append("")
+        lines.append("**Why it failed**")
+        lines.extend(f"- {f.message}" for f in outcome.findings)
+    return "\n".join(lines)
