@@ -5,10 +5,10 @@ from __future__ import annotations
 import time
 
 import pytest
-from support import browser as ui
 
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
+from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
 
