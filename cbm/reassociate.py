@@ -38,6 +38,8 @@ SIZE_GATE = 0.4
 """Largest size mismatch of a pair (the two boxes' lengths or widths about 1.5 times apart)."""
 DENSE_BLOCK = 40_000
 """Up to this many entries (gated ego boxes x gated CAV boxes) the assignment is one dense block."""
+SMALLEST_SIZE = 0.05
+"""Metres. The least length or width a box is compared with."""
 _UNPAIRED = 1e6
 """Cost of an entry outside the gate in a dense block: above any sum of gated costs."""
 
@@ -66,8 +68,10 @@ def axis_difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 
 def size_mismatch(ego: np.ndarray, cav: np.ndarray) -> np.ndarray:
-    """``hypot(log(l_e / l_c), log(w_e / w_c))`` of boxes row by row (0 for equal sizes)."""
-    return np.hypot(np.log(ego[:, 3] / cav[:, 3]), np.log(ego[:, 4] / cav[:, 4]))
+    """``hypot(log(l_e / l_c), log(w_e / w_c))`` of boxes row by row (0 for equal sizes; sizes below
+    ``SMALLEST_SIZE`` count as that, so a degenerate box compares without dividing by zero)."""
+    e, c = np.maximum(ego[:, 3:5], SMALLEST_SIZE), np.maximum(cav[:, 3:5], SMALLEST_SIZE)
+    return np.hypot(*np.log(e / c).T)
 
 
 def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> tuple[np.ndarray, np.ndarray]:
@@ -114,7 +118,7 @@ def _connected_groups(candidates: np.ndarray, n_ego: int, n_cav: int) -> list[np
 
 
 def _assign_block(candidates: np.ndarray, cost: np.ndarray) -> np.ndarray:
-    """The assignment of one connected group of candidates."""
+    """The assignment among some candidates, on the dense block of the boxes they name."""
     rows, row_of = np.unique(candidates[:, 0], return_inverse=True)
     cols, col_of = np.unique(candidates[:, 1], return_inverse=True)
     block = np.full((len(rows), len(cols)), _UNPAIRED)

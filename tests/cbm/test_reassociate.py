@@ -43,6 +43,12 @@ def test_a_flipped_heading_still_pairs_but_a_different_size_does_not():
     np.testing.assert_array_equal(gated_assignment(ego, cav, gate=1.0, sigma=0.3), [[0, 0]])
 
 
+def test_degenerate_sizes_compare_without_warnings():
+    ego = boxes([[0.0, 0.0], [10.0, 0.0]], size=(0.0, 0.0, 0.0))
+    cav = boxes([[0.1, 0.0], [10.1, 0.0]], size=(0.0, 0.0, 0.0))
+    np.testing.assert_array_equal(gated_assignment(ego, cav, gate=1.0, sigma=0.3), [[0, 0], [1, 1]])
+
+
 def test_large_problems_split_into_groups_with_the_same_answer(monkeypatch):
     rng = np.random.default_rng(3)
     ego = boxes(rng.uniform(-40, 40, (120, 2)), yaw=rng.uniform(-np.pi, np.pi, 120)[:, None][:, 0])
