@@ -52,6 +52,8 @@ class Method:
     """Needs the true pairs (``true_pairs=``): only a simulation can run it."""
     explains: bool = False
     """Builds CBM's sets: consensus margin, diagnosis, context inspector and CBM's own pairs apply."""
+    requires: Mapping[str, tuple[str, Any]] = field(default_factory=dict)
+    """Parameters that matter only while another has a value: ``{"sigma3": ("consensus", True)}``."""
 
     @property
     def params_key(self) -> str:
@@ -62,6 +64,16 @@ class Method:
     def tunable(self) -> tuple[str, ...]:
         """The parameters a user or a grid may set (its GUI controls): every field not forced."""
         return tuple(f.name for f in dataclasses.fields(self.params) if f.name not in self.forced)
+
+    def controls(self, params: Any) -> tuple[str, ...]:
+        """The parameters that act under ``params`` (as it runs them): the GUI shows these only."""
+        resolved = self.resolved(params)
+
+        def acts(name: str) -> bool:
+            needed, value = self.requires.get(name, (None, None))
+            return needed is None or getattr(resolved, needed) == value
+
+        return tuple(name for name in self.tunable if acts(name))
 
     def resolved(self, params: Any = None) -> Any:
         """``params`` (or the defaults) with the forced parameters applied: what it runs with."""
@@ -85,11 +97,14 @@ class Method:
         return self.function(ego_boxes, cav_boxes, init, self.resolved(params), **inputs)
 
 
+CBM_REQUIRES = {"sigma3": ("consensus", True), "consensus_rule": ("consensus", True), "refine_gate": ("refine", True)}
+"""CBM's parameters that act only with the consensus or the re-association on."""
+
 METHODS: dict[str, Method] = {m.name: m for m in (
     Method("none", "none (no calibration)", ReferenceParams, match_none),
-    Method("cbm", "CBM", CBMParams, match, explains=True),
+    Method("cbm", "CBM", CBMParams, match, explains=True, requires=CBM_REQUIRES),
     Method("cbm-no-consensus", "CBM without consensus", CBMParams, match, forced={"consensus": False},
-           shares="cbm", explains=True),
+           shares="cbm", explains=True, requires=CBM_REQUIRES),
     Method("icp", "ICP", ICPParams, match_icp),
     Method("ricp", "RICP", RICPParams, match_ricp),
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),

@@ -1,5 +1,6 @@
-"""The Method tab: the method list and a folder per parameter set, showing the set (and within it
-the parameters) of the selected method only (``cbm.methods``: what it tunes, what it forces)."""
+"""The Method tab: the method list and a folder per parameter set, showing the set of the selected
+method only, and within it the parameters that act (``cbm.methods``: what it tunes, what it forces,
+what needs what)."""
 from __future__ import annotations
 
 import dataclasses
@@ -41,10 +42,11 @@ class MethodControls:
 
     def reflect(self, settings: Settings) -> None:
         chosen = METHODS[settings.method]
+        acting = chosen.controls(settings.params)
         for key, folder in self.folders.items():
             folder.visible = key == chosen.params_key
         for (key, name), control in self.params.items():
-            control.visible = key != chosen.params_key or name in chosen.tunable
+            control.visible = key != chosen.params_key or name in acting
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> MethodControls:

@@ -60,3 +60,20 @@ def test_a_step_advances_one_frame_with_one_recompute(browser, server: ExplorerS
     assert len(applied) == 1 and len(submitted) == 1 and tab.settings.frame == start + 1
     assert ui.slider(page, "frame").get_attribute("aria-valuenow") == str(start + 1)
     page.close()
+
+
+def test_only_the_parameters_that_act_are_shown(browser, server: ExplorerServer) -> None:
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    page.get_by_role("tab", name="Method").click()
+    sigma3 = ui.label(page, "σ3 voting (m)")
+    assert sigma3.is_visible()
+    ui.pick_option(page, "method", "CBM without consensus")
+    ui.wait_until(lambda: tab.settings.method == "cbm-no-consensus" and not sigma3.is_visible())
+    assert not ui.label(page, "consensus").is_visible() and ui.label(page, "σ1 angle (°)").is_visible()
+    ui.pick_option(page, "method", "ICP")
+    ui.wait_until(lambda: not ui.label(page, "σ1 angle (°)").is_visible())
+    assert ui.label(page, "max_iterations").is_visible()
+    ui.pick_option(page, "method", "CBM")
+    ui.wait_until(lambda: sigma3.is_visible())
+    page.close()

@@ -47,3 +47,11 @@ def test_unknown_names_and_foreign_parameters_are_refused():
         method("cbm-fast")
     with pytest.raises(TypeError, match="params of ricp must be RICPParams"):
         METHODS["ricp"].resolved(CBMParams())
+
+
+def test_controls_are_the_parameters_that_act():
+    cbm, ablation = METHODS["cbm"], METHODS["cbm-no-consensus"]
+    assert {"sigma3", "consensus_rule", "refine_gate", "consensus"} <= set(cbm.controls(CBMParams()))
+    assert not {"sigma3", "consensus_rule", "consensus"} & set(ablation.controls(CBMParams()))
+    assert "refine_gate" not in cbm.controls(CBMParams(refine=False))
+    assert METHODS["icp"].controls(METHODS["icp"].params()) == METHODS["icp"].tunable
