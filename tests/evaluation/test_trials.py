@@ -29,7 +29,7 @@ def test_app_and_evaluation_build_identical_trials_on_every_frame(scene: Explore
     assert not skipped and [f.index for f in inputs] == list(frames)
     for seed in (0, 1, 7):
         scenario = ScenarioParams(protocol=protocol, eta=0.4, sigma_p=0.3, sigma_theta=5.0, seed=seed)
-        for k in frames[::5]:
+        for k in frames:
             app = scene.compute(Settings(frame=k, scenario=scenario)).trial
             evaluated = inputs[k].build(scenario, seed)
             for name in FIELDS:
