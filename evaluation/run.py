@@ -53,13 +53,7 @@ def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
     protocol on a dataset that does not say what each agent sees."""
     if protocol == "opv2v" and seq.visibility is None:
         raise ValueError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
-    inputs, skipped = [], []
-    for k in frames:
-        try:
-            inputs.append(trials.frame_inputs(seq[k], protocol, target_distance=cav_distance))
-        except trials.NoTrial:
-            skipped.append(k)
-    return inputs, skipped
+    return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance)
 
 
 def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]] | None = None,

@@ -38,7 +38,7 @@ def choose_ego(frame: Frame) -> str | None:
     """The ego of ``frame``: the dataset's ego if present, else the vehicle nearest the objects'
     centroid; None when there is neither."""
     ego = frame.sequence.ego
-    if ego is not None and ego in _agent_ids(frame):
+    if ego is not None and ego in agent_ids(frame):
         return ego
     vehicles = is_vehicle(frame.categories)
     if not vehicles.any():
@@ -76,7 +76,7 @@ def steady_cav(frames: Iterable[Frame], target_distance: float = TARGET_DISTANCE
 
 def agent_pose(frame: Frame, agent_id: str) -> np.ndarray:
     """``(3, 3)`` agent->world pose: from the agent table, else from the object's box (centre, yaw)."""
-    if agent_id in _agent_ids(frame):
+    if agent_id in agent_ids(frame):
         return frame.agent_pose(agent_id)
     rows = np.flatnonzero(frame.track_ids == agent_id)
     if not len(rows):
@@ -105,7 +105,8 @@ def frame_trial_inputs(frame: Frame, ego_id: str, cav_id: str) -> dict[str, Any]
     }
 
 
-def _agent_ids(frame: Frame) -> np.ndarray:
+def agent_ids(frame: Frame) -> np.ndarray:
+    """Ids of the frame's agents (empty when the dataset has no agent table)."""
     agents = frame.agents
     return np.empty(0, dtype=str) if agents is None else agents["agent_id"].to_numpy().astype(str)
 

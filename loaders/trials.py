@@ -16,12 +16,13 @@ objects within the sensor range under OPV2V (and a note saying so).
 from __future__ import annotations
 
 import weakref
+from collections.abc import Iterable
 
 import numpy as np
 
 from cbm.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
 
-from .agents import TARGET_DISTANCE, choose_cav, choose_ego, frame_trial_inputs, steady_cav
+from .agents import TARGET_DISTANCE, agent_ids, choose_cav, choose_ego, frame_trial_inputs, steady_cav
 from .scene import Frame, Sequence
 
 AUTO_CAV = "auto"
@@ -50,7 +51,7 @@ def agents_of(frame: Frame, cav: str = AUTO_CAV,
     ego = choose_ego(frame)
     if ego is None:
         return None
-    present = set(frame.track_ids.tolist()) | set(_agent_ids(frame))
+    present = set(frame.track_ids.tolist()) | set(agent_ids(frame).tolist())
     if cav != AUTO_CAV and cav != ego and cav in present:
         return ego, cav, "chosen"
     steady = sequence_cav(frame.sequence, target_distance)
@@ -78,16 +79,25 @@ def frame_inputs(frame: Frame, protocol: Protocol, cav: str = AUTO_CAV, target_d
     return FrameInputs(frame.index, inputs, labels=frame.categories, note=note)
 
 
+def sequence_inputs(sequence: Sequence, frames: Iterable[int], protocol: Protocol, cav: str = AUTO_CAV,
+                    target_distance: float = TARGET_DISTANCE,
+                    sensor_range: float = ScenarioParams.sensor_range) -> tuple[list[FrameInputs], list[int]]:
+    """``frame_inputs`` of each of ``frames``, and the frames that make no trial (skipped)."""
+    inputs, skipped = [], []
+    for k in frames:
+        try:
+            inputs.append(frame_inputs(sequence[k], protocol, cav, target_distance, sensor_range))
+        except NoTrial:
+            skipped.append(k)
+    return inputs, skipped
+
+
 def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AUTO_CAV,
                 target_distance: float = TARGET_DISTANCE) -> Trial:
     """The trial of ``frame`` under ``scenario`` and ``seed``: ``frame_inputs`` then
     ``FrameInputs.build`` (draws from ``trial_rng(seed, frame.index)``)."""
     inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range)
     return inputs.build(scenario, seed)
-
-
-def _agent_ids(frame: Frame) -> list[str]:
-    return [] if frame.agents is None else frame.agents["agent_id"].cast(str).to_list()
 
 
 def _visibility_by_range(inputs: dict, sensor_range: float) -> dict[str, np.ndarray]:

@@ -1,9 +1,9 @@
 """Sequence runs: a tab's settings over every frame of the sequence, through the evaluation's sweep.
 
-The frames' inputs come from ``Explorer.trial_inputs`` -- the same ego, CAV and visibility the tab
-uses -- and every trial is built by ``FrameInputs.build`` inside ``cbm.sweep``, so each row is the
-number the tab shows on that frame. Frames run in chunks; a cancel stops at the next chunk and
-keeps the rows done so far.
+The frames' inputs come from the trial builder (``loaders.trials.sequence_inputs``) with the tab's
+protocol and CAV -- as ``Explorer.compute`` builds them -- and every trial is built by
+``FrameInputs.build`` inside ``cbm.sweep``, so each row is the number the tab shows on that frame.
+Frames run in chunks; a cancel stops at the next chunk and keeps the rows done so far.
 """
 from __future__ import annotations
 
@@ -17,6 +17,7 @@ import numpy as np
 from cbm.methods import METHODS
 from cbm.scenario import FrameInputs
 from cbm.sweep import Sweep, run, summarise
+from loaders.trials import sequence_inputs
 
 from .background import Task
 from .explorer import Explorer
@@ -36,13 +37,9 @@ def sweep_for(settings: Settings) -> Sweep:
 def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) -> tuple[list[FrameInputs], list[int]]:
     """The sweep inputs of ``frames`` as the tab builds them, and the frames that have no ego or
     no CAV (skipped)."""
-    inputs, skipped = [], []
-    for index in frames:
-        try:
-            inputs.append(explorer.trial_inputs(settings, index))
-        except ValueError:
-            skipped.append(index)
-    return inputs, skipped
+    scenario = settings.scenario
+    return sequence_inputs(explorer.sequence, frames, scenario.protocol, settings.cav,
+                           sensor_range=scenario.sensor_range)
 
 
 @dataclass(frozen=True)
