@@ -1,9 +1,10 @@
 """Global consensus maximization (paper eq. 9-11) over sparse candidate sets.
 
-The candidate sets L_ij (eq. 8) and the voting sets V_k'h' (built the same way with sigma3 in place
-of sigma2; every non-empty set holds its own pair) are stored grouped by pair, and the consensus
+The voting sets V_k'h' (built like the candidate sets L_ij of eq. 8 with sigma3 in place of sigma2;
+every non-empty set holds its own pair) are stored grouped by the pair they hold, so the consensus
 of one anchor costs the votes cast in its own set, never (Ne Nc)^2; ``cbm.selection`` only asks for
-the anchors whose candidate set is large enough to win. Two rules decide which candidates keep
+the anchors whose candidate set is large enough to win, and lists their members on demand
+(``cbm.local_matching.CandidateSets``). Two rules decide which candidates keep
 their place:
 
 - ``paper`` (eq. 9-10): (i', j') in L_ij survives when ``sum_{(k',h') in L_ij} V_k'h'(i', j') > 1``,
@@ -21,12 +22,10 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .local_matching import Quadruples
-
 
 @dataclass(frozen=True)
 class PairSets:
-    """Sets of pairs grouped by their anchor: the members of anchor A are ``member[start[A]:start[A + 1]]``."""
+    """Sets of pairs grouped by a key pair: the set of pair A is ``member[start[A]:start[A + 1]]``."""
 
     start: np.ndarray
     member: np.ndarray
@@ -40,15 +39,14 @@ class PairSets:
 
 
 @numba.njit(cache=True)
-def _group_within(anchor, member, l1, tolerance, n_pairs, by_member):
-    """Rows with l1 <= tolerance plus (A, A) for every anchor A that has one, grouped by anchor
-    (or by member when ``by_member``) with a counting sort: returns (start, grouped values)."""
+def _group_by_member(anchor, member, n_pairs):
+    """(start, anchors) of the quadruples grouped by member with a counting sort, plus (A, A) for
+    every anchor A that has a quadruple (every non-empty voting set holds its own pair)."""
     has_set = np.zeros(n_pairs, np.bool_)
     start = np.zeros(n_pairs + 1, np.int64)
     for row in range(len(anchor)):
-        if l1[row] <= tolerance:
-            has_set[anchor[row]] = True
-            start[(member[row] if by_member else anchor[row]) + 1] += 1
+        has_set[anchor[row]] = True
+        start[member[row] + 1] += 1
     for pair in range(n_pairs):
         if has_set[pair]:
             start[pair + 1] += 1
@@ -57,10 +55,8 @@ def _group_within(anchor, member, l1, tolerance, n_pairs, by_member):
     fill = start[:-1].copy()
     values = np.empty(start[n_pairs], np.int64)
     for row in range(len(anchor)):
-        if l1[row] <= tolerance:
-            key, value = (member[row], anchor[row]) if by_member else (anchor[row], member[row])
-            values[fill[key]] = value
-            fill[key] += 1
+        values[fill[member[row]]] = anchor[row]
+        fill[member[row]] += 1
     for pair in range(n_pairs):
         if has_set[pair]:
             values[fill[pair]] = pair
@@ -68,12 +64,9 @@ def _group_within(anchor, member, l1, tolerance, n_pairs, by_member):
     return start, values
 
 
-def sets_within(quads: Quadruples, tolerance: float, n_pairs: int, by_member: bool = False) -> PairSets:
-    """The sets of all anchors at an L1 tolerance, each with its anchor pair once non-empty (eq. 8).
-
-    ``by_member`` transposes them: row m lists the anchors whose set holds pair m.
-    """
-    start, values = _group_within(quads.anchor, quads.member, quads.l1, float(tolerance), n_pairs, by_member)
+def voted_by_member(anchor: np.ndarray, member: np.ndarray, n_pairs: int) -> PairSets:
+    """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m."""
+    start, values = _group_by_member(anchor, member, n_pairs)
     return PairSets(start=start, member=values)
 
 
@@ -82,7 +75,7 @@ RULE_CODES = {None: 0, "paper": 1, "released": 2}
 
 @numba.njit(cache=True)
 def _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, alone):
-    """alone[r] for rows lo..hi-1: kept, and its ego and CAV objects occur once among the kept rows."""
+    """alone[r - lo] for rows lo..hi-1: kept, and its ego and CAV objects occur once among the kept rows."""
     for row in range(lo, hi):
         if kept[row - lo]:
             ego_count[member[row] // n_cav] += 1
@@ -117,15 +110,14 @@ def _voted(member, lo, hi, is_voter, voted_start, voted_by, needed, voter_here, 
 
 
 @numba.njit(cache=True)
-def final_set(anchor, start, member, voted_start, voted_by, rule, n_cav, scratch, ego_count, cav_count,
-              voter_here, out):
-    """L^(2) of one anchor into ``out``; returns its size.
+def final_set(member, size, voted_start, voted_by, rule, n_cav, scratch, ego_count, cav_count, voter_here, out):
+    """L^(2) of the candidate set ``member[:size]`` into ``out``; returns its size.
 
     Consensus (eq. 9-10) by ``rule`` (0 off, 1 paper, 2 released), then the one-to-one rule (eq. 11).
     ``scratch`` is a (3, max set size) bool work array; the count arrays and ``voter_here`` must be
     zero/False and are left so.
     """
-    lo, hi = start[anchor], start[anchor + 1]
+    lo, hi = 0, size
     everyone, lone, kept = scratch[0], scratch[1], scratch[2]
     everyone[: hi - lo] = True
     if rule == 1:
@@ -137,9 +129,9 @@ def final_set(anchor, start, member, voted_start, voted_by, rule, n_cav, scratch
     else:
         kept[: hi - lo] = True
     _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, lone)
-    size = 0
+    kept_size = 0
     for row in range(lo, hi):
         if lone[row - lo]:
-            out[size] = member[row]
-            size += 1
-    return size
+            out[kept_size] = member[row]
+            kept_size += 1
+    return kept_size

@@ -3,6 +3,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from .params import HeadingMode
@@ -41,10 +42,24 @@ class Context:
 
 
 def build_context(xy: np.ndarray, heading: np.ndarray) -> Context:
-    """Context matrices P_i of eq. 6 for every object, stacked: one row per ordered pair i != i'."""
-    n = len(xy)
-    anchor, member = np.nonzero(~np.eye(n, dtype=bool))
-    offset = xy[member] - xy[anchor]
-    c, s = np.cos(heading[anchor]), np.sin(heading[anchor])
-    vectors = np.stack([c * offset[:, 0] + s * offset[:, 1], -s * offset[:, 0] + c * offset[:, 1]], axis=1)
+    """Context matrices P_i of eq. 6 for every object, stacked: one row per ordered pair i != i',
+    anchor by anchor."""
+    rows = len(xy) * (len(xy) - 1)
+    anchor, member, vectors = np.empty(rows, np.int64), np.empty(rows, np.int64), np.empty((rows, 2))
+    _fill_context(np.ascontiguousarray(xy, dtype=float), np.cos(heading), np.sin(heading), anchor, member, vectors)
     return Context(anchor=anchor, member=member, vectors=vectors)
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_context(xy, c, s, anchor, member, vectors):
+    """``vectors[k] = R(theta_i)^T (p_i' - p_i)`` for every ordered pair (i, i'), i != i'."""
+    k = 0
+    for i in range(len(xy)):
+        for m in range(len(xy)):
+            if m == i:
+                continue
+            dx, dy = xy[m, 0] - xy[i, 0], xy[m, 1] - xy[i, 1]
+            anchor[k], member[k] = i, m
+            vectors[k, 0] = c[i] * dx + s[i] * dy
+            vectors[k, 1] = -s[i] * dx + c[i] * dy
+            k += 1

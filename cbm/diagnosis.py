@@ -33,7 +33,7 @@ def no_anchor_reached_two(result: MatchResult, inspection: Inspection) -> Findin
     """No candidate set held 2 pairs (eq. 8), or the distance limit rejected every one."""
     if result.anchor is not None:
         return None
-    if inspection.sets.candidates.sizes().any():
+    if inspection.sets.candidates.count.any():
         return Finding("no_anchor", "no anchor reached 2 pairs: every candidate set was emptied by consensus "
                                     "and the one-to-one rule or rejected by the distance limit")
     return Finding("no_anchor",

@@ -103,7 +103,7 @@ class Inspection:
     def _explain(self, i: int, j: int) -> AnchorDetail:
         sets = self.sets
         a = i * self.n_cav + j
-        members = sets.candidates.member[sets.candidates.start[a]:sets.candidates.start[a + 1]]
+        members = sets.candidates.members(a)
         candidates = self._pairs(members)
         lone = one_to_one_mask(candidates)
         voters = members[lone] if sets.rule == "released" else members

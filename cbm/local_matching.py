@@ -5,14 +5,24 @@ For an anchor pair (i, j) a candidate (i', j') is accepted when the context vect
 
     arccos(|z . w| / (|z| |w|)) <= sigma1      and      ||z - w||_1 <= sigma2        (eq. 7)
 
-Testing all (Ne Nc)^2 quadruples is what makes the released code dense. Here the CAV context
-vectors are bucketed in a uniform grid whose cells are at least the L1 radius wide, so each ego
-context vector only meets the CAV vectors of its 3 x 3 neighbouring cells: the work grows with
-the number of accepted quadruples, not with (Ne Nc)^2. Pair ids are ``i * Nc + j`` throughout.
+Testing all (Ne Nc)^2 quadruples is what makes the released code dense. Here the join is
+output-sensitive and never holds the accepted quadruples of eq. 8:
+
+- the CAV context vectors lie in a grid of cells half sigma2 wide (``VectorGrid``); an ego vector z
+  meets only the vectors of the cells that the L1 diamond around it touches, column by column;
+- that join counts card(L_ij) for every anchor and lists only the quadruples within sigma3, the
+  voting sets of the consensus (``count_candidates``); it runs in parallel over ranges of ego objects,
+  each owning its anchors' counters, and its lists are joined in ego order, so nothing depends on
+  the threads;
+- the members of one L_ij are listed again when the selection asks for them
+  (``CandidateSets.members``): against the CAV anchor's vectors sorted by x, O(N log N).
+
+Pair ids are ``i * Nc + j`` throughout.
 """
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numba
@@ -20,49 +30,71 @@ import numpy as np
 
 from .context import Context
 
-MAX_GRID_CELLS_PER_AXIS = 2048
-
-
-@dataclass(frozen=True)
-class Quadruples:
-    """Accepted (anchor pair, candidate pair) quadruples, one row each."""
-
-    anchor: np.ndarray
-    """(Q,) pair id of the anchor (i, j)."""
-    member: np.ndarray
-    """(Q,) pair id of the candidate (i', j')."""
-    l1: np.ndarray
-    """(Q,) L1 distance of the two context vectors."""
+CELLS_PER_RADIUS = 2
+"""Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
+MAX_CELLS = 1 << 22
+"""Most grid cells (32 MB of row offsets); a wider scene gets wider cells."""
+MARGIN = 1e-6
+"""Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
+each vector in the window is then tested exactly."""
+PARALLEL_FROM = 2_000
+"""Context vectors per agent from which the joins are split over threads."""
+THREADS = 2
+_POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm-join")
 
 
 @dataclass(frozen=True)
 class VectorGrid:
-    """CAV context vectors bucketed by cell and, inside a cell, sorted by their anchor's heading:
-    the vectors of cell c are ``order[start[c]:start[c + 1]]``."""
+    """CAV context vectors bucketed in square cells of side ``cell``, column by column: cell
+    (kx, ky) holds rows ``start[kx * ny + ky]:start[kx * ny + ky + 1]``, so the cells ky0..ky1 of
+    one column are one run of rows."""
 
-    origin: np.ndarray
+    x0: float
+    y0: float
     cell: float
-    shape: tuple[int, int]
+    nx: int
+    ny: int
     start: np.ndarray
-    order: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    anchor: np.ndarray
+    member: np.ndarray
 
 
-def build_grid(vectors: np.ndarray, anchor_heading: np.ndarray, radius: float) -> VectorGrid:
-    """Bucket vectors in square cells no narrower than ``radius``, at most 2048 cells per axis."""
-    if len(vectors) == 0:
-        return VectorGrid(np.zeros(2), 1.0, (1, 1), np.zeros(2, dtype=np.int64), np.zeros(0, dtype=np.int64))
-    origin = vectors.min(axis=0)
-    extent = float((vectors.max(axis=0) - origin).max())
-    cell = max(radius, extent / (MAX_GRID_CELLS_PER_AXIS - 1), 1e-9)
-    ij = np.floor((vectors - origin) / cell).astype(np.int64)
-    shape = (int(ij[:, 0].max()) + 1, int(ij[:, 1].max()) + 1)
-    cell_id = ij[:, 0] * shape[1] + ij[:, 1]
-    order = np.lexsort((anchor_heading, cell_id)).astype(np.int64)
-    start = np.concatenate([[0], np.cumsum(np.bincount(cell_id, minlength=shape[0] * shape[1]))]).astype(np.int64)
-    return VectorGrid(origin, cell, shape, start, order)
+def build_grid(cav: Context, radius: float) -> VectorGrid:
+    """A grid of cells ``radius / CELLS_PER_RADIUS`` wide (wider when it would pass ``MAX_CELLS``)."""
+    x, y = cav.vectors[:, 0], cav.vectors[:, 1]
+    if len(x) == 0:
+        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, cav.anchor, cav.member)
+    x0, y0 = float(x.min()), float(y.min())
+    width, height = float(x.max()) - x0, float(y.max()) - y0
+    cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / MAX_CELLS), 1e-9)
+    nx, ny = int(width // cell) + 1, int(height // cell) + 1
+    start = np.zeros(nx * ny + 1, np.int64)
+    gx, gy, anchor, member = np.empty(len(x)), np.empty(len(x)), np.empty(len(x), np.int64), np.empty(len(x), np.int64)
+    _bucket(cav.vectors, cav.anchor, cav.member, x0, y0, cell, nx, ny, start, gx, gy, anchor, member)
+    return VectorGrid(x0, y0, cell, nx, ny, start, gx, gy, anchor, member)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
+def _bucket(vectors, anchor, member, x0, y0, cell, nx, ny, start, gx, gy, g_anchor, g_member):
+    """Counting sort of the vectors by cell (column-major), keeping their order inside a cell."""
+    cell_of = np.empty(len(vectors), np.int64)
+    for v in range(len(vectors)):
+        kx = min(int(math.floor((vectors[v, 0] - x0) / cell)), nx - 1)
+        ky = min(int(math.floor((vectors[v, 1] - y0) / cell)), ny - 1)
+        cell_of[v] = kx * ny + ky
+        start[cell_of[v] + 1] += 1
+    for c in range(nx * ny):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    for v in range(len(vectors)):
+        row = fill[cell_of[v]]
+        gx[row], gy[row], g_anchor[row], g_member[row] = vectors[v, 0], vectors[v, 1], anchor[v], member[v]
+        fill[cell_of[v]] += 1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def _accepts(zx, zy, wx, wy, cos2_sigma1, radius):
     """L1 distance of z and w when eq. 7 accepts them, else -1.
 
@@ -79,79 +111,165 @@ def _accepts(zx, zy, wx, wy, cos2_sigma1, radius):
     return l1
 
 
-@numba.njit(cache=True)
-def _same_sign_range(cav_heading, lo, hi, ego_heading, sign):
-    """Rows of one cell (sorted by heading) that may have ``sign`` against an ego anchor with
-    ``ego_heading``: +1 where the folded headings differ by at most pi/2. A hair wider than exact;
-    the caller checks every row."""
-    margin = 1e-9
-    if ego_heading >= 0.0:
-        cut = ego_heading - 0.5 * math.pi
-        if sign > 0:
-            return lo + np.searchsorted(cav_heading[lo:hi], cut - margin), hi
-        return lo, lo + np.searchsorted(cav_heading[lo:hi], cut + margin, side="right")
-    cut = ego_heading + 0.5 * math.pi
-    if sign > 0:
-        return lo, lo + np.searchsorted(cav_heading[lo:hi], cut + margin, side="right")
-    return lo + np.searchsorted(cav_heading[lo:hi], cut - margin), hi
+@numba.njit(cache=True, nogil=True, inline="always")
+def _first_at_least(values, lo, hi, value):
+    """The first row in lo..hi-1 of sorted ``values`` with values[row] >= value (hi when none)."""
+    while lo < hi:
+        mid = (lo + hi) >> 1
+        if values[mid] < value:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
 
 
-@numba.njit(cache=True)
-def _join(ego_anchor, ego_member, ego_vectors, ego_heading, cav_anchor, cav_member, cav_vectors, cav_heading,
-          signs, both_signs, n_cav, origin, cell, nx, ny, start, cos2_sigma1, radius, out_anchor, out_member, out_l1):
-    """Accepted quadruples into the ``out_`` arrays; returns how many there are, which may exceed the
-    arrays' length (then only the first ones were written). The CAV arrays are in grid order, cell c
-    holding rows start[c]:start[c + 1]."""
-    capacity = len(out_anchor)
-    n = 0
-    for u in range(len(ego_vectors)):
-        a = ego_anchor[u]
-        sign_row = signs[a]
-        zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
-        for flip in range(2 if both_signs else 1):
-            sign = 1.0 - 2.0 * flip
-            cx = int(math.floor((sign * zx - origin[0]) / cell))
-            cy = int(math.floor((sign * zy - origin[1]) / cell))
-            for ix in range(max(cx - 1, 0), min(cx + 2, nx)):
-                for iy in range(max(cy - 1, 0), min(cy + 2, ny)):
-                    c = ix * ny + iy
-                    lo, hi = start[c], start[c + 1]
-                    if both_signs and hi > lo:
-                        lo, hi = _same_sign_range(cav_heading, lo, hi, ego_heading[a], sign)
-                    for v in range(lo, hi):
-                        b = cav_anchor[v]
+@numba.njit(cache=True, nogil=True)
+def _join(first, last, ego_vectors, ego_member, per_anchor, signs, both_signs, x0, y0, cell, nx, ny, start, gx, gy,
+          g_anchor, g_member, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
+    """Eq. 7 for the vectors of ego objects first..last-1 against the grid of CAV vectors.
+
+    Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; with
+    ``list_votes``, returns those within sigma3 as (anchor, member) rows, in the order found.
+    The CAV frame of j is turned by ``signs[i, j]``.
+    """
+    n_cav = signs.shape[1]
+    capacity = 1024 if list_votes else 0
+    vote_anchor, vote_member, n_votes = np.empty(capacity, np.int64), np.empty(capacity, np.int64), 0
+    for i in range(first, last):
+        sign_row = signs[i]
+        row = i * n_cav
+        for u in range(i * per_anchor, (i + 1) * per_anchor):
+            zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
+            for flip in range(2 if both_signs else 1):
+                sign = 1.0 - 2.0 * flip
+                qx, qy = sign * zx, sign * zy
+                k0 = max(int(math.floor((qx - radius - MARGIN - x0) / cell)), 0)
+                k1 = min(int(math.floor((qx + radius + MARGIN - x0) / cell)), nx - 1)
+                for k in range(k0, k1 + 1):
+                    gap = max(0.0, x0 + k * cell - qx, qx - (x0 + (k + 1) * cell))
+                    reach = radius - gap + MARGIN
+                    if reach < 0.0:
+                        continue
+                    c0 = max(int(math.floor((qy - reach - y0) / cell)), 0)
+                    c1 = min(int(math.floor((qy + reach - y0) / cell)), ny - 1)
+                    if c1 < c0:
+                        continue
+                    for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+                        b = g_anchor[v]
                         if sign_row[b] != sign:
                             continue
-                        l1 = _accepts(zx, zy, sign * cav_vectors[v, 0], sign * cav_vectors[v, 1], cos2_sigma1, radius)
+                        l1 = _accepts(zx, zy, sign * gx[v], sign * gy[v], cos2_sigma1, radius)
                         if l1 < 0.0:
                             continue
-                        if n < capacity:
-                            out_anchor[n] = a * n_cav + b
-                            out_member[n] = ego_member[u] * n_cav + cav_member[v]
-                            out_l1[n] = l1
-                        n += 1
-    return n
+                        if l1 <= sigma2:
+                            count2[row + b] += 1
+                        if list_votes and l1 <= sigma3:
+                            if n_votes == capacity:
+                                capacity *= 2
+                                vote_anchor = _grown(vote_anchor, capacity)
+                                vote_member = _grown(vote_member, capacity)
+                            vote_anchor[n_votes] = row + b
+                            vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
+                            n_votes += 1
+    return vote_anchor[:n_votes], vote_member[:n_votes]
 
 
-def accepted_quadruples(ego: Context, cav: Context, ego_heading: np.ndarray, cav_heading: np.ndarray,
-                        signs: np.ndarray, sigma1_rad: float, radius: float) -> Quadruples:
-    """Every quadruple (i, j, i', j') with angle <= sigma1 and L1 <= ``radius`` (eq. 7).
+@numba.njit(cache=True, nogil=True)
+def _grown(values, capacity):
+    grown = np.empty(capacity, values.dtype)
+    grown[:len(values)] = values
+    return grown
 
-    ``signs[i, j]`` (+1 or -1) turns the CAV context of j by pi when compared with ego object i
-    (see ``cbm.context.pair_signs``); the headings are the folded ones the contexts were built with.
-    """
-    n_cav = len(cav_heading)
-    grid = build_grid(cav.vectors, cav_heading[cav.anchor], radius)
-    o = grid.order
-    arguments = (ego.anchor, ego.member, ego.vectors, np.ascontiguousarray(ego_heading, dtype=float),
-                 cav.anchor[o], cav.member[o], np.ascontiguousarray(cav.vectors[o]),
-                 np.ascontiguousarray(cav_heading[cav.anchor[o]], dtype=float),
-                 np.ascontiguousarray(signs, dtype=np.float64), bool(np.any(signs < 0)), n_cav,
-                 grid.origin, grid.cell, grid.shape[0], grid.shape[1], grid.start, math.cos(sigma1_rad) ** 2, radius)
-    capacity = len(ego.vectors) * max(8, n_cav // 10) + 1024
-    while True:
-        out = np.empty(capacity, np.int64), np.empty(capacity, np.int64), np.empty(capacity, np.float64)
-        n = _join(*arguments, *out)
-        if n <= capacity:
-            return Quadruples(anchor=out[0][:n], member=out[1][:n], l1=out[2][:n])
-        capacity = n
+
+def _split(n_ego: int, n_vectors: int) -> list[tuple[int, int]]:
+    """Ranges of ego objects for the threads (one range for small problems)."""
+    if n_vectors < PARALLEL_FROM or n_ego < THREADS:
+        return [(0, n_ego)]
+    bounds = np.linspace(0, n_ego, 4 * THREADS + 1).astype(int)
+    return list(zip(bounds[:-1], bounds[1:]))
+
+
+def _run_join(ego: Context, n_ego: int, signs: np.ndarray, grid: VectorGrid, sigma1_rad: float, radius: float,
+              sigma2: float, sigma3: float, count2: np.ndarray, list_votes: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``_join`` over all ego objects, split over threads; the voting rows in ego-object order."""
+    per_anchor = max(n_ego - 1, 0)
+    common = (ego.vectors, ego.member, per_anchor, signs, bool(np.any(signs < 0)), grid.x0, grid.y0, grid.cell,
+              grid.nx, grid.ny, grid.start, grid.x, grid.y, grid.anchor, grid.member, math.cos(sigma1_rad) ** 2,
+              radius, sigma2, sigma3, count2, list_votes)
+    ranges = _split(n_ego, len(ego.vectors))
+    if len(ranges) == 1:
+        return _join(0, n_ego, *common)
+    parts = [future.result() for future in [_POOL.submit(_join, first, last, *common) for first, last in ranges]]
+    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+
+
+@numba.njit(cache=True, nogil=True)
+def _sort_blocks(vectors, member, per_anchor, bx, by, b_member):
+    """Each anchor's context vectors sorted by x, block by block."""
+    for j in range(len(vectors) // max(per_anchor, 1)):
+        lo = j * per_anchor
+        order = np.argsort(vectors[lo:lo + per_anchor, 0], kind="mergesort")
+        for k in range(per_anchor):
+            bx[lo + k] = vectors[lo + order[k], 0]
+            by[lo + k] = vectors[lo + order[k], 1]
+            b_member[lo + k] = member[lo + order[k]]
+
+
+@numba.njit(cache=True, nogil=True)
+def members_into(i, j, sign, ego_vectors, ego_member, per_ego, bx, by, b_member, n_cav, cos2_sigma1, sigma2, out):
+    """The members of L_ij (eq. 8) into ``out``, the anchor pair last; returns how many. The CAV
+    blocks ``bx, by, b_member`` hold each anchor's vectors sorted by x (``_sort_blocks``)."""
+    per_cav = n_cav - 1
+    lo_j, hi_j = j * per_cav, (j + 1) * per_cav
+    size = 0
+    for u in range(i * per_ego, (i + 1) * per_ego):
+        zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
+        qx = sign * zx
+        v = _first_at_least(bx, lo_j, hi_j, qx - sigma2 - MARGIN)
+        while v < hi_j and bx[v] <= qx + sigma2 + MARGIN:
+            if _accepts(zx, zy, sign * bx[v], sign * by[v], cos2_sigma1, sigma2) >= 0.0:
+                out[size] = ego_member[u] * n_cav + b_member[v]
+                size += 1
+            v += 1
+    if size:
+        out[size] = i * n_cav + j
+        size += 1
+    return size
+
+
+@dataclass(frozen=True)
+class CandidateSets:
+    """The candidate sets L_ij of every anchor (eq. 8): their sizes, and their members on demand."""
+
+    count: np.ndarray
+    """(Ne * Nc,) card(L_ij), the anchor pair included when the set is not empty."""
+    lookup: tuple
+    """``members_into``'s arguments after (i, j, sign) and before ``out``."""
+    signs: np.ndarray
+    """(Ne, Nc) how the CAV frame is turned against each ego frame (``cbm.context.pair_signs``)."""
+
+    def sizes(self) -> np.ndarray:
+        return self.count
+
+    def members(self, anchor: int) -> np.ndarray:
+        """Pair ids of L_ij for ``anchor = i * Nc + j``, the anchor pair last."""
+        n_cav = self.signs.shape[1]
+        i, j = divmod(int(anchor), n_cav)
+        out = np.empty(int(self.count[anchor]) + 1, np.int64)
+        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out)
+        return out[:size]
+
+
+def count_candidates(ego: Context, cav: Context, n_ego: int, n_cav: int, signs: np.ndarray, sigma1_rad: float,
+                     sigma2: float, sigma3: float | None) -> tuple[CandidateSets, np.ndarray, np.ndarray]:
+    """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
+    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join."""
+    count2 = np.zeros(n_ego * n_cav, np.int64)
+    radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
+    vote_anchor, vote_member = _run_join(ego, n_ego, signs, build_grid(cav, radius), sigma1_rad, radius, sigma2,
+                                         -1.0 if sigma3 is None else sigma3, count2, sigma3 is not None)
+    count2 += count2 > 0
+    bx, by, b_member = np.empty(len(cav.vectors)), np.empty(len(cav.vectors)), np.empty(len(cav.vectors), np.int64)
+    _sort_blocks(cav.vectors, cav.member, max(n_cav - 1, 0), bx, by, b_member)
+    lookup = (ego.vectors, ego.member, max(n_ego - 1, 0), bx, by, b_member, n_cav, math.cos(sigma1_rad) ** 2, sigma2)
+    return CandidateSets(count=count2, lookup=lookup, signs=signs), vote_anchor, vote_member

@@ -8,11 +8,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import se2
-from .consensus import PairSets, sets_within
+from .consensus import PairSets, voted_by_member
 from .context import Context, build_context, fold_heading, pair_signs
 from .estimate import Fit, least_squares_fit, residuals, robust_fit
 from .inputs import checked_boxes, checked_transform
-from .local_matching import accepted_quadruples
+from .local_matching import CandidateSets, count_candidates
 from .params import CBMParams
 from .reassociate import reassociate
 from .result import MatchResult
@@ -36,8 +36,8 @@ class Sets:
     """(Ne, Nc) +1 or -1: how the CAV frame is turned against each ego frame (step 2)."""
     ego_context: Context
     cav_context: Context
-    candidates: PairSets
-    """L_ij of every anchor (eq. 8), grouped by pair id ``i * Nc + j``."""
+    candidates: CandidateSets
+    """L_ij of every anchor (eq. 8) by pair id ``i * Nc + j``: sizes, and members on demand."""
     voted_by: PairSets
     """Row m: the pairs whose voting set holds pair m (empty when consensus is off)."""
 
@@ -69,16 +69,15 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     t = time.perf_counter()
     timings["context"] = t - started
 
-    radius = max(params.sigma2, params.sigma3) if params.consensus else params.sigma2
-    quads = accepted_quadruples(ego_context, cav_context, ego_heading, cav_heading, signs, params.sigma1_rad, radius)
+    candidates, vote_anchor, vote_member = count_candidates(
+        ego_context, cav_context, len(ego), len(cav), signs, params.sigma1_rad, params.sigma2,
+        params.sigma3 if params.consensus else None)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
 
     n_pairs = len(ego) * len(cav)
-    candidates = sets_within(quads, params.sigma2, n_pairs)
-    voted_by = (sets_within(quads, params.sigma3, n_pairs, by_member=True) if params.consensus
-                else PairSets.empty(n_pairs))
-    timings["candidate_sets"] = time.perf_counter() - t
+    voted_by = voted_by_member(vote_anchor, vote_member, n_pairs) if params.consensus else PairSets.empty(n_pairs)
+    timings["voting_sets"] = time.perf_counter() - t
     return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates,
                 voted_by)
 

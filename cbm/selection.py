@@ -20,6 +20,7 @@ from scipy.spatial.distance import cdist
 
 from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
+from .local_matching import CandidateSets, members_into
 
 
 @dataclass(frozen=True)
@@ -35,10 +36,12 @@ class Selection:
 
 
 @numba.njit(cache=True)
-def _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
-                   scratch, ego_count, cav_count, voter_here, out):
+def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+                   candidates, scratch, ego_count, cav_count, voter_here, out):
     """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average."""
-    size = final_set(anchor, L_start, L_member, voted_start, voted_by, rule, n_cav, scratch, ego_count,
+    i, j = anchor // n_cav, anchor % n_cav
+    listed = members_into(i, j, signs[i, j], *lookup, candidates)
+    size = final_set(candidates, listed, voted_start, voted_by, rule, n_cav, scratch, ego_count,
                      cav_count, voter_here, out)
     total = 0.0
     for k in range(size):
@@ -47,7 +50,7 @@ def _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego
 
 
 @numba.njit(cache=True)
-def _largest_sets(order, candidate_count, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav,
+def _largest_sets(order, candidate_count, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
                   distance, limit):
     """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
 
@@ -58,7 +61,7 @@ def _largest_sets(order, candidate_count, L_start, L_member, voted_start, voted_
     scratch = np.zeros((3, width), np.bool_)
     ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
     voter_here = np.zeros(len(candidate_count), np.bool_)
-    out = np.empty(width, np.int64)
+    out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
     visited = np.empty(len(order), np.int64)
     sizes = np.empty(len(order), np.int64)
     offsets = np.zeros(len(order) + 1, np.int64)
@@ -68,8 +71,8 @@ def _largest_sets(order, candidate_count, L_start, L_member, voted_start, voted_
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, scratch, ego_count, cav_count, voter_here, out)
+        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             grown[: offsets[n]] = members[: offsets[n]]
@@ -83,23 +86,45 @@ def _largest_sets(order, candidate_count, L_start, L_member, voted_start, voted_
 
 
 @numba.njit(cache=True)
-def _strongest_rival(order, first, candidate_count, runner_up, in_winner, L_start, L_member, voted_start,
+def _strongest_rival(order, first, candidate_count, runner_up, in_winner, signs, lookup, voted_start,
                      voted_by, rule, n_ego, n_cav, distance, limit):
-    """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on."""
+    """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on.
+
+    Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
+    survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen."""
     width = max(1, int(candidate_count.max()))
     scratch = np.zeros((3, width), np.bool_)
     ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
     voter_here = np.zeros(len(candidate_count), np.bool_)
-    out = np.empty(width, np.int64)
+    out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
     for n in range(first, len(order)):
         anchor = order[n]
         if candidate_count[anchor] <= runner_up:
             break
-        size = _filtered_size(anchor, L_start, L_member, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, scratch, ego_count, cav_count, voter_here, out)
+        if rule != 1 and in_winner[anchor]:
+            continue
+        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
         if size > runner_up and not in_winner[out[:size]].any():
             runner_up = size
     return runner_up
+
+
+@numba.njit(cache=True)
+def by_count_descending(count):
+    """Pair ids of non-empty sets by decreasing set size, ties by increasing id (a counting sort)."""
+    n_sizes = count.max() + 1 if len(count) else 1
+    start = np.zeros(n_sizes + 1, np.int64)
+    for a in range(len(count)):
+        start[n_sizes - count[a]] += 1
+    for k in range(n_sizes):
+        start[k + 1] += start[k]
+    order = np.empty(start[n_sizes - 1], np.int64)
+    for a in range(len(count)):
+        if count[a] > 0:
+            order[start[n_sizes - 1 - count[a]]] = a
+            start[n_sizes - 1 - count[a]] += 1
+    return order
 
 
 def tie_break_key(pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray) -> tuple[float, ...]:
@@ -120,7 +145,7 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
     return np.stack([members // n_cav, members % n_cav], axis=1)
 
 
-def select(L: PairSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
+def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
            distance_limit: float) -> Selection:
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
     n_ego, n_cav = len(ego_xy), len(cav_xy)
@@ -128,9 +153,9 @@ def select(L: PairSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray
     candidate_count = L.sizes()
     if n_ego * n_cav == 0 or not candidate_count.any():
         return empty
-    order = np.argsort(-candidate_count, kind="stable")
+    order = by_count_descending(candidate_count)
     distance = cdist(ego_xy, cav_xy).ravel()
-    common = (L.start, L.member, voted_by.start, voted_by.member, RULE_CODES[rule], n_ego, n_cav, distance,
+    common = (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], n_ego, n_cav, distance,
               float(distance_limit))
     visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, *common)
     best = int(sizes.max(initial=0))

@@ -29,7 +29,7 @@ from .errors import LoaderError
 from .scene import Sequence
 from .synthetic_layout import DEPARTURE_START, SIDEWALK_START, STOP_LINE, Layout, Path
 
-MAX_OBJECTS = 1000
+MAX_OBJECTS = 2000
 FRAME_RATE = 10.0
 PEDESTRIAN_SIZE = (0.6, 0.6)
 
@@ -74,7 +74,7 @@ def _split(rng: np.random.Generator, n: int, parts: int) -> np.ndarray:
 
 
 def generate(n_objects: int = 200, n_frames: int = 50, seed: int = 0) -> Sequence:
-    """A synthetic intersection scene with ``n_objects`` objects (0 to 1000) in every one of
+    """A synthetic intersection scene with ``n_objects`` objects (0 to 2000) in every one of
     ``n_frames`` frames at 10 Hz; same ``seed``, same scene."""
     if not isinstance(n_objects, (int, np.integer)) or not 0 <= n_objects <= MAX_OBJECTS:
         raise LoaderError(f"synthetic: n_objects must be an integer from 0 to {MAX_OBJECTS}, got {n_objects!r}")

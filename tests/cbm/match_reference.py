@@ -46,7 +46,8 @@ def cases() -> Iterator[tuple[str, np.ndarray, np.ndarray, np.ndarray, str]]:
                 for variant in VARIANTS:
                     if size == 300 and variant != "default":
                         continue
-                    yield f"synthetic{size}-f{k}-{noise_name}-{variant}", trial.ego_boxes, trial.cav_boxes, trial.init, variant
+                    name = f"synthetic{size}-f{k}-{noise_name}-{variant}"
+                    yield name, trial.ego_boxes, trial.cav_boxes, trial.init, variant
     scene = loaders.open("argoverse2")
     for k in range(0, len(scene), 20):
         trial = build_trial(scene[k], ScenarioParams(protocol="range", sigma_p=0.3, sigma_theta=3.0), seed=k)
