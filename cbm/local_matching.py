@@ -40,14 +40,18 @@ each vector in the window is then tested exactly."""
 PARALLEL_FROM = 2_000
 """Context vectors per agent from which the joins are split over threads."""
 THREADS = 2
+HEADING_GROUPS = 4
+"""Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
 _POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm-join")
 
 
 @dataclass(frozen=True)
 class VectorGrid:
-    """CAV context vectors bucketed in square cells of side ``cell``, column by column: cell
-    (kx, ky) holds rows ``start[kx * ny + ky]:start[kx * ny + ky + 1]``, so the cells ky0..ky1 of
-    one column are one run of rows."""
+    """CAV context vectors, each turned by the sign it has against a group of ego objects, in
+    square cells of side ``cell`` column by column: cell (kx, ky) holds rows
+    ``start[kx * ny + ky]:start[kx * ny + ky + 1]``, so the cells ky0..ky1 of one column are one
+    run of rows. ``check[r]`` is 0 where the sign holds for the whole group, else the sign that
+    row carries (the row's vector is there twice, once per sign, to be checked per ego object)."""
 
     x0: float
     y0: float
@@ -59,38 +63,62 @@ class VectorGrid:
     y: np.ndarray
     anchor: np.ndarray
     member: np.ndarray
+    check: np.ndarray
 
 
-def build_grid(cav: Context, radius: float) -> VectorGrid:
-    """A grid of cells ``radius / CELLS_PER_RADIUS`` wide (wider when it would pass ``MAX_CELLS``)."""
-    x, y = cav.vectors[:, 0], cav.vectors[:, 1]
+def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
+    """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
+    sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``)."""
+    x, y, anchor, member, check = _signed_rows(cav.vectors, cav.anchor, cav.member, cav_sign.astype(np.int64))
     if len(x) == 0:
-        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, cav.anchor, cav.member)
+        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, anchor, member, check)
     x0, y0 = float(x.min()), float(y.min())
     width, height = float(x.max()) - x0, float(y.max()) - y0
     cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / MAX_CELLS), 1e-9)
     nx, ny = int(width // cell) + 1, int(height // cell) + 1
     start = np.zeros(nx * ny + 1, np.int64)
-    gx, gy, anchor, member = np.empty(len(x)), np.empty(len(x)), np.empty(len(x), np.int64), np.empty(len(x), np.int64)
-    _bucket(cav.vectors, cav.anchor, cav.member, x0, y0, cell, nx, ny, start, gx, gy, anchor, member)
-    return VectorGrid(x0, y0, cell, nx, ny, start, gx, gy, anchor, member)
+    rows = (x, y, anchor, member, check)
+    grid = tuple(np.empty_like(values) for values in rows)
+    _bucket(*rows, x0, y0, cell, nx, ny, start, *grid)
+    return VectorGrid(x0, y0, cell, nx, ny, start, *grid)
 
 
 @numba.njit(cache=True, nogil=True)
-def _bucket(vectors, anchor, member, x0, y0, cell, nx, ny, start, gx, gy, g_anchor, g_member):
-    """Counting sort of the vectors by cell (column-major), keeping their order inside a cell."""
-    cell_of = np.empty(len(vectors), np.int64)
+def _signed_rows(vectors, anchor, member, cav_sign):
+    """Rows of (sign * x, sign * y, anchor, member, check): one per vector of a CAV object with a
+    fixed sign (check 0), two (check +1 and -1) per vector of one whose sign varies."""
+    n = 0
     for v in range(len(vectors)):
-        kx = min(int(math.floor((vectors[v, 0] - x0) / cell)), nx - 1)
-        ky = min(int(math.floor((vectors[v, 1] - y0) / cell)), ny - 1)
+        n += 1 if cav_sign[anchor[v]] != 0 else 2
+    x, y = np.empty(n), np.empty(n)
+    out_anchor, out_member, check = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    r = 0
+    for v in range(len(vectors)):
+        fixed = cav_sign[anchor[v]]
+        for sign in (1, -1):
+            if fixed != 0 and sign != fixed:
+                continue
+            x[r], y[r] = sign * vectors[v, 0], sign * vectors[v, 1]
+            out_anchor[r], out_member[r], check[r] = anchor[v], member[v], 0 if fixed != 0 else sign
+            r += 1
+    return x, y, out_anchor, out_member, check
+
+
+@numba.njit(cache=True, nogil=True)
+def _bucket(x, y, anchor, member, check, x0, y0, cell, nx, ny, start, gx, gy, g_anchor, g_member, g_check):
+    """Counting sort of the rows by cell (column-major), keeping their order inside a cell."""
+    cell_of = np.empty(len(x), np.int64)
+    for v in range(len(x)):
+        kx = min(int(math.floor((x[v] - x0) / cell)), nx - 1)
+        ky = min(int(math.floor((y[v] - y0) / cell)), ny - 1)
         cell_of[v] = kx * ny + ky
         start[cell_of[v] + 1] += 1
     for c in range(nx * ny):
         start[c + 1] += start[c]
     fill = start[:-1].copy()
-    for v in range(len(vectors)):
+    for v in range(len(x)):
         row = fill[cell_of[v]]
-        gx[row], gy[row], g_anchor[row], g_member[row] = vectors[v, 0], vectors[v, 1], anchor[v], member[v]
+        gx[row], gy[row], g_anchor[row], g_member[row], g_check[row] = x[v], y[v], anchor[v], member[v], check[v]
         fill[cell_of[v]] += 1
 
 
@@ -124,53 +152,51 @@ def _first_at_least(values, lo, hi, value):
 
 
 @numba.njit(cache=True, nogil=True)
-def _join(first, last, ego_vectors, ego_member, per_anchor, signs, both_signs, x0, y0, cell, nx, ny, start, gx, gy,
-          g_anchor, g_member, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
-    """Eq. 7 for the vectors of ego objects first..last-1 against the grid of CAV vectors.
+def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx, ny, start, gx, gy, g_anchor,
+          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
+    """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; with
     ``list_votes``, returns those within sigma3 as (anchor, member) rows, in the order found.
-    The CAV frame of j is turned by ``signs[i, j]``.
+    A grid row with ``check`` s counts only where ``signs[i, j] == s``. The tests are those of
+    ``_accepts``, combined without branches: the data decide no jump in the inner loop.
     """
     n_cav = signs.shape[1]
     capacity = 1024 if list_votes else 0
     vote_anchor, vote_member, n_votes = np.empty(capacity, np.int64), np.empty(capacity, np.int64), 0
-    for i in range(first, last):
+    for i in ego_ids:
         sign_row = signs[i]
         row = i * n_cav
         for u in range(i * per_anchor, (i + 1) * per_anchor):
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
-            for flip in range(2 if both_signs else 1):
-                sign = 1.0 - 2.0 * flip
-                qx, qy = sign * zx, sign * zy
-                k0 = max(int(math.floor((qx - radius - MARGIN - x0) / cell)), 0)
-                k1 = min(int(math.floor((qx + radius + MARGIN - x0) / cell)), nx - 1)
-                for k in range(k0, k1 + 1):
-                    gap = max(0.0, x0 + k * cell - qx, qx - (x0 + (k + 1) * cell))
-                    reach = radius - gap + MARGIN
-                    if reach < 0.0:
-                        continue
-                    c0 = max(int(math.floor((qy - reach - y0) / cell)), 0)
-                    c1 = min(int(math.floor((qy + reach - y0) / cell)), ny - 1)
-                    if c1 < c0:
-                        continue
-                    for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-                        b = g_anchor[v]
-                        if sign_row[b] != sign:
-                            continue
-                        l1 = _accepts(zx, zy, sign * gx[v], sign * gy[v], cos2_sigma1, radius)
-                        if l1 < 0.0:
-                            continue
-                        if l1 <= sigma2:
-                            count2[row + b] += 1
-                        if list_votes and l1 <= sigma3:
-                            if n_votes == capacity:
-                                capacity *= 2
-                                vote_anchor = _grown(vote_anchor, capacity)
-                                vote_member = _grown(vote_member, capacity)
-                            vote_anchor[n_votes] = row + b
-                            vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
-                            n_votes += 1
+            z2 = zx * zx + zy * zy
+            k0 = max(int(math.floor((zx - radius - MARGIN - x0) / cell)), 0)
+            k1 = min(int(math.floor((zx + radius + MARGIN - x0) / cell)), nx - 1)
+            for k in range(k0, k1 + 1):
+                gap = max(0.0, x0 + k * cell - zx, zx - (x0 + (k + 1) * cell))
+                reach = radius - gap + MARGIN
+                if reach < 0.0:
+                    continue
+                c0 = max(int(math.floor((zy - reach - y0) / cell)), 0)
+                c1 = min(int(math.floor((zy + reach - y0) / cell)), ny - 1)
+                if c1 < c0:
+                    continue
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+                    b, wx, wy = g_anchor[v], gx[v], gy[v]
+                    l1 = abs(zx - wx) + abs(zy - wy)
+                    dot = zx * wx + zy * wy
+                    squared_norms = z2 * (wx * wx + wy * wy)
+                    ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
+                          & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
+                    count2[row + b] += ok & (l1 <= sigma2)
+                    if list_votes & ok & (l1 <= sigma3):
+                        if n_votes == capacity:
+                            capacity *= 2
+                            vote_anchor = _grown(vote_anchor, capacity)
+                            vote_member = _grown(vote_member, capacity)
+                        vote_anchor[n_votes] = row + b
+                        vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
+                        n_votes += 1
     return vote_anchor[:n_votes], vote_member[:n_votes]
 
 
@@ -181,60 +207,119 @@ def _grown(values, capacity):
     return grown
 
 
-def _split(n_ego: int, n_vectors: int) -> list[tuple[int, int]]:
-    """Ranges of ego objects for the threads (one range for small problems)."""
-    if n_vectors < PARALLEL_FROM or n_ego < THREADS:
-        return [(0, n_ego)]
-    bounds = np.linspace(0, n_ego, 4 * THREADS + 1).astype(int)
-    return list(zip(bounds[:-1], bounds[1:]))
+def heading_groups(ego_heading: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:
+    """Ego objects in ``HEADING_GROUPS`` groups of neighbouring headings (one group when no sign
+    is -1): within a group most CAV objects have one sign against every member."""
+    if not np.any(signs < 0):
+        return [np.arange(len(ego_heading))]
+    order = np.argsort(ego_heading, kind="stable")
+    return [group for group in np.array_split(order, HEADING_GROUPS) if len(group)]
 
 
-def _run_join(ego: Context, n_ego: int, signs: np.ndarray, grid: VectorGrid, sigma1_rad: float, radius: float,
-              sigma2: float, sigma3: float, count2: np.ndarray, list_votes: bool) -> tuple[np.ndarray, np.ndarray]:
-    """``_join`` over all ego objects, split over threads; the voting rows in ego-object order."""
-    per_anchor = max(n_ego - 1, 0)
-    common = (ego.vectors, ego.member, per_anchor, signs, bool(np.any(signs < 0)), grid.x0, grid.y0, grid.cell,
-              grid.nx, grid.ny, grid.start, grid.x, grid.y, grid.anchor, grid.member, math.cos(sigma1_rad) ** 2,
-              radius, sigma2, sigma3, count2, list_votes)
-    ranges = _split(n_ego, len(ego.vectors))
-    if len(ranges) == 1:
-        return _join(0, n_ego, *common)
-    parts = [future.result() for future in [_POOL.submit(_join, first, last, *common) for first, last in ranges]]
-    return np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts])
+def group_signs(signs: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """(Nc,) the sign of each CAV object against every ego object of ``group``, 0 where it varies."""
+    rows = signs[group]
+    low, high = rows.min(axis=0), rows.max(axis=0)
+    return np.where(low == high, low, 0.0)
+
+
+def _parts(ids: np.ndarray, n_vectors: int) -> list[np.ndarray]:
+    """The ego objects split for the threads (one part for small problems)."""
+    if n_vectors < PARALLEL_FROM or len(ids) < THREADS:
+        return [ids]
+    return [part for part in np.array_split(ids, 2 * THREADS) if len(part)]
+
+
+def _run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
+              radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
+              list_votes: bool) -> tuple[np.ndarray, np.ndarray]:
+    """``_join`` group by group of ego headings, each group's ego objects split over threads."""
+    per_anchor = max(len(ego_heading) - 1, 0)
+    votes = []
+    for group in heading_groups(ego_heading, signs):
+        grid = build_grid(cav, group_signs(signs, group), radius)
+        common = (ego.vectors, ego.member, per_anchor, signs, grid.x0, grid.y0, grid.cell, grid.nx, grid.ny,
+                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
+                  radius, sigma2, sigma3, count2, list_votes)
+        parts = _parts(group, len(ego.vectors))
+        if len(parts) == 1:
+            votes.append(_join(parts[0], *common))
+        else:
+            votes += [future.result() for future in [_POOL.submit(_join, part, *common) for part in parts]]
+    if not votes:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
+
+
+@dataclass(frozen=True)
+class SortedBlocks:
+    """One agent's context vectors, each anchor's block of ``per_anchor`` rows sorted by the key
+    ``x + y``: two vectors within L1 distance r have keys within r, and the key spreads the
+    vectors along the streets of either axis, where x alone would pile them up."""
+
+    key: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    member: np.ndarray
+    per_anchor: int
 
 
 @numba.njit(cache=True, nogil=True)
-def _sort_blocks(vectors, member, per_anchor, bx, by, b_member):
-    """Each anchor's context vectors sorted by x, block by block."""
+def _sort_blocks(vectors, member, per_anchor, key, bx, by, b_member):
     for j in range(len(vectors) // max(per_anchor, 1)):
         lo = j * per_anchor
-        order = np.argsort(vectors[lo:lo + per_anchor, 0], kind="mergesort")
+        block_key = vectors[lo:lo + per_anchor, 0] + vectors[lo:lo + per_anchor, 1]
+        order = np.argsort(block_key, kind="mergesort")
         for k in range(per_anchor):
+            key[lo + k] = block_key[order[k]]
             bx[lo + k] = vectors[lo + order[k], 0]
             by[lo + k] = vectors[lo + order[k], 1]
             b_member[lo + k] = member[lo + order[k]]
 
 
+def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
+    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``)."""
+    n = len(context.vectors)
+    blocks = SortedBlocks(np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), max(n_objects - 1, 0))
+    _sort_blocks(context.vectors, context.member, blocks.per_anchor, blocks.key, blocks.x, blocks.y, blocks.member)
+    return blocks
+
+
 @numba.njit(cache=True, nogil=True)
-def members_into(i, j, sign, ego_vectors, ego_member, per_ego, bx, by, b_member, n_cav, cos2_sigma1, sigma2, out):
-    """The members of L_ij (eq. 8) into ``out``, the anchor pair last; returns how many. The CAV
-    blocks ``bx, by, b_member`` hold each anchor's vectors sorted by x (``_sort_blocks``)."""
-    per_cav = n_cav - 1
-    lo_j, hi_j = j * per_cav, (j + 1) * per_cav
+def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1,
+                 sigma2, out):
+    """The members of L_ij (eq. 8) into ``out``, the anchor pair last; returns how many.
+
+    Both anchors' blocks are sorted by ``x + y``, so the CAV vectors (turned by ``sign``) whose key
+    lies within sigma2 of an ego vector's form a window that only slides forward: O(N) per anchor
+    pair plus the vectors in the windows.
+    """
     size = 0
+    lo_j, hi_j = j * per_cav, (j + 1) * per_cav
+    window = 0
     for u in range(i * per_ego, (i + 1) * per_ego):
-        zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
-        qx = sign * zx
-        v = _first_at_least(bx, lo_j, hi_j, qx - sigma2 - MARGIN)
-        while v < hi_j and bx[v] <= qx + sigma2 + MARGIN:
-            if _accepts(zx, zy, sign * bx[v], sign * by[v], cos2_sigma1, sigma2) >= 0.0:
-                out[size] = ego_member[u] * n_cav + b_member[v]
+        zx, zy, zk = ex[u], ey[u], e_key[u]
+        while window < per_cav and _turned(c_key, lo_j, hi_j, window, sign) < zk - sigma2 - MARGIN:
+            window += 1
+        k = window
+        while k < per_cav:
+            if _turned(c_key, lo_j, hi_j, k, sign) > zk + sigma2 + MARGIN:
+                break
+            v = lo_j + k if sign > 0 else hi_j - 1 - k
+            if _accepts(zx, zy, sign * cx[v], sign * cy[v], cos2_sigma1, sigma2) >= 0.0:
+                out[size] = e_member[u] * n_cav + c_member[v]
                 size += 1
-            v += 1
+            k += 1
     if size:
         out[size] = i * n_cav + j
         size += 1
     return size
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _turned(key, lo, hi, k, sign):
+    """The k-th smallest key of the block lo..hi-1 after turning its vectors by ``sign``."""
+    return key[lo + k] if sign > 0 else -key[hi - 1 - k]
 
 
 @dataclass(frozen=True)
@@ -252,24 +337,25 @@ class CandidateSets:
         return self.count
 
     def members(self, anchor: int) -> np.ndarray:
-        """Pair ids of L_ij for ``anchor = i * Nc + j``, the anchor pair last."""
+        """Pair ids of L_ij for ``anchor = i * Nc + j``, in increasing order."""
         n_cav = self.signs.shape[1]
         i, j = divmod(int(anchor), n_cav)
         out = np.empty(int(self.count[anchor]) + 1, np.int64)
         size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out)
-        return out[:size]
+        return np.sort(out[:size])
 
 
-def count_candidates(ego: Context, cav: Context, n_ego: int, n_cav: int, signs: np.ndarray, sigma1_rad: float,
+def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
                      sigma2: float, sigma3: float | None) -> tuple[CandidateSets, np.ndarray, np.ndarray]:
     """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
     quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join."""
+    n_ego, n_cav = signs.shape
     count2 = np.zeros(n_ego * n_cav, np.int64)
     radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
-    vote_anchor, vote_member = _run_join(ego, n_ego, signs, build_grid(cav, radius), sigma1_rad, radius, sigma2,
+    vote_anchor, vote_member = _run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
                                          -1.0 if sigma3 is None else sigma3, count2, sigma3 is not None)
     count2 += count2 > 0
-    bx, by, b_member = np.empty(len(cav.vectors)), np.empty(len(cav.vectors)), np.empty(len(cav.vectors), np.int64)
-    _sort_blocks(cav.vectors, cav.member, max(n_cav - 1, 0), bx, by, b_member)
-    lookup = (ego.vectors, ego.member, max(n_ego - 1, 0), bx, by, b_member, n_cav, math.cos(sigma1_rad) ** 2, sigma2)
+    e, c = sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav)
+    lookup = (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
+              math.cos(sigma1_rad) ** 2, sigma2)
     return CandidateSets(count=count2, lookup=lookup, signs=signs), vote_anchor, vote_member

@@ -70,7 +70,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     timings["context"] = t - started
 
     candidates, vote_anchor, vote_member = count_candidates(
-        ego_context, cav_context, len(ego), len(cav), signs, params.sigma1_rad, params.sigma2,
+        ego_context, cav_context, ego_heading, signs, params.sigma1_rad, params.sigma2,
         params.sigma3 if params.consensus else None)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
