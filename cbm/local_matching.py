@@ -211,7 +211,7 @@ def heading_groups(ego_heading: np.ndarray, signs: np.ndarray) -> list[np.ndarra
     """Ego objects in ``HEADING_GROUPS`` groups of neighbouring headings (one group when no sign
     is -1): within a group most CAV objects have one sign against every member."""
     if not np.any(signs < 0):
-        return [np.arange(len(ego_heading))]
+        return [np.arange(len(ego_heading))] if len(ego_heading) else []
     order = np.argsort(ego_heading, kind="stable")
     return [group for group in np.array_split(order, HEADING_GROUPS) if len(group)]
 
