@@ -34,10 +34,12 @@ CELLS_PER_RADIUS = 2
 """Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
 MAX_CELLS = 1 << 22
 """Most grid cells (32 MB of row offsets); a wider scene gets wider cells."""
+CELLS_PER_ROW = 4
+"""Most grid cells per vector: a sparse scene gets wider cells rather than many empty ones."""
 MARGIN = 1e-6
 """Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
 each vector in the window is then tested exactly."""
-PARALLEL_FROM = 2_000
+PARALLEL_FROM = 20_000
 """Context vectors per agent from which the joins are split over threads."""
 THREADS = 2
 HEADING_GROUPS = 4
@@ -74,7 +76,8 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
         return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, anchor, member, check)
     x0, y0 = float(x.min()), float(y.min())
     width, height = float(x.max()) - x0, float(y.max()) - y0
-    cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / MAX_CELLS), 1e-9)
+    most_cells = min(MAX_CELLS, CELLS_PER_ROW * len(x) + 1)
+    cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
     nx, ny = int(width // cell) + 1, int(height // cell) + 1
     start = np.zeros(nx * ny + 1, np.int64)
     rows = (x, y, anchor, member, check)
@@ -223,32 +226,44 @@ def group_signs(signs: np.ndarray, group: np.ndarray) -> np.ndarray:
     return np.where(low == high, low, 0.0)
 
 
-def _parts(ids: np.ndarray, n_vectors: int) -> list[np.ndarray]:
-    """The ego objects split for the threads (one part for small problems)."""
-    if n_vectors < PARALLEL_FROM or len(ids) < THREADS:
-        return [ids]
-    return [part for part in np.array_split(ids, 2 * THREADS) if len(part)]
-
-
 def _run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
               radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
               list_votes: bool) -> tuple[np.ndarray, np.ndarray]:
-    """``_join`` group by group of ego headings, each group's ego objects split over threads."""
+    """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
+    at a time, then their ego objects are joined in parts; the votes come back in a fixed order."""
     per_anchor = max(len(ego_heading) - 1, 0)
+    groups = heading_groups(ego_heading, signs)
+    parallel = len(ego.vectors) >= PARALLEL_FROM
+    run = _POOL.submit if parallel else _at_once
     votes = []
-    for group in heading_groups(ego_heading, signs):
-        grid = build_grid(cav, group_signs(signs, group), radius)
-        common = (ego.vectors, ego.member, per_anchor, signs, grid.x0, grid.y0, grid.cell, grid.nx, grid.ny,
-                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
-                  radius, sigma2, sigma3, count2, list_votes)
-        parts = _parts(group, len(ego.vectors))
-        if len(parts) == 1:
-            votes.append(_join(parts[0], *common))
-        else:
-            votes += [future.result() for future in [_POOL.submit(_join, part, *common) for part in parts]]
+    for first in range(0, len(groups), THREADS if parallel else 1):
+        batch = groups[first:first + (THREADS if parallel else 1)]
+        grids = [grid.result() for grid in [run(build_grid, cav, group_signs(signs, g), radius) for g in batch]]
+        jobs = []
+        for group, grid in zip(batch, grids):
+            common = (ego.vectors, ego.member, per_anchor, signs, grid.x0, grid.y0, grid.cell, grid.nx, grid.ny,
+                      grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
+                      radius, sigma2, sigma3, count2, list_votes)
+            parts = np.array_split(group, THREADS) if parallel else [group]
+            jobs += [run(_join, part, *common) for part in parts if len(part)]
+        votes += [job.result() for job in jobs]
     if not votes:
         return np.zeros(0, np.int64), np.zeros(0, np.int64)
     return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
+
+
+class _Done:
+    """A result already computed, read like a future's."""
+
+    def __init__(self, value) -> None:
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def _at_once(function, *args) -> _Done:
+    return _Done(function(*args))
 
 
 @dataclass(frozen=True)

@@ -93,8 +93,8 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     gate, and among those the least summed cost (``gated_pairs``), sorted by ego index.
 
     A small problem is one dense block for ``linear_sum_assignment``; a large one splits into the
-    connected groups of candidates that share no box, each solved on its own, so the work follows
-    the groups' sizes rather than the product of the box counts.
+    connected groups of candidates that share no box, each solved on its own (a lone candidate is
+    its own answer), so the work follows the groups' sizes rather than the product of the box counts.
     """
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
@@ -103,9 +103,18 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     if n_rows * n_cols <= DENSE_BLOCK:
         pairs = _assign_block(candidates, cost)
     else:
-        pairs = np.concatenate([_assign_block(candidates[group], cost[group])
-                                for group in _connected_groups(candidates, len(ego), len(cav))])
+        alone = _alone(candidates, len(ego), len(cav))
+        rest = np.flatnonzero(~alone)
+        pairs = np.concatenate([candidates[alone]] + [_assign_block(candidates[rest[group]], cost[rest[group]])
+                                                      for group in _connected_groups(candidates[rest], len(ego),
+                                                                                     len(cav))])
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+def _alone(candidates: np.ndarray, n_ego: int, n_cav: int) -> np.ndarray:
+    """Candidates whose boxes are in no other candidate: each one a group that pairs as it is."""
+    rows, cols = np.bincount(candidates[:, 0], minlength=n_ego), np.bincount(candidates[:, 1], minlength=n_cav)
+    return (rows[candidates[:, 0]] == 1) & (cols[candidates[:, 1]] == 1)
 
 
 def _connected_groups(candidates: np.ndarray, n_ego: int, n_cav: int) -> list[np.ndarray]:
