@@ -195,19 +195,13 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                     if list_votes & ok & (l1 <= sigma3):
                         if n_votes == capacity:
                             capacity *= 2
-                            vote_anchor = _grown(vote_anchor, capacity)
-                            vote_member = _grown(vote_member, capacity)
+                            grown_anchor, grown_member = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
+                            grown_anchor[:n_votes], grown_member[:n_votes] = vote_anchor, vote_member
+                            vote_anchor, vote_member = grown_anchor, grown_member
                         vote_anchor[n_votes] = row + b
                         vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
                         n_votes += 1
     return vote_anchor[:n_votes], vote_member[:n_votes]
-
-
-@numba.njit(cache=True, nogil=True)
-def _grown(values, capacity):
-    grown = np.empty(capacity, values.dtype)
-    grown[:len(values)] = values
-    return grown
 
 
 def heading_groups(ego_heading: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:
@@ -279,25 +273,17 @@ class SortedBlocks:
     per_anchor: int
 
 
-@numba.njit(cache=True, nogil=True)
-def _sort_blocks(vectors, member, per_anchor, key, bx, by, b_member):
-    for j in range(len(vectors) // max(per_anchor, 1)):
-        lo = j * per_anchor
-        block_key = vectors[lo:lo + per_anchor, 0] + vectors[lo:lo + per_anchor, 1]
-        order = np.argsort(block_key, kind="mergesort")
-        for k in range(per_anchor):
-            key[lo + k] = block_key[order[k]]
-            bx[lo + k] = vectors[lo + order[k], 0]
-            by[lo + k] = vectors[lo + order[k], 1]
-            b_member[lo + k] = member[lo + order[k]]
-
-
 def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
     """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``)."""
-    n = len(context.vectors)
-    blocks = SortedBlocks(np.empty(n), np.empty(n), np.empty(n), np.empty(n, np.int64), max(n_objects - 1, 0))
-    _sort_blocks(context.vectors, context.member, blocks.per_anchor, blocks.key, blocks.x, blocks.y, blocks.member)
-    return blocks
+    per_anchor = max(n_objects - 1, 0)
+    shape = (len(context.vectors) // max(per_anchor, 1), per_anchor)
+    key = (context.vectors[:, 0] + context.vectors[:, 1]).reshape(shape)
+    order = np.argsort(key, axis=1, kind="stable")
+    def sort(values: np.ndarray) -> np.ndarray:
+        return np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
+
+    return SortedBlocks(sort(key), sort(context.vectors[:, 0]), sort(context.vectors[:, 1]), sort(context.member),
+                        per_anchor)
 
 
 @numba.njit(cache=True, nogil=True)
