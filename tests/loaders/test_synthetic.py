@@ -87,7 +87,7 @@ def test_map_and_names():
     assert len(loaders.open("synthetic:0")[0]) == 0
 
 
-@pytest.mark.parametrize("name", ["synthetic:1001", "synthetic:-3", "synthetic:ten", "synthetic:5:seed=x"])
+@pytest.mark.parametrize("name", ["synthetic:2001", "synthetic:-3", "synthetic:ten", "synthetic:5:seed=x"])
 def test_bad_synthetic_names(name):
     with pytest.raises(loaders.LoaderError, match="synthetic"):
         loaders.open(name)
