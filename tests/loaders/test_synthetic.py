@@ -95,6 +95,6 @@ def test_bad_synthetic_names(name):
 
 def test_bad_arguments():
     with pytest.raises(loaders.LoaderError, match="n_objects"):
-        synthetic.generate(n_objects=2000)
+        synthetic.generate(n_objects=2001)
     with pytest.raises(loaders.LoaderError, match="n_frames"):
         synthetic.generate(n_objects=5, n_frames=0)
