@@ -73,7 +73,7 @@ def voted_by_member(anchor: np.ndarray, member: np.ndarray, n_pairs: int) -> Pai
 RULE_CODES = {None: 0, "paper": 1, "released": 2}
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, alone):
     """alone[r - lo] for rows lo..hi-1: kept, and its ego and CAV objects occur once among the kept rows."""
     for row in range(lo, hi):
@@ -88,7 +88,7 @@ def _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, alone):
         cav_count[member[row] % n_cav] = 0
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _voted(member, lo, hi, is_voter, voted_start, voted_by, needed, voter_here, enough):
     """enough[r] for rows lo..hi-1: at least ``needed`` voters of the set hold the row's pair in their
     voting set. ``voted_by[voted_start[m]:voted_start[m + 1]]`` are the pairs whose voting set holds
@@ -109,7 +109,7 @@ def _voted(member, lo, hi, is_voter, voted_start, voted_by, needed, voter_here, 
         voter_here[member[row]] = False
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def final_set(member, size, voted_start, voted_by, rule, n_cav, scratch, ego_count, cav_count, voter_here, out):
     """L^(2) of the candidate set ``member[:size]`` into ``out``; returns its size.
 

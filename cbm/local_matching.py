@@ -44,7 +44,8 @@ PARALLEL_FROM = 20_000
 THREADS = 2
 HEADING_GROUPS = 4
 """Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
-_POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm-join")
+POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
+"""The threads the kernels (numba, without the interpreter lock) share."""
 
 
 @dataclass(frozen=True)
@@ -228,7 +229,7 @@ def _run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.nda
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
     parallel = len(ego.vectors) >= PARALLEL_FROM
-    run = _POOL.submit if parallel else _at_once
+    run = POOL.submit if parallel else _at_once
     votes = []
     for first in range(0, len(groups), THREADS if parallel else 1):
         batch = groups[first:first + (THREADS if parallel else 1)]

@@ -20,7 +20,10 @@ from scipy.spatial.distance import cdist
 
 from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
-from .local_matching import CandidateSets, members_into
+from .local_matching import POOL, THREADS, CandidateSets, members_into
+
+RIVAL_CHUNK = 128
+"""Anchors handed to the threads at a time in the runner-up search."""
 
 
 @dataclass(frozen=True)
@@ -35,7 +38,7 @@ class Selection:
     """Largest set among anchors that share no pair with the winner."""
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
                    candidates, scratch, ego_count, cav_count, voter_here, out):
     """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average."""
@@ -85,28 +88,45 @@ def _largest_sets(order, candidate_count, signs, lookup, voted_start, voted_by, 
     return visited[:n], sizes[:n], offsets[: n + 1], members[: offsets[n]], n
 
 
-@numba.njit(cache=True)
-def _strongest_rival(order, first, candidate_count, runner_up, in_winner, signs, lookup, voted_start,
-                     voted_by, rule, n_ego, n_cav, distance, limit):
-    """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on.
-
-    Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
-    survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen."""
-    width = max(1, int(candidate_count.max()))
+@numba.njit(cache=True, nogil=True)
+def _rival_sizes(anchors, width, in_winner, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                 limit):
+    """Filtered size of each anchor, 0 where the filtered set shares a pair with the winner."""
     scratch = np.zeros((3, width), np.bool_)
     ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
-    voter_here = np.zeros(len(candidate_count), np.bool_)
+    voter_here = np.zeros(len(in_winner), np.bool_)
     out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
-    for n in range(first, len(order)):
-        anchor = order[n]
-        if candidate_count[anchor] <= runner_up:
-            break
-        if rule != 1 and in_winner[anchor]:
-            continue
-        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+    sizes = np.zeros(len(anchors), np.int64)
+    for n in range(len(anchors)):
+        size = _filtered_size(anchors[n], signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
                               limit, candidates, scratch, ego_count, cav_count, voter_here, out)
-        if size > runner_up and not in_winner[out[:size]].any():
-            runner_up = size
+        if not in_winner[out[:size]].any():
+            sizes[n] = size
+    return sizes
+
+
+def strongest_rival(order: np.ndarray, first: int, candidate_count: np.ndarray, runner_up: int,
+                    in_winner: np.ndarray, common: tuple) -> int:
+    """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on
+    whose candidate set could beat ``runner_up``.
+
+    Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
+    survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
+    The anchors go in chunks whose halves run on two threads; a chunk's sizes are then read in
+    order, as one visit would (an anchor the visit would skip cannot beat the runner-up anyway)."""
+    width = max(1, int(candidate_count.max()))
+    rule = common[4]
+    for chunk in range(first, len(order), RIVAL_CHUNK):
+        anchors = order[chunk:chunk + RIVAL_CHUNK]
+        anchors = anchors[candidate_count[anchors] > runner_up]
+        if len(anchors) == 0:
+            break
+        if rule != RULE_CODES["paper"]:
+            anchors = anchors[~in_winner[anchors]]
+        parts = np.array_split(anchors, THREADS) if len(anchors) >= 2 * THREADS else [anchors]
+        jobs = [POOL.submit(_rival_sizes, part, width, in_winner, *common) for part in parts if len(part)]
+        sizes = np.concatenate([job.result() for job in jobs]) if jobs else np.zeros(0, np.int64)
+        runner_up = max(runner_up, int(sizes.max(initial=0)))
     return runner_up
 
 
@@ -177,7 +197,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     set_of_member = np.repeat(np.arange(len(sizes)), sizes)
     shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
     runner_up = int(sizes[~shares].max(initial=0))
-    runner_up = _strongest_rival(order, stop, candidate_count, runner_up, in_winner, *common)
+    runner_up = strongest_rival(order, stop, candidate_count, runner_up, in_winner, common)
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)
