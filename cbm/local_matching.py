@@ -357,7 +357,12 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
     vote_anchor, vote_member = _run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
                                          -1.0 if sigma3 is None else sigma3, count2, sigma3 is not None)
     count2 += count2 > 0
+    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2), signs)
+    return candidates, vote_anchor, vote_member
+
+
+def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad: float, sigma2: float) -> tuple:
+    """What ``members_into`` needs after (i, j, sign) to list any anchor's candidate set."""
     e, c = sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav)
-    lookup = (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
-              math.cos(sigma1_rad) ** 2, sigma2)
-    return CandidateSets(count=count2, lookup=lookup, signs=signs), vote_anchor, vote_member
+    return (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
+            math.cos(sigma1_rad) ** 2, sigma2)
