@@ -10,6 +10,7 @@ import time
 
 import loaders
 from app.server import ExplorerServer
+from app.session import kernels
 from app.session.explorer import Explorer
 from app.session.presets import PresetError, discover
 from app.session.settings import Settings
@@ -40,6 +41,7 @@ def parse(argv: list[str]) -> argparse.Namespace:
 
 def main(argv: list[str] | None = None) -> int:
     args = parse(sys.argv[1:] if argv is None else argv)
+    kernels.prepare()
     try:
         sequence = loaders.open(args.dataset)
     except loaders.LoaderError as error:

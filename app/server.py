@@ -5,22 +5,31 @@ import threading
 
 import viser
 
+from .session import kernels
 from .session.explorer import Explorer
 from .session.settings import Settings
 from .tab import ClientSession
 
 
 class ExplorerServer:
-    """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``."""
+    """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``.
+
+    CBM's compiled kernels are made ready in the background from the start (``kernels.prepare``);
+    a tab's first recompute waits for them."""
 
     def __init__(self, explorer: Explorer, settings: Settings, host: str = "127.0.0.1", port: int = 8080,
                  verbose: bool = False) -> None:
         self.explorer, self.settings = explorer, settings
+        self.kernels = kernels.prepare()
         self.sessions: dict[int, ClientSession] = {}
         self._lock = threading.Lock()
         self.server = viser.ViserServer(host=host, port=port, label="CBM Explorer", verbose=verbose)
         self.server.gui.configure_theme(show_share_button=False, control_width="large", show_logo=False)
         self.server.scene.set_up_direction("+z")
+        # Plain lighting: no environment map (it washes the boxes' tops out, and costs most of a frame in
+        # software WebGL) and no shadows (nothing casts one).
+        self.server.scene.configure_environment_map(None)
+        self.server.scene.configure_default_lights(enabled=True, cast_shadow=False)
         self.server.on_client_connect(self._connected)
         self.server.on_client_disconnect(self._disconnected)
 
@@ -29,7 +38,7 @@ class ExplorerServer:
         return f"http://{self.server.get_host()}:{self.server.get_port()}"
 
     def _connected(self, client: viser.ClientHandle) -> None:
-        session = ClientSession(client, self.explorer, self.settings)
+        session = ClientSession(client, self.explorer, self.settings, self.kernels)
         with self._lock:
             self.sessions[client.client_id] = session
 

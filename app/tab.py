@@ -18,7 +18,9 @@ from .scene.view import SceneView
 from .session.coalesce import Coalescer
 from .session.explorer import CavChoice, Explorer, Outcome
 from .session.history import FrameHistory
+from .session.kernels import Kernels
 from .session.presets import PresetError, discover, save_preset
+from .session.progress import announced
 from .session.settings import AUTO_CAV, Settings
 
 
@@ -26,10 +28,11 @@ class ClientSession:
     """Everything one tab has; nothing in it is shared with other tabs but the ``Explorer``.
 
     ``settings`` is one immutable value, replaced as a whole by ``apply``; a worker recomputes the
-    latest value (``Coalescer``) and shows it."""
+    latest value (``Coalescer``) and shows it, once CBM's ``kernels`` are ready."""
 
-    def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings) -> None:
-        self.client, self.explorer = client, explorer
+    def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
+        self.client, self.explorer, self.kernels = client, explorer, kernels
+        self._note = ""
         self._lock = threading.Lock()
         self._settings = settings
         self.last: Outcome | None = None
@@ -125,27 +128,40 @@ class ClientSession:
         self.worker.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
-        outcome = self.explorer.compute(settings)
-        return outcome, draw(outcome, self.explorer.map_segments)
+        """The outcome of ``settings`` and its drawing, once CBM's kernels are ready; the status
+        line says what it waits for when that takes a moment."""
+        say = self.controls.metrics.say
+        if not self.kernels.ready:
+            with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
+                           after=0.0, every=1.0, since=self.kernels.started):
+                self.kernels.wait()
+            self._note = self.kernels.note()
+        with announced(lambda s: say(f"Computing… {s:.1f} s")):
+            outcome = self.explorer.compute(settings)
+            return outcome, draw(outcome, self.explorer.map_segments)
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
+        """Show a result: the scene's changed nodes and the panels, in one batch sent at once."""
         outcome, picture = computed
         self.history.add(outcome)
         first = not self.view.meshes
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
-        self.view.show(picture)
-        if relaid:
-            self.view.reset_camera(picture.centre_y)
+        with self.client.atomic():
+            self.view.show(picture)
+            if relaid:
+                self.view.reset_camera(picture.centre_y)
+            self.controls.metrics.show(picture.metrics_markdown, self.history.arrays(), self._note)
+            self._refresh_cav_choices(outcome)
+            self.explore.refresh(outcome, picture)
+        self.client.flush()
+        self._note = ""
         if first:
             for name in ("ego_boxes", "cav_boxes"):
                 self.view.meshes[name].on_click(self._picked)
         self.last, self.last_drawing = outcome, picture
-        self.controls.metrics.text.content = picture.metrics_markdown
-        self.controls.metrics.plot.data = self.history.arrays()
-        self._refresh_cav_choices(outcome)
-        self.explore.refresh(outcome, picture)
 
     def _failed(self, error: BaseException) -> None:
+        self.controls.metrics.say("")
         self.notify("Recompute failed", f"{type(error).__name__}: {error}", "red")
 
     def _refresh_cav_choices(self, outcome: Outcome) -> None:

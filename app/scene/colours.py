@@ -2,6 +2,8 @@
 
 EGO_BOXES = (52, 120, 246)
 CAV_BOXES = (255, 140, 0)
+CAV_BEFORE = (255, 185, 110)
+"""Outlines of the CAV's boxes where the wrong pose puts them: a faint CAV orange."""
 EGO_VEHICLE = (16, 40, 150)
 CAV_VEHICLE = (190, 70, 0)
 RIGHT = (30, 170, 60)

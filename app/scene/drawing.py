@@ -18,6 +18,8 @@ from .text import metrics_markdown
 
 LINE_HEIGHT = 1.7
 """Metres above the ground at which match lines run (above most boxes)."""
+MOST_PANELS = 2
+"""The most copies of the scene a layout draws (side by side): each copy has its own map nodes."""
 
 
 @dataclass(frozen=True)
@@ -34,6 +36,9 @@ class Lines:
     """(N, 2, 3) float32."""
     color: tuple[int, int, int]
     thickness: float = 2.0
+    pose: np.ndarray | None = None
+    """(3, 3) SE(2) placing the segments, given in a frame of their own, in the scene (the map: its
+    arrays stay the same from frame to frame, only this pose moves); None: in the scene's frame."""
 
 
 @dataclass(frozen=True)
@@ -62,7 +67,7 @@ class _Parts:
     right: list[np.ndarray] = field(default_factory=list)
     wrong: list[np.ndarray] = field(default_factory=list)
     missed: list[np.ndarray] = field(default_factory=list)
-    maps: dict[str, list[np.ndarray]] = field(default_factory=dict)
+    map_poses: list[np.ndarray] = field(default_factory=list)
 
 
 def placements(outcome: Outcome) -> dict[str, np.ndarray]:
@@ -83,21 +88,22 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
     """The scene of ``outcome`` under its view options."""
     layout = LAYOUTS[outcome.settings.view.layout]
     panels = layout.panels(outcome)
-    parts = _Parts(maps={kind: [] for kind in map_segments})
+    parts = _Parts()
     for panel in panels:
-        _add_panel(parts, outcome, panel, layout.before_ghosts, map_segments)
+        _add_panel(parts, outcome, panel, layout.before_ghosts)
     ego, cav = np.concatenate(parts.ego), np.concatenate(parts.cav)
     trial, copies = outcome.trial, len(panels)
     objects = {"ego": (ego, np.tile(np.arange(len(trial.ego_boxes)), copies)),
                "cav": (cav, np.tile(np.arange(len(trial.cav_boxes)), copies))}
-    return Drawing(meshes=_meshes(parts, ego, cav), lines=_lines(parts), labels=_labels(parts, panels),
+    lines = {**_lines(parts), **_map_lines(map_segments, parts.map_poses)}
+    return Drawing(meshes=_meshes(parts, ego, cav), lines=lines, labels=_labels(parts, panels),
                    metrics_markdown=metrics_markdown(outcome), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])))
 
 
-def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool,
-               map_segments: dict[str, np.ndarray]) -> None:
-    """One copy of the scene: boxes, vehicles, ghosts, match lines and map, shifted by its offset."""
+def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:
+    """One copy of the scene: boxes, vehicles, ghosts, match lines and where the map goes, shifted
+    by its offset."""
     view, trial, offset = outcome.settings.view, outcome.trial, panel.offset
     where = placements(outcome)
     shift = se2.make(offset[0], offset[1], 0.0)
@@ -115,17 +121,14 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
     if view.lines:
         right, wrong, missed = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2])
         parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
-    to_ego = shift @ se2.inverse(trial.ego_pose)
-    for kind, segments in map_segments.items():
-        parts.maps[kind].append(se2.apply_points(to_ego, segments.reshape(-1, 2)).reshape(-1, 2, 2))
+    parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray) -> dict[str, Mesh]:
-    before = _slim(np.concatenate(parts.before)) if parts.before else np.zeros((0, 7))
+    """Boxes as top-down tiles (``geometry.footprint_mesh``), vehicles as small bodies."""
     return {
-        "ego_boxes": Mesh(*geometry.box_mesh(ego), colours.EGO_BOXES),
-        "cav_boxes": Mesh(*geometry.box_mesh(_slim(cav)), colours.CAV_BOXES),
-        "cav_before": Mesh(*geometry.box_mesh(before), colours.CAV_BOXES, opacity=0.3),
+        "ego_boxes": Mesh(*geometry.footprint_mesh(ego), colours.EGO_BOXES),
+        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav)), colours.CAV_BOXES),
         "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), colours.EGO_VEHICLE),
         "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), colours.CAV_VEHICLE),
         "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), colours.CAV_VEHICLE, opacity=0.3),
@@ -133,14 +136,32 @@ def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray) -> dict[str, Mesh]:
 
 
 def _lines(parts: _Parts) -> dict[str, Lines]:
+    """Match lines; outlines of the CAV's boxes where ``init`` put them and of the ground truth."""
     ghosts = geometry.outline_segments(np.concatenate(parts.ghosts)) if parts.ghosts else no_lines()
-    maps = {f"map_{kind}": Lines(np.concatenate([_lift(p) for p in pieces]),
-                                 colours.MAP.get(kind, colours.MAP_OTHER), 1.0)
-            for kind, pieces in parts.maps.items()}
+    before = geometry.outline_segments(np.concatenate(parts.before), 0.1) if parts.before else no_lines()
     return {"right": Lines(_joined(parts.right), colours.RIGHT, 3.0),
             "wrong": Lines(_joined(parts.wrong), colours.WRONG, 3.0),
             "missed": Lines(_joined(parts.missed), colours.MISSED, 2.0),
-            "ghosts": Lines(ghosts, colours.GHOST, 1.5), **maps}
+            "cav_before": Lines(before, colours.CAV_BEFORE, 1.5),
+            "ghosts": Lines(ghosts, colours.GHOST, 1.5)}
+
+
+def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray]) -> dict[str, Lines]:
+    """A node per kind of map line and copy of the scene (``map_<kind>``, ``map_<kind>_2``): the
+    world's segments about a fixed point of the map, placed by the copy's world->scene ``pose``;
+    empty for a copy the layout does not draw."""
+    if not map_segments:
+        return {}
+    origin = next(iter(map_segments.values()))[0, 0]
+    nodes = {}
+    for kind, segments in map_segments.items():
+        local, colour = _lift(segments - origin), colours.MAP.get(kind, colours.MAP_OTHER)
+        for k in range(MOST_PANELS):
+            name = f"map_{kind}" if k == 0 else f"map_{kind}_{k + 1}"
+            shown = k < len(poses)
+            nodes[name] = Lines(local if shown else no_lines(), colour, 1.0,
+                                pose=poses[k] @ se2.make(origin[0], origin[1], 0.0) if shown else None)
+    return nodes
 
 
 def _labels(parts: _Parts, panels: list[Panel]) -> dict[str, tuple[str, tuple[float, float, float]]]:

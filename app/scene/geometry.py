@@ -15,6 +15,7 @@ _BOX_FACES = np.array([
     [0, 4, 5], [0, 5, 1], [1, 5, 6], [1, 6, 2],
     [2, 6, 7], [2, 7, 3], [3, 7, 4], [3, 4, 0],
 ], dtype=np.uint32)
+_TOP_FACES = np.array([[0, 1, 2], [0, 2, 3]], dtype=np.uint32)
 _NOSE = np.array([[0.5, 0.0], [0.15, 0.42], [0.15, -0.42]])
 _NOSE_FACES = np.array([[0, 1, 2], [3, 5, 4]], dtype=np.uint32)
 
@@ -39,6 +40,19 @@ def box_mesh(boxes: np.ndarray, lift: float = 0.0) -> tuple[np.ndarray, np.ndarr
     top = np.concatenate([corners, (lift + boxes[:, 5])[:, None, None].repeat(4, axis=1)], axis=2)
     vertices = np.concatenate([bottom, top], axis=1).reshape(-1, 3)
     faces = (_BOX_FACES[None] + 8 * np.arange(n, dtype=np.uint32)[:, None, None]).reshape(-1, 3)
+    return vertices.astype(np.float32), faces
+
+
+def footprint_mesh(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (4N, 3) and faces (2N, 3) of each box's top face, at its height (a top-down tile,
+    facing up). A sixth of ``box_mesh``'s triangles and one layer of pixels per box: the scene
+    stays cheap to render in software WebGL. Empty input gives empty arrays."""
+    n = len(boxes)
+    if n == 0:
+        return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32)
+    heights = np.repeat(boxes[:, 5, None, None], 4, axis=1)
+    vertices = np.concatenate([footprints(boxes), heights], axis=2).reshape(-1, 3)
+    faces = (_TOP_FACES[None] + 4 * np.arange(n, dtype=np.uint32)[:, None, None]).reshape(-1, 3)
     return vertices.astype(np.float32), faces
 
 

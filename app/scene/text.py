@@ -25,6 +25,14 @@ def own_pairs(result: MatchResult) -> str:
     return f"; CBM's own {len(own)}"
 
 
+def thresholds(outcome: Outcome) -> list[str]:
+    """The row naming CBM's thresholds behind the numbers shown (none for other methods)."""
+    if METHODS[outcome.settings.method].params_key != "cbm":
+        return []
+    p = outcome.settings.cbm
+    return [f"| thresholds | σ1 {p.sigma1:.1f}° · σ2 {p.sigma2:.2f} m · σ3 {p.sigma3:.2f} m |"]
+
+
 def metrics_markdown(outcome: Outcome) -> str:
     """The metrics panel's text for one frame."""
     m, result, trial, limit = outcome.metrics, outcome.result, outcome.trial, outcome.limit
@@ -39,6 +47,7 @@ def metrics_markdown(outcome: Outcome) -> str:
         "|---|---|",
         f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
         f"| co-visible | {m.n_true} |",
+        *thresholds(outcome),
         f"| matches ({method}) | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",
         f"| precision / recall | {number(m.precision)} / {number(m.recall)} |",
         f"| AD | {number(m.ad, ' m')} |",

@@ -1,9 +1,16 @@
 """One tab's 3D scene: a fixed set of nodes (one per group of boxes or lines) whose arrays are
-replaced on each redraw, all in one atomic message batch."""
+replaced on each redraw, all in one atomic message batch. A node whose content is what it last
+sent is left alone, so a redraw sends (and the browser rebuilds) only what changed."""
 from __future__ import annotations
+
+import hashlib
+from collections import Counter
+from collections.abc import Hashable
 
 import numpy as np
 import viser
+
+from cbm import se2
 
 from .drawing import Drawing, Lines, Mesh
 
@@ -16,6 +23,22 @@ PANEL_SHIFT = 0.15
 """Sideways shift of the view per metre of height, so the scene clears the control panel on the right."""
 
 
+def fingerprint(arrays: tuple[np.ndarray, ...], *style: Hashable) -> Hashable:
+    """What a node shows, in a few bytes: the arrays' shapes and a digest of their contents (the
+    arrays of a scene are at most a few hundred kB), and its style (colour, opacity, thickness)."""
+    digest = hashlib.blake2b(digest_size=16)
+    for array in arrays:
+        digest.update(np.ascontiguousarray(array).view(np.uint8).data)
+    return tuple(a.shape for a in arrays), digest.digest(), style
+
+
+def _place(handle: viser.SceneNodeHandle, pose: np.ndarray) -> None:
+    """Move a node to the SE(2) ``pose`` (viser sends nothing when it is where it was)."""
+    yaw = se2.yaw_of(pose)
+    handle.position = (*se2.translation_of(pose), 0.0)
+    handle.wxyz = (np.cos(yaw / 2), 0.0, 0.0, np.sin(yaw / 2))
+
+
 class SceneView:
     """The nodes of one client's scene, created once and updated in place."""
 
@@ -24,6 +47,10 @@ class SceneView:
         self.meshes: dict[str, viser.MeshHandle] = {}
         self.lines: dict[str, viser.LineSegmentsHandle] = {}
         self.labels: dict[str, viser.LabelHandle] = {}
+        self.shown: dict[str, Hashable] = {}
+        """Fingerprint of what each node shows."""
+        self.updates: Counter[str] = Counter()
+        """How often each node was created or changed (a redraw that leaves it alone does not count)."""
 
     @property
     def node_names(self) -> set[str]:
@@ -40,12 +67,16 @@ class SceneView:
         self.client.camera.look_at = (TOP_DOWN["look_at"][0], y, 0.0)
 
     def show(self, drawing: Drawing) -> None:
-        """Replace the scene's arrays with ``drawing``'s."""
+        """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""
         with self.client.atomic():
             for name, mesh in drawing.meshes.items():
-                self._mesh(name, mesh)
+                if self._changed(name, fingerprint((mesh.vertices, mesh.faces), mesh.color, mesh.opacity)):
+                    self._mesh(name, mesh)
             for name, lines in drawing.lines.items():
-                self._lines(name, lines)
+                if self._changed(name, fingerprint((lines.segments,), lines.color, lines.thickness)):
+                    self._lines(name, lines)
+                if lines.pose is not None:
+                    _place(self.lines[name], lines.pose)
             for name in set(self.labels) - set(drawing.labels):
                 self.labels[name].visible = False
             for name, (text, position) in drawing.labels.items():
@@ -62,6 +93,14 @@ class SceneView:
     def hide_label(self, name: str) -> None:
         if name in self.labels:
             self.labels[name].visible = False
+
+    def _changed(self, name: str, shown: Hashable) -> bool:
+        """Whether node ``name`` is to show something else than it does; remembers it."""
+        if self.shown.get(name) == shown:
+            return False
+        self.shown[name] = shown
+        self.updates[name] += 1
+        return True
 
     def _mesh(self, name: str, mesh: Mesh) -> None:
         empty = len(mesh.faces) == 0

@@ -27,10 +27,11 @@ def test_default_frame_is_repaired_and_drawn(explorer: Explorer) -> None:
     assert outcome.ego_id == "ego" and outcome.cav_id == sequence_cav(explorer.sequence)
     assert m.n_ego > 10 and m.n_cav > 10 and m.n_true > 5
     assert m.precision == 1.0 and m.rte < 0.5 and m.rre < 1.0
-    assert {"ego_boxes", "cav_boxes", "ego_vehicle", "cav_vehicle", "cav_before"} <= set(picture.meshes)
-    assert {"right", "wrong", "missed", "ghosts", "map_lane_boundary"} <= set(picture.lines)
-    assert len(picture.meshes["ego_boxes"].faces) == 12 * m.n_ego
-    assert len(picture.meshes["cav_boxes"].faces) == 12 * m.n_cav
+    assert {"ego_boxes", "cav_boxes", "ego_vehicle", "cav_vehicle"} <= set(picture.meshes)
+    assert {"right", "wrong", "missed", "ghosts", "cav_before", "map_lane_boundary"} <= set(picture.lines)
+    assert len(picture.meshes["ego_boxes"].faces) == 2 * m.n_ego, "a box is its top face: two triangles"
+    assert len(picture.meshes["cav_boxes"].faces) == 2 * m.n_cav
+    assert len(picture.lines["cav_before"].segments) == 4 * m.n_cav, "the CAV's boxes at init: outlines"
     assert len(picture.lines["right"].segments) == m.n_correct
     assert len(picture.lines["wrong"].segments) == m.n_matched - m.n_correct
     assert picture.meshes["ego_boxes"].color != picture.meshes["cav_boxes"].color

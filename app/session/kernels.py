@@ -1,0 +1,98 @@
+"""CBM's compiled kernels, made ready once per server process, off the request path.
+
+numba compiles CBM's kernels on their first call, which takes seconds on a fresh install, and keeps
+them in its on-disk cache. At server start ``prepare`` runs ``python -m cbm.warmup`` in a
+subprocess (the compiler is mostly Python: in a thread it would hold this process's interpreter
+lock and stall the server) while the dataset loads, then loads the cached kernels into this
+process with one small match. Recomputes wait for ``ready``; the time spent compiling is reported
+on its own, never as CBM's time.
+"""
+from __future__ import annotations
+
+import atexit
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import cbm
+from cbm.warmup import VARIANTS, warm_up
+
+COMPILED_AFTER = 1.0
+"""Seconds of warm-up above which the kernels were compiled (a warm cache loads in a fraction of one)."""
+TIMEOUT = 600.0
+"""Seconds the compiling subprocess may take before it is given up (this process then compiles)."""
+
+
+class Kernels:
+    """CBM's kernels in this process: compiled (or found in the cache) by a subprocess, then loaded."""
+
+    def __init__(self) -> None:
+        self.started = time.monotonic()
+        self.compile_seconds: float | None = None
+        """Seconds the subprocess took to fill the cache (None until it finished or if it failed)."""
+        self.load_seconds: float | None = None
+        """Seconds this process took to load them (to compile them too if the subprocess failed)."""
+        self._ready = threading.Event()
+        self._process: subprocess.Popen | None = None
+        atexit.register(self.stop)
+        threading.Thread(target=self._prepare, name="cbm-kernels", daemon=True).start()
+
+    @property
+    def ready(self) -> bool:
+        return self._ready.is_set()
+
+    def wait(self, timeout: float | None = None) -> bool:
+        """Block until the kernels are loaded; False on timeout."""
+        return self._ready.wait(timeout)
+
+    def note(self) -> str:
+        """What a first result says about the start-up compile ("" when nothing was compiled)."""
+        spent = (self.compile_seconds or 0.0) + (self.load_seconds or 0.0)
+        if not self.ready or spent < COMPILED_AFTER:
+            return ""
+        return f"CBM's kernels compiled in {spent:.1f} s at start (cached from now on); not part of CBM's time."
+
+    def stop(self) -> None:
+        """End the compiling subprocess, if it still runs (at exit: it is no use to anyone then)."""
+        process = self._process
+        if process is not None and process.poll() is None:
+            process.kill()
+
+    def _compile_in_subprocess(self) -> float | None:
+        """Run ``python -m cbm.warmup``; the seconds it reports, None when it failed."""
+        root = Path(cbm.__file__).resolve().parents[1]
+        try:
+            self._process = subprocess.Popen([sys.executable, "-m", "cbm.warmup"], cwd=root, text=True,
+                                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
+            out, _ = self._process.communicate(timeout=TIMEOUT)
+            return float(out.strip().splitlines()[-1].split()[1]) if self._process.returncode == 0 else None
+        except (OSError, subprocess.SubprocessError, ValueError, IndexError):
+            self.stop()
+            return None
+
+    def _prepare(self) -> None:
+        """Fill the cache in a subprocess, then load the kernels here (or compile them here, when
+        the subprocess failed); ready in any case, so that a broken kernel fails the recompute
+        that calls it, with its own error, rather than making it wait forever."""
+        try:
+            self.compile_seconds = self._compile_in_subprocess()
+            started = time.perf_counter()
+            warm_up(VARIANTS[:1])
+            self.load_seconds = time.perf_counter() - started
+        finally:
+            self._ready.set()
+
+
+_shared: Kernels | None = None
+_lock = threading.Lock()
+
+
+def prepare() -> Kernels:
+    """The process's ``Kernels``, started on the first call."""
+    global _shared
+    with _lock:
+        if _shared is None:
+            _shared = Kernels()
+        return _shared

@@ -1,0 +1,82 @@
+"""CBM's compiled kernels at server start: a subprocess fills numba's on-disk cache while the server
+starts, the first recompute waits for them and says so, and the first frame's CBM time does not
+include the compile. Also the status line's progress reports."""
+from __future__ import annotations
+
+import re
+import socket
+import subprocess
+import sys
+import threading
+import time
+from pathlib import Path
+
+import pytest
+
+from app.session.kernels import Kernels
+from app.session.progress import announced
+from cbm.warmup import VARIANTS, warm_up
+from support import browser as ui
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def test_warm_up_calls_match_once_per_variant() -> None:
+    seen = []
+    seconds = warm_up(report=lambda params, spent: seen.append(params))
+    assert seen == list(VARIANTS) and seconds > 0
+
+
+def test_the_kernels_get_ready_when_the_subprocess_cannot_run(monkeypatch: pytest.MonkeyPatch,
+                                                              tmp_path: Path) -> None:
+    monkeypatch.setattr(sys, "executable", str(tmp_path / "no-such-python"))
+    kernels = Kernels()
+    assert kernels.wait(timeout=300)
+    assert kernels.compile_seconds is None and kernels.load_seconds is not None
+
+
+def test_a_slow_block_is_announced_until_it_ends_and_a_quick_one_not_at_all() -> None:
+    said: list[float] = []
+    with announced(said.append, after=0.05, every=0.05):
+        time.sleep(0.4)
+    count = len(said)
+    time.sleep(0.2)
+    assert count >= 3 and len(said) == count and said == sorted(said)
+    quick: list[float] = []
+    with announced(quick.append, after=0.5):
+        pass
+    assert quick == []
+
+
+def _free_port() -> int:
+    with socket.socket() as probe:
+        probe.bind(("127.0.0.1", 0))
+        return probe.getsockname()[1]
+
+
+@pytest.mark.browser
+@ui.requires_chromium
+def test_a_fresh_start_compiles_off_the_clock(browser, tmp_path: Path) -> None:
+    """With an empty numba cache the page says it is preparing the kernels, then shows the first
+    frame with a CBM time of milliseconds and the compile time apart."""
+    port = _free_port()
+    env = {"CBM_EXPLORER_PRESETS": str(tmp_path), "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PATH": "/usr/bin:/bin"}
+    process = subprocess.Popen([sys.executable, "serve.py", "--port", str(port), "--dataset", "synthetic:60"],
+                               cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True, env=env)
+    watchdog = threading.Timer(300, process.kill)
+    watchdog.start()
+    try:
+        assert any(line.startswith("CBM Explorer on") for line in process.stdout)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(f"http://127.0.0.1:{port}")
+        page.get_by_text("Preparing CBM's compiled kernels (first start only)").wait_for(timeout=60_000)
+        page.get_by_text("precision / recall").first.wait_for(timeout=240_000)
+        note = page.get_by_text(re.compile("CBM's kernels compiled in")).inner_text()
+        compiled = float(re.search(r"compiled in ([\d.]+) s", note).group(1))
+        shown = re.search(r"CBM time\s+([\d.]+) ms", ui.metrics(page))
+        assert compiled > 1.0 and float(shown.group(1)) < 1000.0, (note, shown.group(0))
+        page.close()
+    finally:
+        watchdog.cancel()
+        process.terminate()
+        process.wait(timeout=10)
