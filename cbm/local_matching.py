@@ -155,6 +155,27 @@ def _first_at_least(values, lo, hi, value):
     return lo
 
 
+@numba.njit(cache=True, nogil=True, inline="always")
+def _rows_in_column(zx, zy, k, radius, x0, y0, cell, ny, start):
+    """Rows of column k in the cells the L1 diamond of ``radius`` around z touches (lo >= hi: none)."""
+    gap = max(0.0, x0 + k * cell - zx, zx - (x0 + (k + 1) * cell))
+    reach = radius - gap + MARGIN
+    if reach < 0.0:
+        return 0, 0
+    c0 = max(int(math.floor((zy - reach - y0) / cell)), 0)
+    c1 = min(int(math.floor((zy + reach - y0) / cell)), ny - 1)
+    if c1 < c0:
+        return 0, 0
+    return start[k * ny + c0], start[k * ny + c1 + 1]
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _columns(zx, radius, x0, cell, nx):
+    """First and last column within ``radius`` of z along x."""
+    return (max(int(math.floor((zx - radius - MARGIN - x0) / cell)), 0),
+            min(int(math.floor((zx + radius + MARGIN - x0) / cell)), nx - 1))
+
+
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx, ny, start, gx, gy, g_anchor,
           g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
@@ -162,8 +183,9 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; with
     ``list_votes``, returns those within sigma3 as (anchor, member) rows, in the order found.
-    A grid row with ``check`` s counts only where ``signs[i, j] == s``. The tests are those of
-    ``_accepts``, combined without branches: the data decide no jump in the inner loop.
+    A grid row with ``check`` s counts only where ``signs[i, j] == s``. The counting loop combines
+    the tests of ``_accepts`` without branches (the data decide no jump in it); the votes are listed
+    in a second, narrower pass over the cells within sigma3.
     """
     n_cav = signs.shape[1]
     capacity = 1024 if list_votes else 0
@@ -174,18 +196,10 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
         for u in range(i * per_anchor, (i + 1) * per_anchor):
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             z2 = zx * zx + zy * zy
-            k0 = max(int(math.floor((zx - radius - MARGIN - x0) / cell)), 0)
-            k1 = min(int(math.floor((zx + radius + MARGIN - x0) / cell)), nx - 1)
+            k0, k1 = _columns(zx, radius, x0, cell, nx)
             for k in range(k0, k1 + 1):
-                gap = max(0.0, x0 + k * cell - zx, zx - (x0 + (k + 1) * cell))
-                reach = radius - gap + MARGIN
-                if reach < 0.0:
-                    continue
-                c0 = max(int(math.floor((zy - reach - y0) / cell)), 0)
-                c1 = min(int(math.floor((zy + reach - y0) / cell)), ny - 1)
-                if c1 < c0:
-                    continue
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+                lo, hi = _rows_in_column(zx, zy, k, radius, x0, y0, cell, ny, start)
+                for v in range(lo, hi):
                     b, wx, wy = g_anchor[v], gx[v], gy[v]
                     l1 = abs(zx - wx) + abs(zy - wy)
                     dot = zx * wx + zy * wy
@@ -193,15 +207,25 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                     ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
                           & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
                     count2[row + b] += ok & (l1 <= sigma2)
-                    if list_votes & ok & (l1 <= sigma3):
-                        if n_votes == capacity:
-                            capacity *= 2
-                            grown_anchor, grown_member = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
-                            grown_anchor[:n_votes], grown_member[:n_votes] = vote_anchor, vote_member
-                            vote_anchor, vote_member = grown_anchor, grown_member
-                        vote_anchor[n_votes] = row + b
-                        vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
-                        n_votes += 1
+            if not list_votes:
+                continue
+            k0, k1 = _columns(zx, sigma3, x0, cell, nx)
+            for k in range(k0, k1 + 1):
+                lo, hi = _rows_in_column(zx, zy, k, sigma3, x0, y0, cell, ny, start)
+                for v in range(lo, hi):
+                    b = g_anchor[v]
+                    if g_check[v] != 0 and sign_row[b] != g_check[v]:
+                        continue
+                    if _accepts(zx, zy, gx[v], gy[v], cos2_sigma1, sigma3) < 0.0:
+                        continue
+                    if n_votes == capacity:
+                        capacity *= 2
+                        grown_anchor, grown_member = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
+                        grown_anchor[:n_votes], grown_member[:n_votes] = vote_anchor, vote_member
+                        vote_anchor, vote_member = grown_anchor, grown_member
+                    vote_anchor[n_votes] = row + b
+                    vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
+                    n_votes += 1
     return vote_anchor[:n_votes], vote_member[:n_votes]
 
 
