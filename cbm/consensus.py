@@ -119,15 +119,18 @@ def final_set(member, size, voted_start, voted_by, rule, n_cav, scratch, ego_cou
     """
     lo, hi = 0, size
     everyone, lone, kept = scratch[0], scratch[1], scratch[2]
-    everyone[: hi - lo] = True
+    for row in range(size):
+        everyone[row] = True
     if rule == 1:
         _voted(member, lo, hi, everyone, voted_start, voted_by, 2, voter_here, kept)
     elif rule == 2:
         _alone(member, lo, hi, everyone, n_cav, ego_count, cav_count, lone)
         _voted(member, lo, hi, lone, voted_start, voted_by, 1, voter_here, kept)
-        kept[: hi - lo] |= lone[: hi - lo]
+        for row in range(size):
+            kept[row] = kept[row] or lone[row]
     else:
-        kept[: hi - lo] = True
+        for row in range(size):
+            kept[row] = True
     _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, lone)
     kept_size = 0
     for row in range(lo, hi):

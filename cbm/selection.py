@@ -53,14 +53,13 @@ def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_
 
 
 @numba.njit(cache=True)
-def _largest_sets(order, candidate_count, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
+def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
                   distance, limit):
     """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
 
     Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
-    position in ``order`` where the visit stopped.
+    position in ``order`` where the visit stopped. ``width`` is the largest card(L_ij).
     """
-    width = max(1, int(candidate_count.max()))
     scratch = np.zeros((3, width), np.bool_)
     ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
     voter_here = np.zeros(len(candidate_count), np.bool_)
@@ -78,9 +77,11 @@ def _largest_sets(order, candidate_count, signs, lookup, voted_start, voted_by, 
                               limit, candidates, scratch, ego_count, cav_count, voter_here, out)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
-            grown[: offsets[n]] = members[: offsets[n]]
+            for k in range(offsets[n]):
+                grown[k] = members[k]
             members = grown
-        members[offsets[n]: offsets[n] + size] = out[:size]
+        for k in range(size):
+            members[offsets[n] + k] = out[k]
         visited[n], sizes[n] = anchor, size
         offsets[n + 1] = offsets[n] + size
         best = max(best, size)
@@ -100,8 +101,10 @@ def _rival_sizes(anchors, width, in_winner, signs, lookup, voted_start, voted_by
     for n in range(len(anchors)):
         size = _filtered_size(anchors[n], signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
                               limit, candidates, scratch, ego_count, cav_count, voter_here, out)
-        if not in_winner[out[:size]].any():
-            sizes[n] = size
+        shares = False
+        for k in range(size):
+            shares = shares or in_winner[out[k]]
+        sizes[n] = 0 if shares else size
     return sizes
 
 
@@ -133,7 +136,9 @@ def strongest_rival(order: np.ndarray, first: int, candidate_count: np.ndarray, 
 @numba.njit(cache=True)
 def by_count_descending(count):
     """Pair ids of non-empty sets by decreasing set size, ties by increasing id (a counting sort)."""
-    n_sizes = count.max() + 1 if len(count) else 1
+    n_sizes = 1
+    for a in range(len(count)):
+        n_sizes = max(n_sizes, count[a] + 1)
     start = np.zeros(n_sizes + 1, np.int64)
     for a in range(len(count)):
         start[n_sizes - count[a]] += 1
@@ -165,6 +170,14 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
     return np.stack([members // n_cav, members % n_cav], axis=1)
 
 
+def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray,
+                     cav_xy: np.ndarray, distance_limit: float) -> tuple:
+    """The arguments the visiting kernels share, after their own."""
+    distance = cdist(ego_xy, cav_xy).ravel()
+    return (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy), distance,
+            float(distance_limit))
+
+
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
            distance_limit: float) -> Selection:
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
@@ -174,10 +187,9 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     if n_ego * n_cav == 0 or not candidate_count.any():
         return empty
     order = by_count_descending(candidate_count)
-    distance = cdist(ego_xy, cav_xy).ravel()
-    common = (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], n_ego, n_cav, distance,
-              float(distance_limit))
-    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, *common)
+    common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
+    width = max(1, int(candidate_count.max()))
+    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, width, *common)
     best = int(sizes.max(initial=0))
     if best == 0:
         return empty
