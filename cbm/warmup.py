@@ -9,9 +9,9 @@ variant that reaches a kernel of its own, so that a caller's first real call com
 
 Run it in a subprocess to fill the cache without holding the caller's interpreter lock (numba's
 compiler is mostly Python), then call ``warm_up(VARIANTS[:1])`` in the caller to load the kernels.
-The compiler runs on one core, so ``main`` compiles the two halves of the kernels side by side: the
-selection's (``compile_selection``) in a second process while this one compiles local matching's
-(``compile_matching``); each finds the other's in the cache afterwards.
+The compiler runs on one core, so ``compile_side_by_side`` compiles the two halves of the kernels in
+two processes at once: local matching's (``compile_matching``) and the selection's
+(``compile_selection``); each finds the other's in the cache afterwards.
 """
 from __future__ import annotations
 
@@ -20,6 +20,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
+from pathlib import Path
 
 import numpy as np
 
@@ -94,16 +95,34 @@ def compile_selection() -> None:
 PARTS = {"matching": compile_matching, "selection": compile_selection}
 
 
-def compile_side_by_side() -> float:
-    """Both halves of the kernels at once, the selection's in a second process; the seconds spent."""
+class CompileFailed(RuntimeError):
+    """A compiling process ended with an error."""
+
+
+def compile_side_by_side(processes: list[subprocess.Popen] | None = None) -> float:
+    """Both halves of the kernels at once, each in a process of its own (``python -m cbm.warmup
+    --part NAME``; ``processes`` receives them, to be stopped by the caller if need be). Returns the
+    seconds the slower half spent compiling (or loading from the cache), without the processes'
+    start-up; raises ``CompileFailed`` when one fails."""
+    root = Path(__file__).resolve().parents[1]
+    started = [subprocess.Popen([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=root, text=True,
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL) for part in PARTS]
+    if processes is not None:
+        processes += started
+    seconds = []
+    for process in started:
+        out, _ = process.communicate()
+        if process.returncode != 0:
+            raise CompileFailed(f"{' '.join(process.args[1:])} exited with {process.returncode}")
+        seconds.append(float(out.split()[-2]))
+    return max(seconds)
+
+
+def _compile_part(name: str) -> None:
+    """One half, timed: prints ``compiled S s``."""
     started = time.perf_counter()
-    other = subprocess.Popen([sys.executable, "-m", "cbm.warmup", "--part", "selection"],
-                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    try:
-        compile_matching()
-    finally:
-        other.wait()
-    return time.perf_counter() - started
+    PARTS[name]()
+    print(f"compiled {time.perf_counter() - started:.2f} s", flush=True)
 
 
 def _print(params: CBMParams, seconds: float) -> None:
@@ -116,7 +135,7 @@ def main() -> int:
     parser.add_argument("--part", choices=sorted(PARTS), help="compile one half only (used by the default run)")
     args = parser.parse_args()
     if args.part:
-        PARTS[args.part]()
+        _compile_part(args.part)
         return 0
     halves = compile_side_by_side()
     print(f"halves side by side: {halves:.2f} s", flush=True)

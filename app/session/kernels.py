@@ -1,26 +1,23 @@
 """CBM's compiled kernels, made ready once per server process, off the request path.
 
 numba compiles CBM's kernels on their first call, which takes seconds on a fresh install, and keeps
-them in its on-disk cache. At server start ``prepare`` runs ``python -m cbm.warmup`` in a
-subprocess (the compiler is mostly Python: in a thread it would hold this process's interpreter
-lock and stall the server) while the dataset loads, then loads the cached kernels into this
-process with one small match. Recomputes wait for ``ready``; the time spent compiling is reported
-on its own, never as CBM's time.
+them in its on-disk cache. At server start ``prepare`` compiles them in two subprocesses at once
+(``cbm.warmup.compile_side_by_side``; the compiler is mostly Python: in a thread it would hold
+this process's interpreter lock and stall the server) while the dataset loads, then loads the
+cached kernels into this process with one small match. Recomputes wait for ``ready``; the time
+spent compiling is reported on its own, never as CBM's time.
 """
 from __future__ import annotations
 
 import atexit
 import subprocess
-import sys
 import threading
 import time
-from pathlib import Path
 
-import cbm
-from cbm.warmup import VARIANTS, warm_up
+from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, warm_up
 
 COMPILED_AFTER = 1.0
-"""Seconds of warm-up above which the kernels were compiled (a warm cache loads in a fraction of one)."""
+"""Seconds of compiling above which the kernels were compiled (a warm cache loads in a fraction of one)."""
 TIMEOUT = 600.0
 """Seconds the compiling subprocess may take before it is given up (this process then compiles)."""
 
@@ -35,7 +32,7 @@ class Kernels:
         self.load_seconds: float | None = None
         """Seconds this process took to load them (to compile them too if the subprocess failed)."""
         self._ready = threading.Event()
-        self._process: subprocess.Popen | None = None
+        self._processes: list[subprocess.Popen] = []
         atexit.register(self.stop)
         threading.Thread(target=self._prepare, name="cbm-kernels", daemon=True).start()
 
@@ -49,26 +46,24 @@ class Kernels:
 
     def note(self) -> str:
         """What a first result says about the start-up compile ("" when nothing was compiled)."""
-        spent = (self.compile_seconds or 0.0) + (self.load_seconds or 0.0)
-        if not self.ready or spent < COMPILED_AFTER:
+        compiled = self.load_seconds if self.compile_seconds is None else self.compile_seconds
+        if not self.ready or (compiled or 0.0) < COMPILED_AFTER:
             return ""
+        spent = (self.compile_seconds or 0.0) + (self.load_seconds or 0.0)
         return f"CBM's kernels compiled in {spent:.1f} s at start (cached from now on); not part of CBM's time."
 
     def stop(self) -> None:
-        """End the compiling subprocess, if it still runs (at exit: it is no use to anyone then)."""
-        process = self._process
-        if process is not None and process.poll() is None:
-            process.kill()
+        """End the compiling subprocesses, if they still run (at exit: they are no use to anyone then)."""
+        for process in self._processes:
+            if process.poll() is None:
+                process.kill()
 
     def _compile_in_subprocess(self) -> float | None:
-        """Run ``python -m cbm.warmup``; the seconds it reports, None when it failed."""
-        root = Path(cbm.__file__).resolve().parents[1]
+        """Compile the kernels' two halves in two processes at once; the seconds they took, None
+        when one failed."""
         try:
-            self._process = subprocess.Popen([sys.executable, "-m", "cbm.warmup"], cwd=root, text=True,
-                                             stdout=subprocess.PIPE, stderr=subprocess.DEVNULL)
-            out, _ = self._process.communicate(timeout=TIMEOUT)
-            return float(out.strip().splitlines()[-1].split()[1]) if self._process.returncode == 0 else None
-        except (OSError, subprocess.SubprocessError, ValueError, IndexError):
+            return compile_side_by_side(self._processes)
+        except (OSError, subprocess.SubprocessError, ValueError, IndexError, CompileFailed):
             self.stop()
             return None
 
