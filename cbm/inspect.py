@@ -14,6 +14,7 @@ from .consensus import PairSets
 from .params import CBMParams
 from .pipeline import Sets, build_sets, checked_inputs, match_sets
 from .result import MatchResult
+from .selection import filtered_sizes
 
 
 @dataclass(frozen=True)
@@ -118,6 +119,12 @@ class Inspection:
                             mean_distance=distance, rejected=bool(len(final)) and distance > sets.params.distance_limit)
 
     def best_anchor_among(self, pairs: np.ndarray) -> AnchorDetail | None:
-        """The anchor with the largest score among the given pairs (ties: the first), or None."""
-        details = [self.anchor(int(i), int(j)) for i, j in np.asarray(pairs).reshape(-1, 2)]
-        return max(details, key=lambda d: d.size, default=None)
+        """The anchor with the largest score among the given pairs (ties: the first), or None.
+        The scores come from the selection's kernel; only the best anchor is explained."""
+        pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
+        if len(pairs) == 0:
+            return None
+        sets = self.sets
+        sizes = filtered_sizes(pairs[:, 0] * self.n_cav + pairs[:, 1], sets.candidates, sets.voted_by, sets.rule,
+                               sets.ego_xy, sets.cav_xy, sets.params.distance_limit)
+        return self.anchor(*pairs[int(np.argmax(sizes))])

@@ -178,6 +178,17 @@ def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego
             float(distance_limit))
 
 
+def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, rule: str | None,
+                   ego_xy: np.ndarray, cav_xy: np.ndarray, distance_limit: float) -> np.ndarray:
+    """card(L^(2)) of each of ``anchors`` (eq. 12), 0 where the distance limit rejects it."""
+    anchors = np.asarray(anchors, dtype=np.int64)
+    if len(anchors) == 0:
+        return np.zeros(0, np.int64)
+    width = max(1, int(L.count.max()))
+    nowhere = np.zeros(len(L.count), bool)
+    return _rival_sizes(anchors, width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
+
+
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
            distance_limit: float) -> Selection:
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""

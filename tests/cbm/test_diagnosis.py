@@ -128,3 +128,16 @@ def test_an_inspection_is_freed_when_dropped():
     del inspection
     gc.collect()
     assert alive() is None
+
+
+@pytest.mark.parametrize("rule", ["released", "paper"])
+@pytest.mark.parametrize("seed", [0, 1, 2])
+def test_best_anchor_among_the_true_pairs_equals_explaining_each_of_them(seed, rule):
+    world = street_scene(60, np.random.default_rng(seed))
+    trial = trial_of(world, eta=0.5, sigma_p=0.6, sigma_theta=4.0, seed=seed)
+    params = CBMParams(consensus_rule=rule, distance_limit=6.0)
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    details = [inspection.anchor(i, j) for i, j in trial.gt_pairs]
+    slowest = max(details, key=lambda d: d.size)
+    assert inspection.best_anchor_among(trial.gt_pairs).anchor == slowest.anchor
+    assert inspection.best_anchor_among(np.zeros((0, 2), int)) is None
