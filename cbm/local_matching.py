@@ -30,7 +30,7 @@ import numpy as np
 
 from .context import Context
 
-CELLS_PER_RADIUS = 2
+CELLS_PER_RADIUS = 3
 """Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
 MAX_CELLS = 1 << 22
 """Most grid cells (32 MB of row offsets); a wider scene gets wider cells."""
@@ -51,10 +51,12 @@ POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 @dataclass(frozen=True)
 class VectorGrid:
     """CAV context vectors, each turned by the sign it has against a group of ego objects, in
-    square cells of side ``cell`` column by column: cell (kx, ky) holds rows
-    ``start[kx * ny + ky]:start[kx * ny + ky + 1]``, so the cells ky0..ky1 of one column are one
-    run of rows. ``check[r]`` is 0 where the sign holds for the whole group, else the sign that
-    row carries (the row's vector is there twice, once per sign, to be checked per ego object)."""
+    square cells of side ``cell`` over u = x + y, v = x - y (where the L1 diamond of eq. 7 is an
+    axis-aligned square), column by column: cell (ku, kv) holds rows
+    ``start[ku * ny + kv]:start[ku * ny + kv + 1]``, so the cells kv0..kv1 of one column are one
+    run of rows; (x0, y0) is the grid's corner in (u, v). ``check[r]`` is 0 where the sign holds
+    for the whole group, else the sign that row carries (the row's vector is there twice, once per
+    sign, to be checked per ego object)."""
 
     x0: float
     y0: float
@@ -75,8 +77,9 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     x, y, anchor, member, check = _signed_rows(cav.vectors, cav.anchor, cav.member, cav_sign.astype(np.int64))
     if len(x) == 0:
         return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, anchor, member, check)
-    x0, y0 = float(x.min()), float(y.min())
-    width, height = float(x.max()) - x0, float(y.max()) - y0
+    u, v = x + y, x - y
+    x0, y0 = float(u.min()), float(v.min())
+    width, height = float(u.max()) - x0, float(v.max()) - y0
     most_cells = min(MAX_CELLS, CELLS_PER_ROW * len(x) + 1)
     cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
     nx, ny = int(width // cell) + 1, int(height // cell) + 1
@@ -109,12 +112,12 @@ def _signed_rows(vectors, anchor, member, cav_sign):
 
 
 @numba.njit(cache=True, nogil=True)
-def _bucket(x, y, anchor, member, check, x0, y0, cell, nx, ny, start, gx, gy, g_anchor, g_member, g_check):
-    """Counting sort of the rows by cell (column-major), keeping their order inside a cell."""
+def _bucket(x, y, anchor, member, check, u0, v0, cell, nx, ny, start, gx, gy, g_anchor, g_member, g_check):
+    """Counting sort of the rows by cell of (x + y, x - y) (column-major), keeping their order inside a cell."""
     cell_of = np.empty(len(x), np.int64)
     for v in range(len(x)):
-        kx = min(int(math.floor((x[v] - x0) / cell)), nx - 1)
-        ky = min(int(math.floor((y[v] - y0) / cell)), ny - 1)
+        kx = min(int(math.floor((x[v] + y[v] - u0) / cell)), nx - 1)
+        ky = min(int(math.floor((x[v] - y[v] - v0) / cell)), ny - 1)
         cell_of[v] = kx * ny + ky
         start[cell_of[v] + 1] += 1
     for c in range(nx * ny):
@@ -156,24 +159,13 @@ def _first_at_least(values, lo, hi, value):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _rows_in_column(zx, zy, k, radius, x0, y0, cell, ny, start):
-    """Rows of column k in the cells the L1 diamond of ``radius`` around z touches (lo >= hi: none)."""
-    gap = max(0.0, x0 + k * cell - zx, zx - (x0 + (k + 1) * cell))
-    reach = radius - gap + MARGIN
-    if reach < 0.0:
-        return 0, 0
-    c0 = max(int(math.floor((zy - reach - y0) / cell)), 0)
-    c1 = min(int(math.floor((zy + reach - y0) / cell)), ny - 1)
-    if c1 < c0:
-        return 0, 0
-    return start[k * ny + c0], start[k * ny + c1 + 1]
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _columns(zx, radius, x0, cell, nx):
-    """First and last column within ``radius`` of z along x."""
-    return (max(int(math.floor((zx - radius - MARGIN - x0) / cell)), 0),
-            min(int(math.floor((zx + radius + MARGIN - x0) / cell)), nx - 1))
+def _cells(zu, zv, radius, u0, v0, cell, nx, ny):
+    """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
+    the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y."""
+    return (max(int(math.floor((zu - radius - MARGIN - u0) / cell)), 0),
+            min(int(math.floor((zu + radius + MARGIN - u0) / cell)), nx - 1),
+            max(int(math.floor((zv - radius - MARGIN - v0) / cell)), 0),
+            min(int(math.floor((zv + radius + MARGIN - v0) / cell)), ny - 1))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -196,10 +188,10 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
         for u in range(i * per_anchor, (i + 1) * per_anchor):
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             z2 = zx * zx + zy * zy
-            k0, k1 = _columns(zx, radius, x0, cell, nx)
+            zu, zv = zx + zy, zx - zy
+            k0, k1, c0, c1 = _cells(zu, zv, radius, x0, y0, cell, nx, ny)
             for k in range(k0, k1 + 1):
-                lo, hi = _rows_in_column(zx, zy, k, radius, x0, y0, cell, ny, start)
-                for v in range(lo, hi):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1] if c1 >= c0 else 0):
                     b, wx, wy = g_anchor[v], gx[v], gy[v]
                     l1 = abs(zx - wx) + abs(zy - wy)
                     dot = zx * wx + zy * wy
@@ -209,10 +201,9 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                     count2[row + b] += ok & (l1 <= sigma2)
             if not list_votes:
                 continue
-            k0, k1 = _columns(zx, sigma3, x0, cell, nx)
+            k0, k1, c0, c1 = _cells(zu, zv, sigma3, x0, y0, cell, nx, ny)
             for k in range(k0, k1 + 1):
-                lo, hi = _rows_in_column(zx, zy, k, sigma3, x0, y0, cell, ny, start)
-                for v in range(lo, hi):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1] if c1 >= c0 else 0):
                     b = g_anchor[v]
                     if g_check[v] != 0 and sign_row[b] != g_check[v]:
                         continue
