@@ -32,10 +32,12 @@ from .context import Context
 
 CELLS_PER_RADIUS = 3
 """Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
-MAX_CELLS = 1 << 22
-"""Most grid cells (32 MB of row offsets); a wider scene gets wider cells."""
+MAX_CELLS = 1 << 21
+"""Most grid cells (16 MB of row offsets); a wider scene gets wider cells."""
 CELLS_PER_ROW = 4
 """Most grid cells per vector: a sparse scene gets wider cells rather than many empty ones."""
+MOST_PAIRS = 2**31 - 1
+"""Most ego x CAV pairs: the voting quadruples are listed as 32-bit pair ids (half the memory)."""
 MARGIN = 1e-6
 """Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
 each vector in the window is then tested exactly."""
@@ -181,7 +183,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
     """
     n_cav = signs.shape[1]
     capacity = 1024 if list_votes else 0
-    vote_anchor, vote_member, n_votes = np.empty(capacity, np.int64), np.empty(capacity, np.int64), 0
+    vote_anchor, vote_member, n_votes = np.empty(capacity, np.int32), np.empty(capacity, np.int32), 0
     for i in ego_ids:
         sign_row = signs[i]
         row = i * n_cav
@@ -211,7 +213,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                         continue
                     if n_votes == capacity:
                         capacity *= 2
-                        grown_anchor, grown_member = np.empty(capacity, np.int64), np.empty(capacity, np.int64)
+                        grown_anchor, grown_member = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
                         grown_anchor[:n_votes], grown_member[:n_votes] = vote_anchor, vote_member
                         vote_anchor, vote_member = grown_anchor, grown_member
                     vote_anchor[n_votes] = row + b
@@ -258,7 +260,7 @@ def _run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.nda
             jobs += [run(_join, part, *common) for part in parts if len(part)]
         votes += [job.result() for job in jobs]
     if not votes:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+        return np.zeros(0, np.int32), np.zeros(0, np.int32)
     return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
 
 
@@ -367,6 +369,9 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
     """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
     quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join."""
     n_ego, n_cav = signs.shape
+    if n_ego * n_cav > MOST_PAIRS:
+        raise ValueError(f"cbm.match: {n_ego} x {n_cav} boxes make more than {MOST_PAIRS} pairs (the voting "
+                         "sets keep pair ids in 32 bits)")
     count2 = np.zeros(n_ego * n_cav, np.int64)
     radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
     vote_anchor, vote_member = _run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
