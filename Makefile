@@ -16,13 +16,14 @@ test: $(VENV)/.installed-test chromium
 lint: $(VENV)/.installed-test
 	$(PY) -m ruff check .
 
-bench: $(VENV)/.installed
+bench: $(VENV)/.installed-test chromium
 	$(PY) bench/bench_match.py
 	$(PY) bench/bench_heading.py
 	$(PY) bench/bench_loaders.py
 	$(PY) bench/bench_baselines.py
 	$(PY) bench/bench_accuracy.py
 	$(PY) bench/bench_app.py
+	$(PY) bench/bench_start.py
 
 install: $(VENV)/.installed
 
