@@ -163,11 +163,15 @@ def _first_at_least(values, lo, hi, value):
 @numba.njit(cache=True, nogil=True, inline="always")
 def _cells(zu, zv, radius, u0, v0, cell, nx, ny):
     """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
-    the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y."""
-    return (max(int(math.floor((zu - radius - MARGIN - u0) / cell)), 0),
-            min(int(math.floor((zu + radius + MARGIN - u0) / cell)), nx - 1),
-            max(int(math.floor((zv - radius - MARGIN - v0) / cell)), 0),
-            min(int(math.floor((zv + radius + MARGIN - v0) / cell)), ny - 1))
+    the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y. No column
+    (k1 < k0) when the square misses the grid."""
+    k0 = max(int(math.floor((zu - radius - MARGIN - u0) / cell)), 0)
+    k1 = min(int(math.floor((zu + radius + MARGIN - u0) / cell)), nx - 1)
+    c0 = max(int(math.floor((zv - radius - MARGIN - v0) / cell)), 0)
+    c1 = min(int(math.floor((zv + radius + MARGIN - v0) / cell)), ny - 1)
+    if c1 < c0:
+        return 0, -1, 0, 0
+    return k0, k1, c0, c1
 
 
 @numba.njit(cache=True, nogil=True)
@@ -193,7 +197,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
             zu, zv = zx + zy, zx - zy
             k0, k1, c0, c1 = _cells(zu, zv, radius, x0, y0, cell, nx, ny)
             for k in range(k0, k1 + 1):
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1] if c1 >= c0 else 0):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
                     b, wx, wy = g_anchor[v], gx[v], gy[v]
                     l1 = abs(zx - wx) + abs(zy - wy)
                     dot = zx * wx + zy * wy
@@ -205,7 +209,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                 continue
             k0, k1, c0, c1 = _cells(zu, zv, sigma3, x0, y0, cell, nx, ny)
             for k in range(k0, k1 + 1):
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1] if c1 >= c0 else 0):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
                     b = g_anchor[v]
                     if g_check[v] != 0 and sign_row[b] != g_check[v]:
                         continue
