@@ -149,18 +149,6 @@ def _accepts(zx, zy, wx, wy, cos2_sigma1, radius):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _first_at_least(values, lo, hi, value):
-    """The first row in lo..hi-1 of sorted ``values`` with values[row] >= value (hi when none)."""
-    while lo < hi:
-        mid = (lo + hi) >> 1
-        if values[mid] < value:
-            lo = mid + 1
-        else:
-            hi = mid
-    return lo
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
 def _cells(zu, zv, radius, u0, v0, cell, nx, ny):
     """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
     the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y. No column
