@@ -8,14 +8,16 @@ For an anchor pair (i, j) a candidate (i', j') is accepted when the context vect
 Testing all (Ne Nc)^2 quadruples is what makes the released code dense. Here the join is
 output-sensitive and never holds the accepted quadruples of eq. 8:
 
-- the CAV context vectors lie in a grid of cells half sigma2 wide (``VectorGrid``); an ego vector z
-  meets only the vectors of the cells that the L1 diamond around it touches, column by column;
+- the ego objects go in four groups of neighbouring headings; for each group the CAV context
+  vectors lie in a grid (``VectorGrid``), already turned by the sign they have against it, over
+  u = x + y and v = x - y, where the L1 diamond around an ego vector z is an axis-aligned square:
+  z meets only the vectors of the cells that square covers, one run of cells per column;
 - that join counts card(L_ij) for every anchor and lists only the quadruples within sigma3, the
-  voting sets of the consensus (``count_candidates``); it runs in parallel over ranges of ego objects,
-  each owning its anchors' counters, and its lists are joined in ego order, so nothing depends on
-  the threads;
+  voting sets of the consensus (``count_candidates``); it runs in parallel over parts of each
+  group, each part owning its anchors' counters, and its lists are joined in a fixed order, so
+  nothing depends on the threads;
 - the members of one L_ij are listed again when the selection asks for them
-  (``CandidateSets.members``): against the CAV anchor's vectors sorted by x, O(N log N).
+  (``CandidateSets.members``): a window sliding over both anchors' vectors sorted by x + y, O(N).
 
 Pair ids are ``i * Nc + j`` throughout.
 """
@@ -56,12 +58,12 @@ class VectorGrid:
     square cells of side ``cell`` over u = x + y, v = x - y (where the L1 diamond of eq. 7 is an
     axis-aligned square), column by column: cell (ku, kv) holds rows
     ``start[ku * ny + kv]:start[ku * ny + kv + 1]``, so the cells kv0..kv1 of one column are one
-    run of rows; (x0, y0) is the grid's corner in (u, v). ``check[r]`` is 0 where the sign holds
+    run of rows; (u0, v0) is the grid's corner. ``check[r]`` is 0 where the sign holds
     for the whole group, else the sign that row carries (the row's vector is there twice, once per
     sign, to be checked per ego object)."""
 
-    x0: float
-    y0: float
+    u0: float
+    v0: float
     cell: float
     nx: int
     ny: int
@@ -80,16 +82,16 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     if len(x) == 0:
         return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, anchor, member, check)
     u, v = x + y, x - y
-    x0, y0 = float(u.min()), float(v.min())
-    width, height = float(u.max()) - x0, float(v.max()) - y0
+    u0, v0 = float(u.min()), float(v.min())
+    width, height = float(u.max()) - u0, float(v.max()) - v0
     most_cells = min(MAX_CELLS, CELLS_PER_ROW * len(x) + 1)
     cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
     nx, ny = int(width // cell) + 1, int(height // cell) + 1
     start = np.zeros(nx * ny + 1, np.int64)
     rows = (x, y, anchor, member, check)
     grid = tuple(np.empty_like(values) for values in rows)
-    _bucket(*rows, x0, y0, cell, nx, ny, start, *grid)
-    return VectorGrid(x0, y0, cell, nx, ny, start, *grid)
+    _bucket(*rows, u0, v0, cell, nx, ny, start, *grid)
+    return VectorGrid(u0, v0, cell, nx, ny, start, *grid)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -163,7 +165,7 @@ def _cells(zu, zv, radius, u0, v0, cell, nx, ny):
 
 
 @numba.njit(cache=True, nogil=True)
-def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx, ny, start, gx, gy, g_anchor,
+def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
           g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
@@ -183,7 +185,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             z2 = zx * zx + zy * zy
             zu, zv = zx + zy, zx - zy
-            k0, k1, c0, c1 = _cells(zu, zv, radius, x0, y0, cell, nx, ny)
+            k0, k1, c0, c1 = _cells(zu, zv, radius, u0, v0, cell, nx, ny)
             for k in range(k0, k1 + 1):
                 for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
                     b, wx, wy = g_anchor[v], gx[v], gy[v]
@@ -195,7 +197,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, x0, y0, cell, nx,
                     count2[row + b] += ok & (l1 <= sigma2)
             if not list_votes:
                 continue
-            k0, k1, c0, c1 = _cells(zu, zv, sigma3, x0, y0, cell, nx, ny)
+            k0, k1, c0, c1 = _cells(zu, zv, sigma3, u0, v0, cell, nx, ny)
             for k in range(k0, k1 + 1):
                 for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
                     b = g_anchor[v]
@@ -245,7 +247,7 @@ def _run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.nda
         grids = [grid.result() for grid in [run(build_grid, cav, group_signs(signs, g), radius) for g in batch]]
         jobs = []
         for group, grid in zip(batch, grids):
-            common = (ego.vectors, ego.member, per_anchor, signs, grid.x0, grid.y0, grid.cell, grid.nx, grid.ny,
+            common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
                       grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
                       radius, sigma2, sigma3, count2, list_votes)
             parts = np.array_split(group, THREADS) if parallel else [group]
@@ -289,11 +291,9 @@ def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
     shape = (len(context.vectors) // max(per_anchor, 1), per_anchor)
     key = (context.vectors[:, 0] + context.vectors[:, 1]).reshape(shape)
     order = np.argsort(key, axis=1, kind="stable")
-    def sort(values: np.ndarray) -> np.ndarray:
-        return np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
-
-    return SortedBlocks(sort(key), sort(context.vectors[:, 0]), sort(context.vectors[:, 1]), sort(context.member),
-                        per_anchor)
+    key, x, y, member = (np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
+                         for values in (key, context.vectors[:, 0], context.vectors[:, 1], context.member))
+    return SortedBlocks(key, x, y, member, per_anchor)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -344,8 +344,10 @@ class CandidateSets:
     signs: np.ndarray
     """(Ne, Nc) how the CAV frame is turned against each ego frame (``cbm.context.pair_signs``)."""
 
-    def sizes(self) -> np.ndarray:
-        return self.count
+    @property
+    def width(self) -> int:
+        """The largest card(L_ij) (at least 1): the room a kernel needs for any one set."""
+        return max(1, int(self.count.max())) if len(self.count) else 1
 
     def members(self, anchor: int) -> np.ndarray:
         """Pair ids of L_ij for ``anchor = i * Nc + j``, in increasing order."""

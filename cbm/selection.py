@@ -90,12 +90,13 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
 
 
 @numba.njit(cache=True, nogil=True)
-def _rival_sizes(anchors, width, in_winner, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
                  limit):
-    """Filtered size of each anchor, 0 where the filtered set shares a pair with the winner."""
+    """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
+    an ``excluded`` pair."""
     scratch = np.zeros((3, width), np.bool_)
     ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
-    voter_here = np.zeros(len(in_winner), np.bool_)
+    voter_here = np.zeros(len(excluded), np.bool_)
     out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
@@ -103,13 +104,13 @@ def _rival_sizes(anchors, width, in_winner, signs, lookup, voted_start, voted_by
                               limit, candidates, scratch, ego_count, cav_count, voter_here, out)
         shares = False
         for k in range(size):
-            shares = shares or in_winner[out[k]]
+            shares = shares or excluded[out[k]]
         sizes[n] = 0 if shares else size
     return sizes
 
 
-def strongest_rival(order: np.ndarray, first: int, candidate_count: np.ndarray, runner_up: int,
-                    in_winner: np.ndarray, common: tuple) -> int:
+def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: int, in_winner: np.ndarray,
+                    common: tuple) -> int:
     """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on
     whose candidate set could beat ``runner_up``.
 
@@ -117,17 +118,16 @@ def strongest_rival(order: np.ndarray, first: int, candidate_count: np.ndarray, 
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
     The anchors go in chunks whose halves run on two threads; a chunk's sizes are then read in
     order, as one visit would (an anchor the visit would skip cannot beat the runner-up anyway)."""
-    width = max(1, int(candidate_count.max()))
     rule = common[4]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
-        anchors = anchors[candidate_count[anchors] > runner_up]
+        anchors = anchors[L.count[anchors] > runner_up]
         if len(anchors) == 0:
             break
         if rule != RULE_CODES["paper"]:
             anchors = anchors[~in_winner[anchors]]
         parts = np.array_split(anchors, THREADS) if len(anchors) >= 2 * THREADS else [anchors]
-        jobs = [POOL.submit(_rival_sizes, part, width, in_winner, *common) for part in parts if len(part)]
+        jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common) for part in parts if len(part)]
         sizes = np.concatenate([job.result() for job in jobs]) if jobs else np.zeros(0, np.int64)
         runner_up = max(runner_up, int(sizes.max(initial=0)))
     return runner_up
@@ -184,9 +184,9 @@ def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, ru
     anchors = np.asarray(anchors, dtype=np.int64)
     if len(anchors) == 0:
         return np.zeros(0, np.int64)
-    width = max(1, int(L.count.max()))
     nowhere = np.zeros(len(L.count), bool)
-    return _rival_sizes(anchors, width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
+    return _filtered_sizes(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
+                                                                        distance_limit))
 
 
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
@@ -194,13 +194,12 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
     n_ego, n_cav = len(ego_xy), len(cav_xy)
     empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, runner_up_count=0)
-    candidate_count = L.sizes()
+    candidate_count = L.count
     if n_ego * n_cav == 0 or not candidate_count.any():
         return empty
     order = by_count_descending(candidate_count)
     common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    width = max(1, int(candidate_count.max()))
-    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, width, *common)
+    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, L.width, *common)
     best = int(sizes.max(initial=0))
     if best == 0:
         return empty
@@ -220,7 +219,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     set_of_member = np.repeat(np.arange(len(sizes)), sizes)
     shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
     runner_up = int(sizes[~shares].max(initial=0))
-    runner_up = strongest_rival(order, stop, candidate_count, runner_up, in_winner, common)
+    runner_up = strongest_rival(order, stop, L, runner_up, in_winner, common)
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)

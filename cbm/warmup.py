@@ -89,7 +89,7 @@ def compile_selection() -> None:
     sets = (candidates, PairSets.empty(n_ego * n_cav), params.consensus_rule, ego[:, :2], cav[:, :2],
             params.distance_limit)
     select(*sets)
-    strongest_rival(by_count_descending(bound), 0, bound, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
+    strongest_rival(by_count_descending(bound), 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}
@@ -99,11 +99,12 @@ class CompileFailed(RuntimeError):
     """A compiling process ended with an error."""
 
 
-def compile_side_by_side(processes: list[subprocess.Popen] | None = None) -> float:
+def compile_side_by_side(processes: list[subprocess.Popen] | None = None, timeout: float | None = None) -> float:
     """Both halves of the kernels at once, each in a process of its own (``python -m cbm.warmup
     --part NAME``; ``processes`` receives them, to be stopped by the caller if need be). Returns the
     seconds the slower half spent compiling (or loading from the cache), without the processes'
-    start-up; raises ``CompileFailed`` when one fails."""
+    start-up; raises ``CompileFailed`` when one fails, ``subprocess.TimeoutExpired`` past ``timeout``
+    seconds."""
     root = Path(__file__).resolve().parents[1]
     started = [subprocess.Popen([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=root, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL) for part in PARTS]
@@ -111,7 +112,7 @@ def compile_side_by_side(processes: list[subprocess.Popen] | None = None) -> flo
         processes += started
     seconds = []
     for process in started:
-        out, _ = process.communicate()
+        out, _ = process.communicate(timeout=timeout)
         if process.returncode != 0:
             raise CompileFailed(f"{' '.join(process.args[1:])} exited with {process.returncode}")
         seconds.append(float(out.split()[-2]))

@@ -19,16 +19,16 @@ from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, warm_up
 COMPILED_AFTER = 1.0
 """Seconds of compiling above which the kernels were compiled (a warm cache loads in a fraction of one)."""
 TIMEOUT = 600.0
-"""Seconds the compiling subprocess may take before it is given up (this process then compiles)."""
+"""Seconds the compiling subprocesses may take before they are given up (this process then compiles)."""
 
 
 class Kernels:
-    """CBM's kernels in this process: compiled (or found in the cache) by a subprocess, then loaded."""
+    """CBM's kernels in this process: compiled (or found in the cache) by two subprocesses, then loaded."""
 
     def __init__(self) -> None:
         self.started = time.monotonic()
         self.compile_seconds: float | None = None
-        """Seconds the subprocess took to fill the cache (None until it finished or if it failed)."""
+        """Seconds the subprocesses took to fill the cache (None until they finished or if one failed)."""
         self.load_seconds: float | None = None
         """Seconds this process took to load them (to compile them too if the subprocess failed)."""
         self._ready = threading.Event()
@@ -62,14 +62,14 @@ class Kernels:
         """Compile the kernels' two halves in two processes at once; the seconds they took, None
         when one failed."""
         try:
-            return compile_side_by_side(self._processes)
+            return compile_side_by_side(self._processes, timeout=TIMEOUT)
         except (OSError, subprocess.SubprocessError, ValueError, IndexError, CompileFailed):
             self.stop()
             return None
 
     def _prepare(self) -> None:
-        """Fill the cache in a subprocess, then load the kernels here (or compile them here, when
-        the subprocess failed); ready in any case, so that a broken kernel fails the recompute
+        """Fill the cache in subprocesses, then load the kernels here (or compile them here, when
+        one failed); ready in any case, so that a broken kernel fails the recompute
         that calls it, with its own error, rather than making it wait forever."""
         try:
             self.compile_seconds = self._compile_in_subprocess()
