@@ -48,6 +48,9 @@ PARALLEL_FROM = 20_000
 THREADS = 2
 HEADING_GROUPS = 4
 """Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
+ANCHORS_PER_CHUNK = 64
+"""Ego objects whose context vectors are joined together, column by column of the grid (their
+counters, 64 rows of Nc, stay in a core's cache)."""
 POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 """The threads the kernels (numba, without the interpreter lock) share."""
 
@@ -165,23 +168,53 @@ def _cells(zu, zv, radius, u0, v0, cell, nx, ny):
 
 
 @numba.njit(cache=True, nogil=True)
+def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order):
+    """The context vectors of the ego objects ``ego_ids[chunk:chunk + ANCHORS_PER_CHUNK]`` into
+    ``order`` by the grid column their u = x + y falls in (a counting sort); returns how many."""
+    last = min(chunk + ANCHORS_PER_CHUNK, len(ego_ids))
+    column_start[:] = 0
+    for n in range(chunk, last):
+        for u in range(ego_ids[n] * per_anchor, (ego_ids[n] + 1) * per_anchor):
+            column_start[_column(ego_vectors[u, 0] + ego_vectors[u, 1], u0, cell, nx) + 1] += 1
+    for k in range(nx):
+        column_start[k + 1] += column_start[k]
+    for n in range(chunk, last):
+        for u in range(ego_ids[n] * per_anchor, (ego_ids[n] + 1) * per_anchor):
+            k = _column(ego_vectors[u, 0] + ego_vectors[u, 1], u0, cell, nx)
+            order[column_start[k]] = u
+            column_start[k] += 1
+    return (last - chunk) * per_anchor
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _column(zu, u0, cell, nx):
+    return min(max(int(math.floor((zu - u0) / cell)), 0), nx - 1)
+
+
+@numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
           g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; with
-    ``list_votes``, returns those within sigma3 as (anchor, member) rows, in the order found.
-    A grid row with ``check`` s counts only where ``signs[i, j] == s``. The counting loop combines
+    ``list_votes``, returns those within sigma3 as (anchor, member) rows. A grid row with ``check``
+    s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
+    time are visited column by column of the grid, so consecutive queries read the same few
+    columns (from the cache) and the chunk's counters stay in it too. The counting loop combines
     the tests of ``_accepts`` without branches (the data decide no jump in it); the votes are listed
     in a second, narrower pass over the cells within sigma3.
     """
     n_cav = signs.shape[1]
     capacity = 1024 if list_votes else 0
     vote_anchor, vote_member, n_votes = np.empty(capacity, np.int32), np.empty(capacity, np.int32), 0
-    for i in ego_ids:
-        sign_row = signs[i]
-        row = i * n_cav
-        for u in range(i * per_anchor, (i + 1) * per_anchor):
+    order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
+    column_start = np.empty(nx + 1, np.int64)
+    for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
+        for q in range(_by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order)):
+            u = order[q]
+            i = u // per_anchor
+            sign_row = signs[i]
+            row = i * n_cav
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             z2 = zx * zx + zy * zy
             zu, zv = zx + zy, zx - zy
