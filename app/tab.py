@@ -12,16 +12,21 @@ import viser
 from . import panels
 from .panels.actions import Edit
 from .panels.explore import ExplorePanel
-from .scene import picking
+from .panels.keynumbers import KeyNumbers, unusable_markdown
+from .panels.plot import timeline_data
+from .scene import picking, presentation
 from .scene.drawing import Drawing, draw
+from .scene.pinned import with_baseline
 from .scene.view import SceneView
+from .session.baseline import Baseline
 from .session.coalesce import Coalescer
 from .session.explorer import CavChoice, Explorer, Outcome
-from .session.history import FrameHistory
+from .session.history import FrameHistory, settings_key, sweep_rows
 from .session.kernels import Kernels
 from .session.presets import PresetError, discover, save_preset
 from .session.progress import announced
 from .session.settings import AUTO_CAV, Settings
+from .walkthrough.panel import WalkthroughPanel
 
 
 class ClientSession:
@@ -38,14 +43,18 @@ class ClientSession:
         self.last: Outcome | None = None
         self.last_drawing: Drawing | None = None
         self.history = FrameHistory()
+        self.baseline = Baseline()
         self._choices: list[CavChoice] = []
         self._choices_frame = -1
         self.presets, problems = discover()
         self.view = SceneView(client)
         self.view.reset_camera()
+        self.key_numbers = KeyNumbers(client.gui)
         self.controls = panels.build(client.gui, settings, len(explorer), list(self.presets))
         self.explore = ExplorePanel(client.gui, self.controls.tabs, self)
+        self.walkthrough = WalkthroughPanel(client.gui, self.controls.tabs, self)
         panels.bind(self.controls, self)
+        panels.metrics.bind(self.controls.metrics, self)
         for problem in problems:
             self.notify("Preset skipped", problem, "yellow")
         self._playing = threading.Event()
@@ -115,8 +124,26 @@ class ClientSession:
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self) -> None:
-        """Back to the top-down view of the current layout."""
-        self.view.reset_camera(0.0 if self.last_drawing is None else self.last_drawing.centre_y)
+        """Back to the top-down view of the current layout (presentation mode: over the two agents)."""
+        view = self._settings.view if self.last is None else self.last.settings.view
+        presentation.aim(self.view, view, self.last_drawing)
+
+    def refresh(self) -> None:
+        """Recompute the settings on screen (the pinned baseline changed)."""
+        self.worker.submit(self._settings)
+
+    def add_frames(self, settings: Settings, rows: list[dict]) -> None:
+        """A sequence run's rows join the timeline when they are the current settings'."""
+        current = self._settings
+        if settings_key(settings) != settings_key(current):
+            return
+        self.history.merge(settings, sweep_rows(rows))
+        self.controls.metrics.show_timeline(self._timeline(current.frame), self.history.failures(),
+                                            self.baseline.pinned)
+
+    def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
+        rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
+        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer))
 
     def notify(self, title: str, body: str, color: str) -> None:
         self.client.add_notification(title, body, color=color, auto_close_seconds=8)
@@ -138,7 +165,8 @@ class ClientSession:
             self._note = self.kernels.note()
         with announced(lambda s: say(f"Computing… {s:.1f} s")):
             outcome = self.explorer.compute(settings)
-            return outcome, draw(outcome, self.explorer.map_segments)
+            pinned = self.baseline.outcome(self.explorer, settings)
+            return outcome, with_baseline(draw(outcome, self.explorer.map_segments), outcome, pinned)
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
         """Show a result: the scene's changed nodes and the panels, in one batch sent at once."""
@@ -148,11 +176,15 @@ class ClientSession:
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
         with self.client.atomic():
             self.view.show(picture)
-            if relaid:
-                self.view.reset_camera(picture.centre_y)
-            self.controls.metrics.show(picture.metrics_markdown, self.history.arrays(), self._note)
+            staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
+            if relaid or staged or first:
+                presentation.aim(self.view, outcome.settings.view, picture)
+            self.controls.metrics.show(picture.metrics_markdown, self._timeline(outcome.frame_index),
+                                       self.history.failures(), self.baseline.pinned, self._note)
+            self.key_numbers.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)
+            self.walkthrough.refresh(outcome)
         self.client.flush()
         self._note = ""
         if first:
@@ -161,7 +193,15 @@ class ClientSession:
         self.last, self.last_drawing = outcome, picture
 
     def _failed(self, error: BaseException) -> None:
-        self.controls.metrics.say("")
+        """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
+        (or above the last frame's, marked as such), and in the key numbers."""
+        message = unusable_markdown(self.explorer, self._settings, error)
+        if self.last is None:
+            self.controls.metrics.say("")
+            self.controls.metrics.text.content = message
+        else:
+            self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
+        self.key_numbers.problem("CBM cannot run on this frame: see the panel")
         self.notify("Recompute failed", f"{type(error).__name__}: {error}", "red")
 
     def _refresh_cav_choices(self, outcome: Outcome) -> None:

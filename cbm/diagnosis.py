@@ -1,6 +1,7 @@
 """Why a frame failed: rules that read a result, its trial and CBM's own sets.
 
 Each rule returns a ``Finding`` or None; ``diagnose`` lists the findings of all rules, most basic first.
+Objects are named by their ids as the app's labels show them (``short_id``), never by row index.
 """
 from __future__ import annotations
 
@@ -19,6 +20,26 @@ class Finding:
     code: str
     """One of: few_covisible, no_anchor, single_pair, distance_limit, heading_fold, wrong_anchor."""
     message: str
+
+
+ID_CHARS = 8
+"""Characters of an object id that labels show."""
+
+
+def short_id(value: object) -> str:
+    """An object id as labels show it: its first ``ID_CHARS`` characters."""
+    return str(value)[:ID_CHARS]
+
+
+def pair_name(trial: Trial, pair: tuple[int, int] | np.ndarray) -> str:
+    """An (ego row, CAV row) pair by the objects' ids: ``ego 46 ↔ CAV 20``."""
+    i, j = (int(k) for k in pair)
+    return f"ego {_name(trial.ego_ids, i)} ↔ CAV {_name(trial.cav_ids, j)}"
+
+
+def _name(ids: np.ndarray, row: int) -> str:
+    """The id of ``row``; its row number only for a trial that has no ids (a constructed one)."""
+    return short_id(ids[row]) if row < len(ids) else f"row {row}"
 
 
 def too_few_covisible(trial: Trial, minimum: int = 3) -> Finding | None:
@@ -52,8 +73,9 @@ def distance_limit(result: MatchResult, trial: Trial, inspection: Inspection, ne
     limit = inspection.sets.params.distance_limit
     right = inspection.best_anchor_among(trial.gt_pairs)
     if right is not None and right.rejected:
-        return Finding("distance_limit", f"the right anchor {right.anchor} was rejected by the distance limit: its "
-                                         f"pairs are {right.mean_distance:.1f} m apart on average (limit {limit:g} m)")
+        return Finding("distance_limit", f"the right anchor {pair_name(trial, right.anchor)} was rejected by the "
+                                         f"distance limit: its pairs are {right.mean_distance:.1f} m apart on "
+                                         f"average (limit {limit:g} m)")
     if result.anchor is not None:
         winner = inspection.anchor(*result.anchor)
         if winner.mean_distance >= near * limit:
@@ -73,25 +95,36 @@ def heading_fold(trial: Trial, inspection: Inspection) -> Finding | None:
     flipped = np.flatnonzero(alignment < -math.cos(math.pi / 4))
     if len(flipped) == 0:
         return None
-    ids = ", ".join(str(trial.ego_ids[gt[k, 0]]) for k in flipped[:5])
+    ids = ", ".join(short_id(trial.ego_ids[gt[k, 0]]) for k in flipped[:5])
     return Finding("heading_fold", f"{len(flipped)} co-visible object(s) folded differently for the two agents "
                                    f"(heading near +-90 degrees: {ids}); their local frames are flipped — "
                                    f"heading='align' avoids this")
 
 
 def wrong_anchor(result: MatchResult, trial: Trial, inspection: Inspection) -> Finding | None:
-    """The winning anchor is not a true pair, and the best true anchor scored less."""
+    """The winning anchor is not a true pair; how the best true anchor scored against the
+    consensus margin's runner-up (eq. 12: ``result.runner_up_count``)."""
     if result.anchor is None:
         return None
     gt = {tuple(p) for p in np.asarray(trial.gt_pairs).reshape(-1, 2).tolist()}
     if tuple(result.anchor) in gt:
         return None
+    winner = f"the winning anchor {pair_name(trial, result.anchor)} was wrong with {result.consensus_count} pairs"
     right = inspection.best_anchor_among(trial.gt_pairs)
     if right is None:
-        return Finding("wrong_anchor", f"the winning anchor {tuple(result.anchor)} was wrong "
-                                       f"({result.consensus_count} pairs) and there is no right anchor")
-    return Finding("wrong_anchor", f"the winning anchor {tuple(result.anchor)} was wrong with {result.consensus_count} "
-                                   f"pairs; the best right anchor {right.anchor} came second with {right.size}")
+        return Finding("wrong_anchor", f"{winner} and there is no right anchor")
+    return Finding("wrong_anchor", f"{winner}; the best right anchor {pair_name(trial, right.anchor)} "
+                                   f"{rank_against_runner_up(right.size, result.runner_up_count)}")
+
+
+def rank_against_runner_up(size: int, runner_up: int) -> str:
+    """How a right anchor holding ``size`` pairs placed, in the consensus margin's terms."""
+    if size == runner_up:
+        return f"came second with {size} (the runner-up of the consensus margin)"
+    if size < runner_up:
+        return f"held only {size}: a wrong anchor came second with {runner_up}"
+    return (f"held {size}, more than the runner-up's {runner_up}, but shares pairs with the winning set, "
+            f"so the margin does not count it")
 
 
 def diagnose(result: MatchResult, trial: Trial, inspection: Inspection) -> list[Finding]:

@@ -33,7 +33,8 @@ class Controls:
         self.reflect(settings)
 
     def reflect(self, settings: Settings) -> None:
-        """Show the controls that apply to ``settings`` and hide the others."""
+        """Show the controls that apply to ``settings``; hide or disable the others."""
+        self.scenario.reflect(settings)
         self.method.reflect(settings)
         self.view.reflect(settings)
 

@@ -18,7 +18,7 @@ from PIL import Image
 
 from cbm.diagnosis import Finding
 
-from ..scene import inspector
+from ..scene import inspector, layouts
 from ..scene.drawing import Drawing
 from ..scene.view import SceneView
 from ..session import export, worst
@@ -64,7 +64,7 @@ class ExplorePanel:
                 self.look = gui.add_button("look at the context panels")
                 self.clear = gui.add_button("clear")
                 self.inspector_text = gui.add_markdown("Click a box in the scene to see its context and its "
-                                                       "counterpart's, drawn right of the scene.")
+                                                       "counterpart's, drawn left of the scene.")
             with gui.add_folder("Parameter search"):
                 self.objective = gui.add_dropdown("objective", tuple(OBJECTIVE_LABELS), initial_value="success")
                 self.stride = gui.add_number("every k-th frame", 1, min=1, step=1)
@@ -77,6 +77,8 @@ class ExplorePanel:
                 self.parquet = gui.add_button("per-frame metrics (Parquet)")
                 self.preset = gui.add_button("settings as a preset (TOML)")
                 self.screenshot = gui.add_button("screenshot of the view (PNG)")
+                self.with_panel = gui.add_checkbox("include the control panel", False,
+                                                   hint="the frame's metrics drawn beside the 3D view in the PNG")
         self._bind()
 
     def _bind(self) -> None:
@@ -95,7 +97,7 @@ class ExplorePanel:
         self.preset.on_click(lambda e: self._download("cbm-explorer-preset.toml", export.preset_toml(
             self.tab.settings, self.tab.explorer.sequence.name)))
         self.screenshot.on_click(lambda e: self._in_thread("Screenshot", lambda: self._download(
-            f"cbm-explorer-frame-{self.tab.settings.frame}.png", screenshot(self.tab.client))))
+            f"cbm-explorer-frame-{self.tab.settings.frame}.png", self.screenshot_png())))
 
     # sequence run and worst frames
 
@@ -113,6 +115,7 @@ class ExplorePanel:
         self.run, self.findings = result
         self.summary.content = sequence_markdown(self.run)
         self.plot.data = self.run.plot_data()
+        self.tab.add_frames(self.run.settings, list(self.run.rows))
         self._show_worst()
 
     def _show_worst(self) -> None:
@@ -189,9 +192,14 @@ class ExplorePanel:
             self.tab.notify("Nothing inspected", "click a box first", "yellow")
             return
         x, y = self.shown.centre
-        camera = self.tab.client.camera
-        camera.position = (x - 10.0, y, 1.1 * self.shown.span)
-        camera.look_at = (x, y, 0.0)
+        client = self.tab.client
+        screen = layouts.screen_of(client.camera)
+        z = layouts.fitting_height(self.shown.span, screen)
+        position, look_at = layouts.slid_clear_of_panel((x - 0.15 * z, y, z), (x, y, 0.0), screen)
+        client.flush()
+        with client.atomic():
+            client.camera.position, client.camera.look_at = position, look_at
+        client.flush()
 
     def clear_inspector(self) -> None:
         self.inspected = self.shown = None
@@ -212,6 +220,13 @@ class ExplorePanel:
             return
         name = re.sub(r"[^A-Za-z0-9]+", "-", self.tab.explorer.sequence.name).strip("-")[:40]
         self._download(f"cbm-{name}-seed{self.run.settings.scenario.seed}.{suffix}", encode(list(self.run.rows)))
+
+    def screenshot_png(self) -> bytes:
+        """The view as PNG bytes, with the metrics panel beside it when "include the control panel" is on."""
+        _, picture = self.tab.current()
+        if not self.with_panel.value or picture is None:
+            return png(render(self.tab.client))
+        return png(export.with_panel(render(self.tab.client), picture.metrics_markdown))
 
     def _download(self, filename: str, content: bytes) -> None:
         self.tab.client.send_file_download(filename, content, save_immediately=True)
@@ -257,9 +272,9 @@ def png(image: np.ndarray) -> bytes:
     return out.getvalue()
 
 
-def screenshot(client: viser.ClientHandle, timeout: float = 20.0) -> bytes:
-    """A render of the tab's current view from its own camera at the view's size, as PNG bytes
+def render(client: viser.ClientHandle, timeout: float = 20.0) -> np.ndarray:
+    """A render of the tab's current view from its own camera at the view's size, (H, W, 3|4) uint8
     (blocks until the browser answers; run it off the GUI threads)."""
     camera = client.camera
     width, height = camera.image_width or 1280, camera.image_height or 720
-    return png(client.get_render(height, width, transport_format="png", timeout=timeout))
+    return client.get_render(height, width, transport_format="png", timeout=timeout)

@@ -1,6 +1,7 @@
 """The Method tab: the method list and a folder per parameter set, showing the set of the selected
-method only, and within it the parameters that act (``cbm.methods``: what it tunes, what it forces,
-what needs what)."""
+method and CBM's (CBM's thresholds are the ones the app is about); a control that has no effect under
+the current settings is disabled, and its folder's note says why (``cbm.methods``: what a method
+tunes, what it forces, what needs what)."""
 from __future__ import annotations
 
 import dataclasses
@@ -34,6 +35,10 @@ class MethodControls:
     """A folder per parameter set (``Method.params_key``)."""
     params: dict[tuple[str, str], Any]
     """(parameter set, field) -> its control."""
+    notes: dict[str, viser.GuiMarkdownHandle]
+    """A folder's note: which of its controls are disabled, and why."""
+    hints: dict[tuple[str, str], str]
+    """Each control's own hint (a disabled one's hint starts with why it is disabled)."""
 
     def show(self, settings: Settings) -> None:
         self.method.value = METHODS[settings.method].label
@@ -41,25 +46,48 @@ class MethodControls:
             control.value = getattr(settings.method_params[key], name)
 
     def reflect(self, settings: Settings) -> None:
+        """Show the chosen method's folder and CBM's; disable, with a note, what does not act."""
         chosen = METHODS[settings.method]
-        acting = chosen.controls(settings.params)
         for key, folder in self.folders.items():
-            folder.visible = key == chosen.params_key
+            folder.visible = key in (chosen.params_key, "cbm")
+        inactive: dict[str, dict[str, list[str]]] = {key: {} for key in self.folders}
         for (key, name), control in self.params.items():
-            control.visible = key != chosen.params_key or name in acting
+            why = inactive_reason(settings, key, name)
+            control.disabled = why is not None
+            control.hint = self.hints[(key, name)] if why is None else f"Disabled: {why}. {self.hints[(key, name)]}"
+            if why is not None:
+                inactive[key].setdefault(why, []).append(control.label)
+        for key, note in self.notes.items():
+            note.content = "  \n".join(f"*Disabled ({why}): {', '.join(names)}.*"
+                                       for why, names in inactive[key].items())
+            note.visible = bool(inactive[key])
+
+
+def inactive_reason(settings: Settings, key: str, name: str) -> str | None:
+    """Why parameter ``name`` of set ``key`` has no effect under ``settings``; None when it acts."""
+    chosen = METHODS[settings.method]
+    if key != chosen.params_key:
+        return f"{chosen.label} selected: {METHODS[key].label}'s parameters do not apply"
+    if name in chosen.forced:
+        return f"{chosen.label} forces {name} = {chosen.forced[name]}"
+    needed = chosen.requires.get(name)
+    if needed is not None and name not in chosen.controls(settings.params):
+        return f"{needed[0]} is off"
+    return None
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> MethodControls:
     method = gui.add_dropdown("method", tuple(LABELS), initial_value=METHODS[settings.method].label)
-    folders, params = {}, {}
+    folders, params, notes = {}, {}, {}
     for key, values in settings.method_params.items():
         if not dataclasses.fields(values):
             continue
         with gui.add_folder(f"{METHODS[key].label} parameters") as folder:
             folders[key] = folder
+            notes[key] = gui.add_markdown("", visible=False)
             for f in dataclasses.fields(values):
                 params[(key, f.name)] = _control(gui, key, f.name, getattr(values, f.name))
-    return MethodControls(method, folders, params)
+    return MethodControls(method, folders, params, notes, {k: c.hint or "" for k, c in params.items()})
 
 
 def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:

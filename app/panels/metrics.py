@@ -1,13 +1,34 @@
 """The outputs above the controls: a status line (what the tab is waiting for), the frame's
-metrics and the plot over the frames seen so far."""
+metrics, the timeline of the frames computed so far, and its controls: step to the previous or
+next failed frame, jump to a failed frame, pin the current settings as a baseline."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 import viser
 
-from .plot import add_frame_plot
+from ..session.baseline import Baseline
+from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
+from .actions import TabActions, on_user
+from .plot import add_timeline
+
+FAILED_HEADER = "failed frames"
+PIN, UNPIN = "pin baseline", "unpin"
+HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned. Fills with every "
+        "frame computed (stepping, play, *run all frames*) until a setting other than frame, CAV or view changes.")
+
+
+class TimelineTab(TabActions, Protocol):
+    """The browser tab as the timeline's controls see it."""
+
+    history: FrameHistory
+    baseline: Baseline
+
+    def refresh(self) -> None:
+        """Recompute the frame on screen (the pinned comparison changed)."""
 
 
 @dataclass
@@ -15,19 +36,79 @@ class MetricsControls:
     status: viser.GuiMarkdownHandle
     text: viser.GuiMarkdownHandle
     plot: viser.GuiUplotHandle
+    failures: viser.GuiButtonGroupHandle
+    failed: viser.GuiDropdownHandle
+    pin: viser.GuiButtonHandle
 
     def say(self, status: str) -> None:
         """Show ``status`` above the metrics; an empty one hides the line."""
         self.status.content = status
         self.status.visible = bool(status)
 
-    def show(self, metrics_markdown: str, plot_data: tuple[np.ndarray, ...], status: str = "") -> None:
-        """One result: its metrics, the plot over frames, and what to say above them."""
+    def show(self, metrics_markdown: str, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool,
+             status: str = "") -> None:
+        """One result: its metrics, the timeline, the failed frames known, and what to say above them."""
         self.say(status)
         self.text.content = metrics_markdown
-        self.plot.data = plot_data
+        self.show_timeline(timeline, failures, pinned)
+
+    def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool) -> None:
+        """The timeline, the list of failed frames and the pin button's label."""
+        self.plot.data = timeline
+        options = (f"{FAILED_HEADER} ({len(failures)} known)", *(f"frame {f}" for f in failures))
+        if tuple(self.failed.options) != options:
+            self.failed.options = options
+            self.failed.value = options[0]
+        self.pin.label = UNPIN if pinned else PIN
 
 
 def build(gui: viser.GuiApi) -> MetricsControls:
-    return MetricsControls(gui.add_markdown("", visible=False), gui.add_markdown("Computing the first frame…"),
-                           add_frame_plot(gui, "over frames", with_rre=False))
+    status, text = gui.add_markdown("", visible=False), gui.add_markdown("Computing the first frame…")
+    plot = add_timeline(gui)
+    failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
+    failed = gui.add_dropdown("jump to", (f"{FAILED_HEADER} (0 known)",),
+                              hint="a failed frame known so far (viser sends no clicks on a chart: jump from here)")
+    pin = gui.add_button(PIN, hint="keep these settings and their per-frame results to compare against")
+    gui.add_markdown(HINT)
+    return MetricsControls(status, text, plot, failures, failed, pin)
+
+
+def bind(c: MetricsControls, tab: TimelineTab) -> None:
+    c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
+    on_user(c.failed, lambda: jump(tab, c.failed.value))
+    c.pin.on_click(lambda e: toggle_pin(tab))
+
+
+def go_to(tab: TabActions, frame: int) -> None:
+    tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True)
+
+
+def step_failure(tab: TimelineTab, direction: int) -> None:
+    """Show the nearest failed frame before or after this one among the frames computed."""
+    frame = tab.settings.frame
+    found = step_to_failure(dict(tab.history.rows) if tab.history.matches(tab.settings) else {}, frame, direction)
+    if found is None:
+        where = "after" if direction > 0 else "before"
+        tab.notify("No failed frame known", f"none {where} frame {frame} among the frames computed so far; "
+                   "run all frames (Explore tab) to find every failure", "yellow")
+        return
+    go_to(tab, found)
+
+
+def jump(tab: TabActions, option: str) -> None:
+    """Show the frame an entry of the failed frames' list names."""
+    if option.startswith("frame "):
+        go_to(tab, int(option.removeprefix("frame ")))
+
+
+def toggle_pin(tab: TimelineTab) -> None:
+    """Pin the settings on screen with their per-frame results, or unpin the baseline."""
+    if tab.baseline.pinned:
+        tab.baseline.unpin()
+        tab.notify("Baseline unpinned", "the timeline and the metrics show the current settings only", "blue")
+    else:
+        outcome, _ = tab.current()
+        tab.baseline.pin(tab.settings, tab.history, outcome)
+        tab.notify("Baseline pinned", "change settings to compare: the metrics show current vs pinned, the "
+                   "timeline both (dashed: pinned)", "green")
+    tab.refresh()

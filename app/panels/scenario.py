@@ -1,4 +1,5 @@
-"""The Scenario tab: protocol, localization error, detection noise, co-visibility, seed."""
+"""The Scenario tab: protocol, localization error, detection noise, co-visibility, seed. A slider
+the protocol does not read is disabled, and the tab's note says why."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -19,6 +20,9 @@ SLIDERS = {
     "loc_yaw": ("localization yaw (°)", 0.0, 30.0, 0.5, "CAV pose error in yaw"),
     "sensor_range": ("sensor range (m)", 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
 }
+PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
+"""The protocols under which a slider acts (the others act under every protocol); opv2v reads the
+sensor range in a dataset without per-agent visibility."""
 
 
 @dataclass
@@ -27,6 +31,7 @@ class ScenarioControls:
     localization: viser.GuiDropdownHandle
     sliders: dict[str, viser.GuiSliderHandle]
     seed: viser.GuiNumberHandle
+    note: viser.GuiMarkdownHandle
 
     def show(self, settings: Settings) -> None:
         scenario = settings.scenario
@@ -34,6 +39,18 @@ class ScenarioControls:
         for name, slider in self.sliders.items():
             slider.value = getattr(scenario, name)
         self.seed.value = scenario.seed
+
+    def reflect(self, settings: Settings) -> None:
+        """Disable the sliders the protocol does not read, with the reason in their hint and the note."""
+        protocol = settings.scenario.protocol
+        off = []
+        for name, slider in self.sliders.items():
+            hint = SLIDERS[name][4]
+            slider.disabled = protocol not in PROTOCOLS_READING.get(name, (protocol,))
+            slider.hint = f"Disabled: no effect under the {protocol} protocol. {hint}" if slider.disabled else hint
+            off += [SLIDERS[name][0]] if slider.disabled else []
+        self.note.content = f"*Disabled (no effect under the {protocol} protocol): {', '.join(off)}.*"
+        self.note.visible = bool(off)
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> ScenarioControls:
@@ -43,7 +60,8 @@ def build(gui: viser.GuiApi, settings: Settings) -> ScenarioControls:
         localization=gui.add_dropdown("localization error", ("fixed", "gaussian"), initial_value=scenario.localization),
         sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
                  for name, (label, low, high, step, hint) in SLIDERS.items()},
-        seed=gui.add_number("seed", scenario.seed, min=0, step=1))
+        seed=gui.add_number("seed", scenario.seed, min=0, step=1),
+        note=gui.add_markdown("", visible=False))
 
 
 def bind(c: ScenarioControls, tab: TabActions) -> None:

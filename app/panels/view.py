@@ -1,4 +1,5 @@
-"""The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, camera."""
+"""The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, camera,
+presentation mode and the dark theme, and the legend of the palette in use."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -7,11 +8,12 @@ import viser
 
 from cbm.methods import METHODS
 
+from ..scene.colours import palette
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, on_user
 
-LEGEND = ("Boxes: **ego** blue, **CAV** orange (faint: before calibration). Lines: green right pair, red wrong "
-          "pair, grey dashed a true pair missed.")
+TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines")
+"""The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 
 
@@ -22,15 +24,21 @@ class ViewControls:
     lines: viser.GuiCheckboxHandle
     line_pairs: viser.GuiDropdownHandle
     labels: viser.GuiCheckboxHandle
+    pinned_lines: viser.GuiCheckboxHandle
     reset_camera: viser.GuiButtonHandle
+    presentation: viser.GuiCheckboxHandle
+    dark: viser.GuiCheckboxHandle
+    legend: viser.GuiMarkdownHandle
 
     def show(self, settings: Settings) -> None:
         view = settings.view
-        self.layout.value, self.ghosts.value, self.lines.value = view.layout, view.ghosts, view.lines
-        self.line_pairs.value, self.labels.value = LINE_PAIRS[view.line_pairs], view.labels
+        self.layout.value, self.line_pairs.value = view.layout, LINE_PAIRS[view.line_pairs]
+        for name in TOGGLES:
+            getattr(self, name).value = getattr(view, name)
 
     def reflect(self, settings: Settings) -> None:
         self.line_pairs.visible = METHODS[settings.method].explains
+        self.legend.content = palette(settings.view).legend
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
@@ -43,13 +51,19 @@ def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
                                     initial_value=LINE_PAIRS[view.line_pairs],
                                     hint="CBM's own pairs (eq. 13), or all pairs after the guided re-association"),
         labels=gui.add_checkbox("label clicked objects", view.labels),
-        reset_camera=gui.add_button("reset camera"))
-    gui.add_markdown(LEGEND)
+        pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
+                                      hint="The pinned baseline's match lines, faint grey (pin under the timeline)"),
+        reset_camera=gui.add_button("reset camera"),
+        presentation=gui.add_checkbox("presentation mode", view.presentation,
+                                      hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
+                                           "view, the camera over the two agents, this panel minimised"),
+        dark=gui.add_checkbox("dark theme", view.dark, hint="A dark page and scene, in this browser tab only"),
+        legend=gui.add_markdown(palette(view).legend))
     return controls
 
 
 def bind(c: ViewControls, tab: TabActions) -> None:
-    for name, control in (("layout", c.layout), ("ghosts", c.ghosts), ("lines", c.lines), ("labels", c.labels)):
+    for name, control in (("layout", c.layout), *((n, getattr(c, n)) for n in TOGGLES)):
         on_user(control, lambda n=name, h=control: tab.apply(lambda s: s.with_view(**{n: h.value})))
     on_user(c.line_pairs, lambda: tab.apply(lambda s: s.with_view(line_pairs=LINE_PAIR_KEYS[c.line_pairs.value])))
     c.reset_camera.on_click(lambda e: tab.reset_camera())

@@ -12,7 +12,7 @@ import numpy as np
 from cbm import se2
 
 from ..session.explorer import Outcome
-from . import colours, geometry
+from . import colours, geometry, presentation
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .text import metrics_markdown
 
@@ -51,6 +51,10 @@ class Drawing:
     """(boxes (N, 7) as drawn, index into the trial's list) by group (``ego``, ``cav``), for picking."""
     centre_y: float = 0.0
     """Sideways middle of the panels the layout shows (where the camera looks on reset)."""
+    agents: tuple[tuple[float, float], ...] = ()
+    """(x, y) of every vehicle drawn, ego and CAV of each panel (what the presentation camera frames)."""
+    label_px: float = presentation.LABEL_PX
+    """Height of the labels' text in CSS pixels."""
 
 
 @dataclass
@@ -95,10 +99,17 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
     trial, copies = outcome.trial, len(panels)
     objects = {"ego": (ego, np.tile(np.arange(len(trial.ego_boxes)), copies)),
                "cav": (cav, np.tile(np.arange(len(trial.cav_boxes)), copies))}
-    lines = {**_lines(parts), **_map_lines(map_segments, parts.map_poses)}
-    return Drawing(meshes=_meshes(parts, ego, cav), lines=lines, labels=_labels(parts, panels),
+    view = outcome.settings.view
+    palette = colours.palette(view)
+    lines = {**_lines(parts, palette), **_map_lines(map_segments, parts.map_poses, palette)}
+    agents = tuple(tuple(map(float, se2.translation_of(pose))) for pose in (*parts.ego_poses, *parts.cav_poses))
+    labels = _labels(parts, panels)
+    if view.presentation:
+        labels["numbers"] = (presentation.key_numbers(outcome), presentation.numbers_position(agents))
+    return Drawing(meshes=_meshes(parts, ego, cav, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome), objects=objects,
-                   centre_y=float(np.mean([panel.offset[1] for panel in panels])))
+                   centre_y=float(np.mean([panel.offset[1] for panel in panels])),
+                   agents=agents, label_px=presentation.label_px(view))
 
 
 def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:
@@ -119,34 +130,35 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
         seen = np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))
         parts.ghosts.append(_shifted(outcome.world_boxes[seen], offset))
     if view.lines:
-        right, wrong, missed = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2])
+        right, wrong, missed = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2],
+                                            colours.palette(view))
         parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
 
 
-def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray) -> dict[str, Mesh]:
+def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
     """Boxes as top-down tiles (``geometry.footprint_mesh``), vehicles as small bodies."""
     return {
-        "ego_boxes": Mesh(*geometry.footprint_mesh(ego), colours.EGO_BOXES),
-        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav)), colours.CAV_BOXES),
-        "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), colours.EGO_VEHICLE),
-        "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), colours.CAV_VEHICLE),
-        "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), colours.CAV_VEHICLE, opacity=0.3),
+        "ego_boxes": Mesh(*geometry.footprint_mesh(ego), palette.ego_boxes),
+        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav)), palette.cav_boxes),
+        "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
+        "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), palette.cav_vehicle),
+        "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), palette.cav_vehicle, opacity=0.3),
     }
 
 
-def _lines(parts: _Parts) -> dict[str, Lines]:
+def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
     """Match lines; outlines of the CAV's boxes where ``init`` put them and of the ground truth."""
     ghosts = geometry.outline_segments(np.concatenate(parts.ghosts)) if parts.ghosts else no_lines()
     before = geometry.outline_segments(np.concatenate(parts.before), 0.1) if parts.before else no_lines()
-    return {"right": Lines(_joined(parts.right), colours.RIGHT, 3.0),
-            "wrong": Lines(_joined(parts.wrong), colours.WRONG, 3.0),
-            "missed": Lines(_joined(parts.missed), colours.MISSED, 2.0),
-            "cav_before": Lines(before, colours.CAV_BEFORE, 1.5),
-            "ghosts": Lines(ghosts, colours.GHOST, 1.5)}
+    strokes = {"right": palette.right, "wrong": palette.wrong, "missed": palette.missed}
+    return {**{name: Lines(_joined(getattr(parts, name)), s.color, s.thickness) for name, s in strokes.items()},
+            "cav_before": Lines(before, palette.cav_before, 1.5),
+            "ghosts": Lines(ghosts, palette.ghost, 1.5)}
 
 
-def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray]) -> dict[str, Lines]:
+def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
+               palette: colours.Palette) -> dict[str, Lines]:
     """A node per kind of map line and copy of the scene (``map_<kind>``, ``map_<kind>_2``): the
     world's segments about a fixed point of the map, placed by the copy's world->scene ``pose``;
     empty for a copy the layout does not draw."""
@@ -155,7 +167,7 @@ def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray]) -> 
     origin = next(iter(map_segments.values()))[0, 0]
     nodes = {}
     for kind, segments in map_segments.items():
-        local, colour = _lift(segments - origin), colours.MAP.get(kind, colours.MAP_OTHER)
+        local, colour = _lift(segments - origin), palette.map.get(kind, palette.map_other)
         for k in range(MOST_PANELS):
             name = f"map_{kind}" if k == 0 else f"map_{kind}_{k + 1}"
             shown = k < len(poses)
@@ -174,17 +186,19 @@ def _labels(parts: _Parts, panels: list[Panel]) -> dict[str, tuple[str, tuple[fl
     return labels
 
 
-def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray,
-                 cav_xy: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Segments of right pairs, wrong pairs, and true pairs the method missed (dashed)."""
+def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray,
+                 palette: colours.Palette) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Segments of right pairs, wrong pairs, and true pairs the method missed, each solid or
+    dashed as the palette's stroke says."""
     truth = {tuple(p) for p in trial.gt_pairs.tolist()}
     found = {tuple(p) for p in pairs.tolist()}
     right = np.array([p for p in found if p in truth], dtype=int).reshape(-1, 2)
     wrong = np.array([p for p in found if p not in truth], dtype=int).reshape(-1, 2)
     missed = np.array([p for p in truth if p not in found], dtype=int).reshape(-1, 2)
-    return (geometry.segments(ego_xy[right[:, 0]], cav_xy[right[:, 1]], LINE_HEIGHT),
-            geometry.segments(ego_xy[wrong[:, 0]], cav_xy[wrong[:, 1]], LINE_HEIGHT),
-            geometry.dashed(ego_xy[missed[:, 0]], cav_xy[missed[:, 1]], LINE_HEIGHT))
+    drawn = [(ego_xy[p[:, 0]], cav_xy[p[:, 1]], stroke.dash)
+             for p, stroke in ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
+    return tuple(geometry.segments(a, b, LINE_HEIGHT) if dash is None else geometry.dashed(a, b, LINE_HEIGHT, dash)
+                 for a, b, dash in drawn)
 
 
 def _slim(boxes: np.ndarray) -> np.ndarray:

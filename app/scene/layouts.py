@@ -3,8 +3,10 @@ where ``init`` puts them, or where the estimate does), where, and with which tit
 ``ViewOptions.layout``'s (``app.session.settings.LAYOUTS``)."""
 from __future__ import annotations
 
+import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -14,6 +16,11 @@ SIDE_GAP = 20.0
 """Metres between the two copies of the side-by-side layout."""
 TITLE_AT = (-12.0, 3.0)
 """(x, height) of a copy's title."""
+PANEL_PX = 384 + 2 * 16
+"""CSS pixels the control panel takes from the right of the page: viser's ``large`` width (24 em)
+and its margins."""
+SCREEN = (math.radians(50.0), 1280, 720)
+"""(vertical field of view, width, height) assumed before the browser reports its camera."""
 
 
 @dataclass(frozen=True)
@@ -54,3 +61,43 @@ LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
     Layout("before", single("before")),
     Layout("side by side", side_by_side),
 )}
+
+
+def clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, float, float], centre_y: float,
+                   screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The default top-down camera (``position``, ``look_at``) for the layout centred on ``centre_y``,
+    shown in the part of the page left of the control panel: raised so that two copies side by side
+    fit in that part as they would in the whole page, then ``slid_clear_of_panel``."""
+    width = screen[1]
+    x, _, z = position
+    z = (z + 1.3 * abs(centre_y)) * (width / free_width(width) if centre_y else 1.0)
+    return slid_clear_of_panel((x, centre_y, z), (look_at[0], centre_y, 0.0), screen)
+
+
+def screen_of(camera: Any) -> tuple[float, int, int]:
+    """(vertical field of view, width, height) of a viser camera, ``SCREEN`` until the browser reports it."""
+    return (camera.fov, camera.image_width, camera.image_height) if camera.update_timestamp else SCREEN
+
+
+def free_width(width: int) -> float:
+    """CSS pixels of the page left of the control panel."""
+    return max(width - PANEL_PX, width / 3)
+
+
+def slid_clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, float, float],
+                        screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A top-down camera slid sideways (to -y, the screen's right) so that what it looked at shows in
+    the middle of the page's part left of the control panel: by half the panel's width, in metres at
+    the look-at distance (from the vertical field of view ``screen[0]`` and the page's height)."""
+    fov, width, height = screen
+    metres_per_px = 2.0 * math.dist(position, look_at) * math.tan(fov / 2.0) / height
+    shift = metres_per_px * (width - free_width(width)) / 2.0
+    return ((position[0], position[1] - shift, position[2]), (look_at[0], look_at[1] - shift, look_at[2]))
+
+
+def fitting_height(span: float, screen: tuple[float, int, int] = SCREEN, margin: float = 1.25) -> float:
+    """Height of a camera looking straight down at which ``span`` metres across (screen x) fill the
+    part of the page left of the control panel, with ``margin`` to spare."""
+    fov, width, height = screen
+    metres_per_px_per_metre = 2.0 * math.tan(fov / 2.0) / height
+    return margin * span / (free_width(width) * metres_per_px_per_metre)

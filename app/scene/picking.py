@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from cbm.diagnosis import short_id
+
 from ..session.explorer import Outcome
 from .drawing import Drawing
 
@@ -33,12 +35,12 @@ def describe(outcome: Outcome, picture: Drawing, group: str, row: int) -> str:
     column = 0 if group == "ego" else 1
     partner = pairs[pairs[:, column] == index]
     truth = trial.gt_pairs[trial.gt_pairs[:, column] == index]
-    text = f"{group.upper()} {str(ids[index])[:8]}"
+    text = f"{group.upper()} {short_id(ids[index])}"
     if len(partner):
         other = int(partner[0, 1 - column])
         right = len(truth) and int(truth[0, 1 - column]) == other
         other_ids = trial.cav_ids if group == "ego" else trial.ego_ids
-        text += f" -> {str(other_ids[other])[:8]} ({'right' if right else 'wrong'})"
+        text += f" -> {short_id(other_ids[other])} ({'right' if right else 'wrong'})"
     elif len(truth):
         text += " (co-visible, missed)"
     else:

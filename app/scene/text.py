@@ -7,6 +7,7 @@ import numpy as np
 
 from cbm import se2
 from cbm.methods import METHODS
+from cbm.metrics import is_success
 from cbm.result import MatchResult
 
 from ..session.explorer import Outcome
@@ -31,6 +32,12 @@ def thresholds(outcome: Outcome) -> list[str]:
         return []
     p = outcome.settings.cbm
     return [f"| thresholds | σ1 {p.sigma1:.1f}° · σ2 {p.sigma2:.2f} m · σ3 {p.sigma3:.2f} m |"]
+
+
+def findings_heading(outcome: Outcome) -> str:
+    """``Why it failed`` above the diagnosis of a failed frame; ``Warnings`` when the frame succeeded
+    (``cbm.metrics.is_success``) and a rule still found something."""
+    return "**Warnings** (the frame succeeded)" if is_success(outcome.metrics) else "**Why it failed**"
 
 
 def metrics_markdown(outcome: Outcome) -> str:
@@ -63,6 +70,6 @@ def metrics_markdown(outcome: Outcome) -> str:
         lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")
     if outcome.findings:
         lines.append("")
-        lines.append("**Why it failed**")
+        lines.append(findings_heading(outcome))
         lines.extend(f"- {f.message}" for f in outcome.findings)
     return "\n".join(lines)

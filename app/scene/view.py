@@ -13,14 +13,18 @@ import viser
 from cbm import se2
 
 from .drawing import Drawing, Lines, Mesh
+from .layouts import clear_of_panel, screen_of
+from .presentation import LABEL_PX
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
 _DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
 TOP_DOWN = {"position": (-10.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
 """Default camera: high above the ego, looking down and a little forward (x points up the screen)."""
-PANEL_SHIFT = 0.15
-"""Sideways shift of the view per metre of height, so the scene clears the control panel on the right."""
+VISER_LABEL_PX = 12.0
+"""Height in CSS pixels of viser's screen-space label text at ``font_screen_scale`` 1."""
+LARGER = {"numbers": 1.25}
+"""Labels drawn larger than the others, by how much (presentation mode's key numbers)."""
 
 
 def fingerprint(arrays: tuple[np.ndarray, ...], *style: Hashable) -> Hashable:
@@ -51,6 +55,8 @@ class SceneView:
         """Fingerprint of what each node shows."""
         self.updates: Counter[str] = Counter()
         """How often each node was created or changed (a redraw that leaves it alone does not count)."""
+        self.label_px = LABEL_PX
+        """Height of the labels' text in CSS pixels, as the last drawing shown asks."""
 
     @property
     def node_names(self) -> set[str]:
@@ -59,12 +65,10 @@ class SceneView:
 
     def reset_camera(self, centre_y: float = 0.0) -> None:
         """Look down on the ego from behind, centred sideways on ``centre_y`` (higher when the
-        layout shows two panels side by side)."""
-        x, _, z = TOP_DOWN["position"]
-        z += 1.3 * abs(centre_y)
-        y = centre_y - PANEL_SHIFT * z
-        self.client.camera.position = (x, y, z)
-        self.client.camera.look_at = (TOP_DOWN["look_at"][0], y, 0.0)
+        layout shows two panels side by side), in the part of the page the control panel leaves free."""
+        camera = self.client.camera
+        camera.position, camera.look_at = clear_of_panel(TOP_DOWN["position"], TOP_DOWN["look_at"], centre_y,
+                                                         screen_of(camera))
 
     def show(self, drawing: Drawing) -> None:
         """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""
@@ -77,18 +81,21 @@ class SceneView:
                     self._lines(name, lines)
                 if lines.pose is not None:
                     _place(self.lines[name], lines.pose)
+            self.label_px = drawing.label_px
             for name in set(self.labels) - set(drawing.labels):
                 self.labels[name].visible = False
             for name, (text, position) in drawing.labels.items():
                 self.label(name, text, position)
 
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
-        """Show (or move) the label ``name``."""
+        """Show (or move) the label ``name``, its text ``label_px`` high (more for ``LARGER`` ones)."""
+        scale = self.label_px * LARGER.get(name, 1.0) / VISER_LABEL_PX
         handle = self.labels.get(name)
         if handle is None:
-            self.labels[name] = self.client.scene.add_label(f"/labels/{name}", text, position=position)
+            self.labels[name] = self.client.scene.add_label(f"/labels/{name}", text, position=position,
+                                                            font_screen_scale=scale)
         else:
-            handle.text, handle.position, handle.visible = text, position, True
+            handle.text, handle.position, handle.visible, handle.font_screen_scale = text, position, True, scale
 
     def hide_label(self, name: str) -> None:
         if name in self.labels:
@@ -124,4 +131,4 @@ class SceneView:
                 f"/scene/{name}", points, colors, thickness=lines.thickness, thickness_units="screen",
                 visible=not empty)
             return
-        handle.points, handle.colors, handle.visible = points, colors, not empty
+        handle.points, handle.colors, handle.visible, handle.thickness = points, colors, not empty, lines.thickness

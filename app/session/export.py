@@ -1,13 +1,20 @@
 """What a tab can download, as bytes: the per-frame metrics of its last sequence run (CSV,
-Parquet) and its current settings as a preset file (the screenshot is taken by ``panels.explore``)."""
+Parquet), its current settings as a preset file, and a screenshot composed with the control panel's
+key content (the render itself is taken by ``panels.explore``: the server cannot capture the page, so
+the panel's metrics text is drawn beside the render with Pillow)."""
 from __future__ import annotations
 
 import io
+import re
+import textwrap
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
+import numpy as np
 import polars as pl
 import tomli_w
+from PIL import Image, ImageDraw, ImageFont
 
 from .settings import Settings, to_preset
 
@@ -31,3 +38,49 @@ def preset_toml(settings: Settings, dataset: str) -> bytes:
     """The settings as a preset file (``app.presets`` reads it back; frame and CAV left out)."""
     description = f"Exported from CBM Explorer ({dataset}, frame {settings.frame})."
     return tomli_w.dumps({"description": description, **to_preset(settings)}).encode("utf-8")
+
+
+FONT_FILES = ("/usr/share/fonts/truetype/dejavu/DejaVuSans.ttf",
+              "/usr/share/fonts/truetype/liberation/LiberationSans-Regular.ttf")
+"""Fonts with Greek letters and degree signs, when the system has one (else Pillow's own)."""
+PANEL_WIDTH = 420
+WRAP = 50
+"""Characters per line of the panel's text."""
+PANEL_TITLE = "CBM Explorer — control panel"
+
+
+def panel_lines(markdown: str) -> list[str]:
+    """The metrics panel's markdown as plain lines of at most ``WRAP`` characters: a table row
+    ``| a | b |`` reads ``a: b``; emphasis, code marks and table rules go."""
+    lines = []
+    for raw in markdown.splitlines():
+        if re.fullmatch(r"\|?[\s|:-]*\|?", raw) and "|" in raw:
+            continue
+        cells = [c.strip() for c in raw.strip().strip("|").split("|")] if raw.lstrip().startswith("|") else None
+        text = ": ".join(c for c in cells if c) if cells else raw
+        lines += textwrap.wrap(re.sub(r"[*`]", "", text).strip(), WRAP, subsequent_indent="  ") or [""]
+    return lines
+
+
+def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
+    for path in FONT_FILES:
+        if Path(path).exists():
+            return ImageFont.truetype(path, size)
+    return ImageFont.load_default(size=size)
+
+
+def with_panel(render: np.ndarray, markdown: str, size: int = 15) -> np.ndarray:
+    """The (H, W, 3|4) ``render`` with a white panel on its right holding the title and
+    ``panel_lines(markdown)``, as the page shows them side by side; (H', W + PANEL_WIDTH, 3) uint8."""
+    lines, font, title = panel_lines(markdown), _font(size), _font(size + 3)
+    step = size + 6
+    height = max(render.shape[0], 2 * step + step * len(lines) + 16)
+    canvas = Image.new("RGB", (render.shape[1] + PANEL_WIDTH, height), "white")
+    canvas.paste(Image.fromarray(np.ascontiguousarray(render[..., :3])), (0, 0))
+    draw = ImageDraw.Draw(canvas)
+    left = render.shape[1]
+    draw.line([(left, 0), (left, height)], fill=(200, 200, 200), width=2)
+    draw.text((left + 14, 12), PANEL_TITLE, fill=(20, 20, 20), font=title)
+    for k, line in enumerate(lines):
+        draw.text((left + 14, 12 + 2 * step + k * step), line, fill=(30, 30, 30), font=font)
+    return np.asarray(canvas)

@@ -1,34 +1,90 @@
-"""The metrics of the frames a tab has shown under its current settings, for the plot over frames."""
+"""The per-frame results a tab has computed under its current settings: the timeline's rows.
+
+A frame *fails* as the evaluation counts it (``cbm.metrics.is_success``): no pose estimate, or
+RTE >= 1 m, or RRE >= 1 deg. Rows come from the frames shown (``add``) and from sequence runs of
+the same settings (``merge``); they are forgotten only when a setting other than the frame, the
+CAV or the view changes.
+"""
 from __future__ import annotations
 
 import dataclasses
+import math
+from collections.abc import Iterable, Mapping
+from typing import Any, NamedTuple
 
-import numpy as np
+from cbm.metrics import TrialMetrics, is_success
 
 from .explorer import Outcome
 from .settings import AUTO_CAV, Settings, ViewOptions
 
+FAILED_MEANING = "failed = no pose estimate, or RTE ≥ 1 m or RRE ≥ 1° (the evaluation's success test)"
+
+
+class Row(NamedTuple):
+    """One frame's numbers on the timeline."""
+
+    precision: float
+    recall: float
+    rte: float
+    rre: float
+    n_matched: int
+    failed: bool
+
+
+def row_of(metrics: TrialMetrics) -> Row:
+    """The timeline row of one frame's metrics."""
+    return Row(metrics.precision, metrics.recall, metrics.rte, metrics.rre, metrics.n_matched,
+               not is_success(metrics))
+
+
+def row_of_sweep(row: Mapping[str, Any]) -> Row:
+    """The timeline row of one ``cbm.sweep`` row (a sequence run's frame)."""
+    def number(name: str) -> float:
+        value = row.get(name)
+        return math.nan if value is None else float(value)
+
+    return Row(number("precision"), number("recall"), number("rte"), number("rre"), int(row.get("n_matched", 0)),
+               not bool(row["success"]))
+
+
+def settings_key(settings: Settings) -> Settings:
+    """What a row depends on: the settings without the frame, the CAV and the view."""
+    return dataclasses.replace(settings, frame=0, cav=AUTO_CAV, view=ViewOptions())
+
+
+def step_to_failure(rows: Mapping[int, Row], frame: int, direction: int) -> int | None:
+    """The nearest failed frame after (``direction`` > 0) or before ``frame`` among ``rows``."""
+    failed = sorted(f for f, row in rows.items() if row.failed)
+    ahead = [f for f in failed if f > frame] if direction > 0 else [f for f in reversed(failed) if f < frame]
+    return ahead[0] if ahead else None
+
 
 class FrameHistory:
-    """Per-frame metrics of the current settings, for the plot over frames; forgotten when any
-    setting other than the frame, the CAV or the view changes."""
+    """Per-frame rows of the current settings (``settings_key``), by frame index."""
 
     def __init__(self) -> None:
         self.key: Settings | None = None
-        self.rows: dict[int, tuple[float, float, float]] = {}
+        self.rows: dict[int, Row] = {}
 
-    @staticmethod
-    def _key(settings: Settings) -> Settings:
-        return dataclasses.replace(settings, frame=0, cav=AUTO_CAV, view=ViewOptions())
+    def matches(self, settings: Settings) -> bool:
+        """Whether ``settings`` would add to these rows rather than start new ones."""
+        return settings_key(settings) == self.key
 
     def add(self, outcome: Outcome) -> None:
-        key = self._key(outcome.settings)
-        if key != self.key:
-            self.key, self.rows = key, {}
-        m = outcome.metrics
-        self.rows[outcome.frame_index] = (m.precision, m.recall, m.rte)
+        """The row of a frame shown."""
+        self.merge(outcome.settings, {outcome.frame_index: row_of(outcome.metrics)})
 
-    def arrays(self) -> tuple[np.ndarray, ...]:
-        frames = np.array(sorted(self.rows), dtype=float)
-        values = np.array([self.rows[int(f)] for f in frames], dtype=float).reshape(-1, 3)
-        return (frames, *(np.where(np.isfinite(values[:, k]), values[:, k], np.nan) for k in range(3)))
+    def merge(self, settings: Settings, rows: Mapping[int, Row]) -> None:
+        """Rows computed under ``settings``; other settings than the rows' so far start afresh."""
+        if not self.matches(settings):
+            self.key, self.rows = settings_key(settings), {}
+        self.rows.update(rows)
+
+    def failures(self) -> list[int]:
+        """The failed frames among the rows (a sequence run may add rows meanwhile: read a copy)."""
+        return sorted(f for f, row in dict(self.rows).items() if row.failed)
+
+
+def sweep_rows(rows: Iterable[Mapping[str, Any]]) -> dict[int, Row]:
+    """A sequence run's rows by frame."""
+    return {int(row["frame"]): row_of_sweep(row) for row in rows}

@@ -33,11 +33,19 @@ class ViewOptions:
     ghosts: bool = False
     """Ground-truth outlines of every object either agent sees."""
     lines: bool = True
-    """Match lines: right (green), wrong (red), missed true pairs (grey, dashed)."""
+    """Match lines: right (green), wrong (red), missed true pairs (grey, dashed); presentation mode
+    draws them in the Okabe-Ito palette and tells them apart by dash and width too."""
     line_pairs: LinePairs = "refined"
     """CBM's lines: its final pairs (``refined``) or its own pairs before the re-association (``own``)."""
     labels: bool = True
     """A label on the object clicked last."""
+    pinned_lines: bool = True
+    """The pinned baseline's match lines, faint grey (only while a baseline is pinned)."""
+    presentation: bool = False
+    """Presentation mode: a colour-blind-safe palette, large labels, the key numbers in the 3D view,
+    the camera over the two agents and the control panel collapsed."""
+    dark: bool = False
+    """The dark theme (this tab only)."""
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:

@@ -62,18 +62,26 @@ def test_a_step_advances_one_frame_with_one_recompute(browser, server: ExplorerS
     page.close()
 
 
-def test_only_the_parameters_that_act_are_shown(browser, server: ExplorerServer) -> None:
+def test_only_the_parameters_that_act_are_live(browser, server: ExplorerServer) -> None:
+    """A parameter that has no effect stays in view, disabled (issue 13); another method's set hides."""
     page = ui.open_page(browser, server)
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="Method").click()
-    sigma3 = ui.label(page, "σ3 voting (m)")
-    assert sigma3.is_visible()
+
+    def live(text: str) -> bool:
+        control = page.locator(f'[id="{ui.label(page, text).get_attribute("for")}"]')
+        handle = control.locator('[role="slider"]')
+        if handle.count():
+            return handle.first.get_attribute("data-disabled") != "true"
+        return control.is_enabled()
+
+    assert live("σ3 voting (m)")
     ui.pick_option(page, "method", "CBM without consensus")
-    ui.wait_until(lambda: tab.settings.method == "cbm-no-consensus" and not sigma3.is_visible())
-    assert not ui.label(page, "consensus").is_visible() and ui.label(page, "σ1 angle (°)").is_visible()
+    ui.wait_until(lambda: tab.settings.method == "cbm-no-consensus" and not live("σ3 voting (m)"))
+    assert not live("consensus") and live("σ1 angle (°)")
     ui.pick_option(page, "method", "ICP")
-    ui.wait_until(lambda: not ui.label(page, "σ1 angle (°)").is_visible())
+    ui.wait_until(lambda: not live("σ1 angle (°)"))
     assert ui.label(page, "max_iterations").is_visible()
     ui.pick_option(page, "method", "CBM")
-    ui.wait_until(lambda: sigma3.is_visible())
+    ui.wait_until(lambda: live("σ3 voting (m)") and not ui.label(page, "max_iterations").is_visible())
     page.close()

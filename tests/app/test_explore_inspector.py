@@ -45,11 +45,13 @@ def test_the_winning_anchor_is_drawn_and_explained(small_explorer: Explorer) -> 
     assert lines["inspector_ego_kept"] > 0
     assert f"L_ij holds {len(detail.candidates)} pairs" in shown.markdown
     rows = zip(detail.candidates.tolist()[:5], detail.votes.tolist(), detail.kept_by_consensus.tolist())
+    ego_ids, cav_ids = outcome.trial.ego_ids, outcome.trial.cav_ids
     for (a, b), votes, kept in rows:
-        assert f"| {a} | {b} | {votes} | {'kept' if kept else 'removed'} |" in shown.markdown
+        row = f"| {str(ego_ids[a])[:8]} | {str(cav_ids[b])[:8]} | {votes} | {'kept' if kept else 'removed'} |"
+        assert row in shown.markdown
     drawn = np.concatenate([part.segments for part in shown.lines.values() if len(part.segments)])
-    scene_right = min(boxes[:, 1].min() for boxes, _ in picture.objects.values())
-    assert drawn[..., 1].max() < scene_right, "the panels sit right of the scene"
+    scene_left = max(boxes[:, 1].max() for boxes, _ in picture.objects.values())
+    assert drawn[..., 1].min() > scene_left, "the panels sit left of the scene, away from the control panel"
     assert drawn[..., 1].min() >= shown.centre[1] - shown.span / 2 - 1e-6
     assert drawn[..., 1].max() <= shown.centre[1] + shown.span / 2 + 1e-6
 

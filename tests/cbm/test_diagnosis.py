@@ -1,9 +1,11 @@
 """The why-it-failed rules on constructed cases, and the inspector against the fast path."""
+import dataclasses
+
 import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from cbm.diagnosis import diagnose
+from cbm.diagnosis import diagnose, pair_name, rank_against_runner_up, short_id
 from cbm.inspect import Inspection
 from cbm.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
@@ -80,8 +82,38 @@ def test_wrong_anchor_reports_both_counts():
     assert tuple(result.anchor) not in {tuple(p) for p in trial.gt_pairs.tolist()}
     right = inspection.best_anchor_among(trial.gt_pairs)
     assert right.size <= result.consensus_count
-    assert findings["wrong_anchor"].endswith(f"with {result.consensus_count} pairs; the best right anchor "
-                                             f"{right.anchor} came second with {right.size}")
+    message = findings["wrong_anchor"]
+    assert message.startswith(f"the winning anchor {pair_name(trial, result.anchor)} was wrong with "
+                              f"{result.consensus_count} pairs; the best right anchor {pair_name(trial, right.anchor)}")
+    assert message.endswith(rank_against_runner_up(right.size, result.runner_up_count))
+
+
+def test_messages_name_objects_by_their_ids_not_rows():
+    """The ids are made to differ from the rows, so a row index in a message would show."""
+    world = street_scene(40, np.random.default_rng(0))
+    trial = trial_of(world, eta=0.15, sigma_p=0.8, sigma_theta=10.0, seed=0)
+    trial = dataclasses.replace(trial, ego_ids=np.array([f"e{k + 500}" for k in range(len(trial.ego_boxes))]),
+                                cav_ids=np.array([f"c{k + 700}" for k in range(len(trial.cav_boxes))]))
+    params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    message = {f.code: f.message for f in diagnose(result, trial, inspection)}["wrong_anchor"]
+    i, j = result.anchor
+    assert f"ego e{i + 500} ↔ CAV c{j + 700}" in message
+    assert str(tuple(result.anchor)) not in message
+
+
+@pytest.mark.parametrize(("size", "runner_up", "says"), [(5, 5, "came second with 5"),
+                                                         (3, 5, "a wrong anchor came second with 5"),
+                                                         (6, 5, "more than the runner-up's 5")])
+def test_came_second_only_when_it_did(size, runner_up, says):
+    text = rank_against_runner_up(size, runner_up)
+    assert says in text
+    assert ("came second" in text.split(":")[0]) == (size == runner_up)
+
+
+def test_short_ids_are_what_labels_show():
+    assert short_id("0123456789abcdef") == "01234567" and short_id(42) == "42"
 
 
 @pytest.mark.parametrize("setting", [dict(), dict(consensus_rule="released", sigma3=1.0), dict(consensus=False),

@@ -1,0 +1,77 @@
+"""The key numbers of the frame on screen, pinned to the bottom-left corner of the page: the control
+panel is one scroll area, so the metrics at its top scroll away while a slider deep in a tab is moved;
+this line never does. It also carries the lasting message of a frame CBM cannot run on
+(``unusable_markdown``)."""
+from __future__ import annotations
+
+import html
+
+import numpy as np
+import viser
+
+from cbm.metrics import is_success
+from loaders import is_vehicle
+
+from ..scene.text import number
+from ..session.explorer import Explorer, Outcome
+from ..session.settings import Settings
+
+ELEMENT_ID = "cbm-key-numbers"
+STYLE = ("position:fixed;left:12px;bottom:12px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
+         "border-radius:6px;background:rgba(255,255,255,0.92);box-shadow:0 1px 4px rgba(0,0,0,0.25);"
+         "font:13px/1.4 system-ui,sans-serif;color:#222;pointer-events:none")
+
+
+def key_numbers_html(outcome: Outcome) -> str:
+    """One line per fact: the frame and its verdict, precision / recall, the pose errors."""
+    m = outcome.metrics
+    verdict = "success" if is_success(m) else "failed"
+    return _box([f"<b>Frame {outcome.frame_index}</b> · {verdict}",
+                 f"precision / recall {number(m.precision)} / {number(m.recall)}",
+                 f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}"])
+
+
+def problem_html(title: str) -> str:
+    return _box([f"<b>{html.escape(title)}</b>"])
+
+
+def _box(lines: list[str]) -> str:
+    return f'<div id="{ELEMENT_ID}" style="{STYLE}">' + "<br>".join(lines) + "</div>"
+
+
+def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseException) -> str:
+    """What is missing for CBM to run on the tab's frame, and what to try."""
+    sequence = explorer.sequence
+    index = min(max(settings.frame, 0), len(sequence) - 1)
+    frame = sequence[index]
+    n_objects = len(frame.track_ids)
+    n_vehicles = int(np.count_nonzero(is_vehicle(frame.categories)))
+    kinds = ", ".join(sorted({str(c) for c in frame.categories})) or "none"
+    protocol = settings.scenario.protocol
+    if n_objects < 2:
+        missing = (f"frame {index} has {n_objects} object(s): CBM matches objects between two agents' views and "
+                   f"needs at least 2 (3 to tell contexts apart).")
+        fix = "pick another frame (the frame slider) or load a dataset with more objects."
+    elif protocol != "sind" and n_vehicles < 2:
+        missing = (f"frame {index} has {n_vehicles} vehicle(s) among its {n_objects} objects ({kinds}): the "
+                   f"{protocol} protocol needs two vehicles (or agents in the table's `agent` column) to act as "
+                   f"the ego and the CAV.")
+        fix = ("set the Scenario tab's protocol to `sind` (abstract agents: no vehicles needed), or load a "
+               "dataset with vehicles.")
+    else:
+        missing = f"{type(error).__name__}: {error}."
+        fix = "pick another frame, protocol or dataset."
+    return f"**CBM cannot run on this frame.**\n\nWhat is missing: {missing}\n\nWhat to try: {fix}"
+
+
+class KeyNumbers:
+    """The pinned line of one tab."""
+
+    def __init__(self, gui: viser.GuiApi) -> None:
+        self.handle = gui.add_html(problem_html("Computing the first frame…"), order=1_000_000.0)
+
+    def show(self, outcome: Outcome) -> None:
+        self.handle.content = key_numbers_html(outcome)
+
+    def problem(self, title: str) -> None:
+        self.handle.content = problem_html(title)

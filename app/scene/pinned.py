@@ -1,0 +1,66 @@
+"""What a pinned baseline adds to a drawing: its matches as faint lines and a comparison table."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from cbm import se2
+
+from ..session.explorer import Outcome
+from . import geometry
+from .drawing import LINE_HEIGHT, Drawing, Lines, no_lines
+from .layouts import LAYOUTS
+from .text import number
+
+PINNED_LINES = (175, 175, 175)
+"""The pinned run's match lines: a faint grey, thinner and lower than the current run's."""
+PINNED_HEIGHT = LINE_HEIGHT - 0.4
+
+
+def pinned_segments(outcome: Outcome, pinned: Outcome) -> np.ndarray:
+    """The pinned run's pairs from its ego boxes to its CAV boxes at its estimate, in every copy of
+    the scene that shows the CAV at the estimate (the only copy when none does)."""
+    trial, pairs = pinned.trial, pinned.result.pairs.reshape(-1, 2)
+    if not len(pairs):
+        return no_lines()
+    ego_xy = trial.ego_boxes[pairs[:, 0], :2]
+    cav_xy = se2.apply_boxes(pinned.result.transform, trial.cav_boxes)[pairs[:, 1], :2]
+    panels = LAYOUTS[outcome.settings.view.layout].panels(outcome)
+    shown = [p for p in panels if p.placement == "after"] or panels[:1]
+    return np.concatenate([geometry.segments(ego_xy + p.offset, cav_xy + p.offset, PINNED_HEIGHT) for p in shown])
+
+
+def _row(name: str, current: float, pinned: float, unit: str, digits: int) -> str:
+    difference = current - pinned
+    sign = "+" if difference > 0 else ""
+    shown = "—" if math.isnan(difference) else f"{sign}{difference:.{digits}f}{unit}"
+    return f"| {name} | {number(current, unit, digits)} | {number(pinned, unit, digits)} | {shown} |"
+
+
+def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
+    """Current against pinned on this frame, and the difference (current − pinned)."""
+    m, p = outcome.metrics, pinned.metrics
+    return "\n".join([
+        "**Pinned baseline** (same frame and CAV)",
+        "",
+        "| | current | pinned | current − pinned |",
+        "|---|---|---|---|",
+        _row("precision", m.precision, p.precision, "", 2),
+        _row("recall", m.recall, p.recall, "", 2),
+        _row("RTE", m.rte, p.rte, " m", 2),
+        _row("RRE", m.rre, p.rre, "°", 2),
+        _row("matches", float(m.n_matched), float(p.n_matched), "", 0),
+    ])
+
+
+def with_baseline(picture: Drawing, outcome: Outcome, pinned: Outcome | None) -> Drawing:
+    """``picture`` with the ``pinned`` node (empty unless a baseline is pinned and the view asks
+    for its lines) and, when pinned, the comparison below the metrics."""
+    show = pinned is not None and outcome.settings.view.pinned_lines
+    lines = {**picture.lines, "pinned": Lines(pinned_segments(outcome, pinned) if show else no_lines(),
+                                              PINNED_LINES, 1.5)}
+    text = picture.metrics_markdown if pinned is None else \
+        f"{picture.metrics_markdown}\n\n{comparison_markdown(outcome, pinned)}"
+    return dataclasses.replace(picture, lines=lines, metrics_markdown=text)

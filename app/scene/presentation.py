@@ -1,0 +1,92 @@
+"""Presentation mode and the dark theme, as far as they go beyond the drawing: the key numbers
+label, the camera over the two agents, the control panel and the page's colour scheme (all for
+one browser tab)."""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+import viser
+
+from ..session.settings import ViewOptions
+from .text import number
+
+if TYPE_CHECKING:
+    from ..session.explorer import Outcome
+    from .drawing import Drawing
+    from .view import SceneView
+
+LABEL_PX = 14.0
+"""Height of the labels' text in CSS pixels (viser's own default is 12)."""
+PRESENTATION_LABEL_PX = 20.0
+"""In presentation mode: readable from the back of a room."""
+THEME = {"show_share_button": False, "control_width": "large", "show_logo": False}
+"""The theme ``app.server`` configures for every tab; a tab's own ``configure_theme`` replaces the
+whole theme, so it repeats these with its colour scheme."""
+MARGIN = 14.0
+"""Metres of scene kept around the agents by the presentation camera (room for the numbers below them)."""
+LOWEST = 30.0
+"""The presentation camera's lowest height (m): agents close together still show their surroundings."""
+TILT = 0.05
+"""How far the presentation camera stands behind the point it looks at, per metre of height (a
+camera looking straight down has no 'up' to keep x pointing up the screen)."""
+
+
+def label_px(view: ViewOptions) -> float:
+    """Height of the labels' text for ``view``."""
+    return PRESENTATION_LABEL_PX if view.presentation else LABEL_PX
+
+
+def key_numbers(outcome: Outcome) -> str:
+    """The one line of numbers presentation mode shows in the 3D view."""
+    m = outcome.metrics
+    return (f"precision {number(m.precision)} · recall {number(m.recall)} · "
+            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}")
+
+
+def numbers_position(agents: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
+    """Where the key numbers go: just below the agents on screen (x points up), starting at their
+    left (the label's top-left corner is its anchor; y points left)."""
+    points = np.asarray(agents, float).reshape(-1, 2)
+    return float(points[:, 0].min() - 5.0), float(points[:, 1].max() + 4.0), 2.5
+
+
+def camera_over(agents: Sequence[tuple[float, float]], fov: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Camera position and look-at point above the middle of ``agents`` ((x, y) of each vehicle
+    drawn), high enough that the vertical field of view ``fov`` (radians) holds all of them and
+    ``MARGIN`` around them."""
+    points = np.asarray(agents, float).reshape(-1, 2)
+    low, high = points.min(axis=0), points.max(axis=0)
+    centre = (low + high) / 2
+    half = float(np.max(high - low)) / 2 + MARGIN
+    height = max(LOWEST, half / math.tan(fov / 2))
+    return (float(centre[0] - TILT * height), float(centre[1]), height), (float(centre[0]), float(centre[1]), 0.0)
+
+
+def aim(scene: SceneView, view: ViewOptions, drawing: Drawing | None) -> None:
+    """The tab's default camera: over the agents in presentation mode, else the layout's view."""
+    if drawing is None:
+        scene.reset_camera()
+    elif view.presentation and drawing.agents:
+        camera = scene.client.camera
+        camera.position, camera.look_at = camera_over(drawing.agents, camera.fov)
+    else:
+        scene.reset_camera(drawing.centre_y)
+
+
+def restage(client: viser.ClientHandle, before: ViewOptions | None, after: ViewOptions) -> bool:
+    """Switch the tab's colour scheme and control panel from ``before``'s (None: the defaults) to
+    ``after``'s; whether presentation mode changed (then the camera is to be aimed again).
+
+    The panel is minimised (``main_panel.minimize``: the same as its on-screen minimise control,
+    which expands it again) when presentation mode starts, and expanded when it ends."""
+    before = before or ViewOptions()
+    if after.dark != before.dark:
+        client.gui.configure_theme(dark_mode=after.dark, **THEME)
+    if after.presentation == before.presentation:
+        return False
+    panel = client.gui.main_panel
+    (panel.minimize if after.presentation else panel.expand)()
+    return True

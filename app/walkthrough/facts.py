@@ -1,0 +1,112 @@
+"""What the walkthrough explains, gathered once per outcome: CBM's sets (``cbm.inspect``), the pair
+it follows, that pair's way through eq. 8-13, the robust fit of CBM's own pairs (eq. 14-15) and
+the result after the guided re-association (step 7b)."""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from cbm import se2
+from cbm.estimate import Fit
+from cbm.inspect import AnchorDetail, Inspection
+from cbm.methods import METHODS
+from cbm.metrics import TrialMetrics, evaluate
+from cbm.params import CBMParams
+from cbm.pipeline import estimate
+from cbm.result import MatchResult
+from cbm.scenario import Trial
+
+from ..scene.inspector import inspection_of
+from ..session.explorer import Outcome
+
+
+@dataclass(frozen=True)
+class Facts:
+    """One outcome as the walkthrough tells it: CBM's run on the outcome's trial."""
+
+    outcome: Outcome
+    inspection: Inspection
+    result: MatchResult
+    """CBM's result: the outcome's own when its method is CBM, else CBM run on the same sets."""
+    metrics: TrialMetrics
+    pair: tuple[int, int] | None
+    """(ego index, CAV index) followed: the winning anchor, else the first true pair."""
+    detail: AnchorDetail | None
+    """``pair`` through eq. 8-13."""
+    fit: Fit | None
+    """The robust fit of eq. 14 on CBM's own pairs (None when fewer than 2)."""
+
+    @property
+    def trial(self) -> Trial:
+        return self.outcome.trial
+
+    @property
+    def params(self) -> CBMParams:
+        return self.inspection.sets.params
+
+    @property
+    def ego_xy(self) -> np.ndarray:
+        return self.inspection.sets.ego_xy
+
+    @property
+    def cav_xy(self) -> np.ndarray:
+        """CAV centres where the wrong pose ``init`` puts them (step 1)."""
+        return self.inspection.sets.cav_xy
+
+    @property
+    def own_pairs(self) -> np.ndarray:
+        """CBM's own pairs (eq. 13), before the re-association."""
+        own = self.result.context_pairs
+        return (self.result.pairs if own is None else own).reshape(-1, 2)
+
+    @property
+    def fit_pose(self) -> np.ndarray:
+        """CAV->ego pose after the robust fit of CBM's own pairs (eq. 15), before step 7b."""
+        return self.result.init if self.fit is None else self.fit.transform @ self.result.init
+
+    def is_anchor(self) -> bool:
+        anchor = self.result.anchor
+        return self.pair is not None and anchor is not None and tuple(map(int, anchor)) == self.pair
+
+    def ego_name(self, index: int) -> str:
+        return f"EGO {str(self.trial.ego_ids[index])[:8]}"
+
+    def cav_name(self, index: int) -> str:
+        return f"CAV {str(self.trial.cav_ids[index])[:8]}"
+
+    def truth(self) -> set[tuple[int, int]]:
+        return {tuple(p) for p in np.asarray(self.trial.gt_pairs).reshape(-1, 2).tolist()}
+
+
+def pose_error(T: np.ndarray, truth: np.ndarray) -> tuple[float, float]:
+    """(metres, degrees) between a CAV->ego pose and the true one."""
+    metres = float(np.linalg.norm(se2.translation_of(T) - se2.translation_of(truth)))
+    return metres, abs(math.degrees(se2.wrap_angle(se2.yaw_of(T) - se2.yaw_of(truth))))
+
+
+def followed_pair(result: MatchResult, gt_pairs: np.ndarray, n_ego: int, n_cav: int) -> tuple[int, int] | None:
+    """The pair the walkthrough follows: the winning anchor, else the first true pair, else the
+    first objects of both agents (None when an agent sees nothing)."""
+    if result.anchor is not None:
+        return int(result.anchor[0]), int(result.anchor[1])
+    gt = np.asarray(gt_pairs).reshape(-1, 2)
+    if len(gt):
+        return int(gt[0, 0]), int(gt[0, 1])
+    return (0, 0) if n_ego and n_cav else None
+
+
+def gather(outcome: Outcome) -> Facts:
+    """The facts of ``outcome``: CBM's sets with the tab's thresholds, reused, not recomputed otherwise."""
+    inspection = inspection_of(outcome)
+    own = METHODS[outcome.settings.method].explains
+    result = outcome.result if own else inspection.match()
+    metrics = outcome.metrics if own else evaluate(result, outcome.trial)
+    trial = outcome.trial
+    pair = followed_pair(result, trial.gt_pairs, len(trial.ego_boxes), len(trial.cav_boxes))
+    detail = inspection.anchor(*pair) if pair is not None else None
+    pairs = (result.pairs if result.context_pairs is None else result.context_pairs).reshape(-1, 2)
+    sets = inspection.sets
+    fit = estimate(sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]], sets.params) if len(pairs) >= 2 else None
+    return Facts(outcome, inspection, result, metrics, pair, detail, fit)

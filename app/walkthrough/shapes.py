@@ -1,0 +1,90 @@
+"""The walkthrough's geometry, in the ego frame: the boxes, pair lines, context vectors drawn in
+one object's frame, and the Welsch weights as line widths."""
+from __future__ import annotations
+
+import numpy as np
+
+from ..scene import geometry
+from ..scene.colours import CAV_BOXES, EGO_BOXES
+from ..scene.drawing import Lines, Mesh, no_lines
+from ..scene.inspector import band_segments, region_segments
+
+PAIR_HEIGHT = 1.9
+"""Metres above the ground of pair lines (above the boxes' tiles)."""
+VECTOR_HEIGHT = 2.1
+"""Metres above the ground of context vectors and their regions."""
+WEIGHT_CLASSES = ((0.75, 7.0), (0.5, 4.5), (0.25, 2.5), (0.0, 1.0))
+"""(least Welsch weight, line width) of each class of pairs drawn in the robust fit's step."""
+
+
+def ego_mesh(boxes: np.ndarray) -> Mesh:
+    return Mesh(*geometry.footprint_mesh(boxes), EGO_BOXES)
+
+
+def cav_mesh(boxes: np.ndarray) -> Mesh:
+    """The CAV's boxes in the CAV's own frame (the node is placed by a pose), narrower and taller
+    than the ego's as in the main scene, so a matched pair shows both colours."""
+    slim = boxes.copy()
+    slim[:, 3:5] *= 0.7
+    slim[:, 5] *= 1.3
+    return Mesh(*geometry.footprint_mesh(slim), CAV_BOXES)
+
+
+def pair_segments(ego_xy: np.ndarray, cav_xy: np.ndarray, pairs: np.ndarray,
+                  z: float = PAIR_HEIGHT) -> np.ndarray:
+    """(K, 2, 3) lines from each pair's ego centre to its CAV centre."""
+    pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
+    return geometry.segments(ego_xy[pairs[:, 0]], cav_xy[pairs[:, 1]], z)
+
+
+def rays(origin: np.ndarray, targets: np.ndarray, z: float = VECTOR_HEIGHT) -> np.ndarray:
+    """(N, 2, 3) lines from ``origin`` to each of ``targets``."""
+    targets = np.asarray(targets, dtype=float).reshape(-1, 2)
+    return geometry.segments(np.broadcast_to(origin, targets.shape), targets, z)
+
+
+def to_scene(segments: np.ndarray, origin: np.ndarray, heading: float, z: float = VECTOR_HEIGHT) -> np.ndarray:
+    """Segments given in an object's own frame (eq. 5-6), placed at ``origin`` turned by ``heading``."""
+    c, s = np.cos(heading), np.sin(heading)
+    out = np.array(segments, dtype=np.float32, copy=True)
+    x, y = out[..., 0].copy(), out[..., 1].copy()
+    out[..., 0], out[..., 1], out[..., 2] = origin[0] + c * x - s * y, origin[1] + s * x + c * y, z
+    return out
+
+
+def local_vectors(vectors: np.ndarray) -> np.ndarray:
+    """(n, 2, 3) segments from an object's own origin to each context vector's tip."""
+    vectors = np.asarray(vectors, dtype=float).reshape(-1, 2)
+    return geometry.segments(np.zeros_like(vectors), vectors, 0.0)
+
+
+def tolerance_region(vector: np.ndarray, sigma1_deg: float, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
+    """The sigma1 wedge and the sigma2 diamond (L1 ball) of eq. 7 around one context vector, in
+    its object's frame (``cbm`` tests a vector of the other agent against both)."""
+    vector = np.asarray(vector, dtype=float).reshape(1, 2)
+    return band_segments(np.zeros(2), vector, sigma1_deg, sigma2), region_segments(np.zeros(2), vector, sigma2)
+
+
+def weight_lines(segments: np.ndarray, weights: np.ndarray, color: tuple[int, int, int]) -> dict[str, Lines]:
+    """One node per width class of ``WEIGHT_CLASSES`` (viser draws one width per node): each
+    pair's line in the class of its weight."""
+    weights = np.asarray(weights, dtype=float)
+    nodes, upper = {}, np.inf
+    for k, (least, width) in enumerate(WEIGHT_CLASSES, start=1):
+        chosen = (weights >= least) & (weights < upper)
+        nodes[f"weights_{k}"] = Lines(segments[chosen] if len(segments) else no_lines(), color, width)
+        upper = least
+    return nodes
+
+
+def midpoints(segments: np.ndarray) -> np.ndarray:
+    """(N, 3) middle of each segment, a little above it (where a label goes)."""
+    if len(segments) == 0:
+        return np.zeros((0, 3))
+    middle = segments.mean(axis=1).astype(float)
+    middle[:, 2] += 0.4
+    return middle
+
+
+def outlines(boxes: np.ndarray) -> np.ndarray:
+    return geometry.outline_segments(boxes, 0.1)

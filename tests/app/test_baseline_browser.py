@@ -1,0 +1,75 @@
+"""Pinning a baseline: the metrics compare current and pinned, the timeline shows both, the pinned
+run's matches can be shown ghosted in the scene, and unpinning takes it all away."""
+from __future__ import annotations
+
+import contextlib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from app.server import ExplorerServer
+from app.session.explorer import Explorer
+from support import browser as ui
+
+pytestmark = [pytest.mark.browser, ui.requires_chromium]
+
+SCREENSHOT = Path(__file__).resolve().parents[2] / "docs" / "img" / "timeline.png"
+
+
+@pytest.fixture(scope="module")
+def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
+    with ui.scenario_server(small_explorer, tmp_path_factory.mktemp("presets"), protocol="sind") as running:
+        yield running
+
+
+def dismiss_notifications(page) -> None:
+    """Close the notifications on screen (one may close itself meanwhile)."""
+    for button in page.locator(".mantine-Notification-root button").all():
+        with contextlib.suppress(Exception):
+            button.click(timeout=2_000)
+
+
+def run_all_frames(page, tab) -> None:
+    """Run the current settings over every frame (Explore tab) and wait until the timeline has them."""
+    page.get_by_role("tab", name="Explore").click()
+    page.get_by_role("button", name="run all frames").click()
+    ui.wait_until(lambda: len(tab.history.rows) == len(tab.explorer) and tab.history.matches(tab.settings), 180)
+    ui.wait_until(lambda: page.get_by_role("button", name="run all frames").is_enabled(), 60)
+
+
+def pinned_frames(tab) -> set[int]:
+    """Frames where the timeline draws the pinned precision."""
+    x, pinned_precision = tab.controls.metrics.plot.data[0], tab.controls.metrics.plot.data[4]
+    return set(x[np.isfinite(pinned_precision)].astype(int))
+
+
+def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browser, server: ExplorerServer) -> None:
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    run_all_frames(page, tab)
+    page.get_by_role("button", name="pin baseline").click()
+    page.get_by_text("current − pinned").first.wait_for(timeout=60_000)
+    page.get_by_role("tab", name="Presets").click()
+    ui.pick_option(page, "preset", "stress")
+    page.get_by_role("button", name="load", exact=True).click()
+    ui.wait_until(lambda: tab.last.settings.scenario.sigma_p == 0.9, 60)
+    page.get_by_text("current − pinned").first.wait_for(timeout=30_000)
+    for frame in (1, 2, 3):
+        page.get_by_role("button", name="next ▶").click()
+        ui.wait_until(lambda f=frame: tab.last.frame_index == f, 60)
+    assert {0, 1, 2, 3} <= pinned_frames(tab)
+    assert tab.view.lines["pinned"].visible
+    run_all_frames(page, tab)
+    assert pinned_frames(tab) == set(range(len(tab.explorer)))
+    page.set_viewport_size({"width": 1280, "height": 720})
+    dismiss_notifications(page)
+    page.get_by_text("Pinned baseline").first.evaluate("e => e.scrollIntoView({block: 'start'})")
+    page.screenshot(path=str(SCREENSHOT))
+    page.get_by_role("tab", name="View").click()
+    ui.label(page, "show pinned matches").click()
+    ui.wait_until(lambda: not tab.last.settings.view.pinned_lines and not tab.view.lines["pinned"].visible, 60)
+    page.get_by_role("button", name="unpin").click()
+    ui.wait_until(lambda: not pinned_frames(tab) and "current − pinned" not in ui.metrics(page), 60)
+    assert page.get_by_role("button", name="pin baseline").is_visible()
+    page.close()

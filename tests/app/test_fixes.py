@@ -1,0 +1,73 @@
+"""Issue 13's fixes without a browser: the diagnosis heading, why a control is disabled, the camera
+clear of the panel, the screenshot's panel and the message of a frame CBM cannot run on."""
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+
+from app.panels.keynumbers import unusable_markdown
+from app.panels.method import inactive_reason
+from app.scene import layouts
+from app.scene.text import metrics_markdown
+from app.session import export
+from app.session.explorer import Explorer
+from app.session.settings import Settings
+from cbm.diagnosis import Finding
+from loaders.trials import NoTrial
+
+
+def test_a_finding_on_a_frame_that_succeeded_is_a_warning(small_explorer: Explorer) -> None:
+    outcome = small_explorer.compute(Settings())
+    assert outcome.metrics.rte < 1.0 and outcome.metrics.rre < 1.0
+    noted = dataclasses.replace(outcome, findings=[Finding("distance_limit", "nearly rejected")])
+    assert "**Warnings** (the frame succeeded)" in metrics_markdown(noted)
+    assert "Why it failed" not in metrics_markdown(noted)
+    failed = dataclasses.replace(noted, metrics=dataclasses.replace(noted.metrics, rte=5.0))
+    assert "**Why it failed**" in metrics_markdown(failed)
+
+
+def test_why_a_method_control_is_disabled() -> None:
+    settings = Settings()
+    assert inactive_reason(settings, "cbm", "sigma3") is None
+    off = settings.with_params("cbm", consensus=False)
+    assert inactive_reason(off, "cbm", "sigma3") == "consensus is off"
+    icp = dataclasses.replace(settings, method="icp")
+    assert inactive_reason(icp, "cbm", "sigma1") == "ICP selected: CBM's parameters do not apply"
+    forced = dataclasses.replace(settings, method="cbm-no-consensus")
+    assert "forces consensus" in inactive_reason(forced, "cbm", "consensus")
+
+
+def test_the_default_camera_centres_the_layout_left_of_the_panel() -> None:
+    screen = (math.radians(50.0), 1280, 720)
+    position, look_at = layouts.clear_of_panel((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 0.0, screen)
+    metres_per_px = 2 * math.dist(position, look_at) * math.tan(screen[0] / 2) / 720
+    assert look_at[1] == position[1] < 0
+    assert math.isclose(-look_at[1] / metres_per_px, layouts.PANEL_PX / 2)
+    raised, _ = layouts.clear_of_panel((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 30.0, screen)
+    assert raised[2] > (60.0 + 1.3 * 30.0) * 1.2, "side by side: raised to fit the free part"
+
+
+def test_the_screenshot_panel_is_the_metrics_as_plain_lines() -> None:
+    markdown = "**Frame 3** · ego `a`\n\n| | |\n|---|---|\n| precision / recall | 1.00 / 0.50 |\n\n- " + "x " * 60
+    lines = export.panel_lines(markdown)
+    assert lines[:3] == ["Frame 3 · ego a", "", "precision / recall: 1.00 / 0.50"]
+    assert all(len(line) <= export.WRAP for line in lines) and len(lines) > 4
+    image = export.with_panel(np.zeros((200, 300, 4), np.uint8), markdown)
+    assert image.shape[1] == 300 + export.PANEL_WIDTH and image.shape[0] >= 200
+    assert (image[:, 300 + 4:].sum(axis=-1) < 200).any()
+
+
+def test_a_frame_of_one_object_says_so() -> None:
+    class OneObject:
+        track_ids = np.array(["a"])
+        categories = np.array(["car"])
+
+    class Sequence(list):
+        name = "one"
+
+    lonely = Explorer.__new__(Explorer)
+    lonely.sequence = Sequence([OneObject()])
+    text = unusable_markdown(lonely, Settings(), NoTrial("no ego and CAV"))
+    assert "frame 0 has 1 object(s)" in text and "What to try" in text

@@ -1,0 +1,185 @@
+"""Real-browser tests of issue 13's fixes at 1280x720: key numbers that never scroll away, a camera
+that keeps the layouts clear of the control panel, an inspector beside the scene that is never blank,
+inactive controls disabled with the reason, and a screenshot that can include the panel."""
+from __future__ import annotations
+
+import io
+import math
+
+import numpy as np
+import pytest
+from PIL import Image
+
+import loaders
+from app.scene.layouts import PANEL_PX
+from app.server import ExplorerServer
+from app.session.explorer import Explorer
+from app.session.export import PANEL_WIDTH
+from support import browser as ui
+
+pytestmark = [pytest.mark.browser, ui.requires_chromium]
+WIDTH, HEIGHT = 1280, 720
+
+
+@pytest.fixture(scope="module")
+def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
+    with ui.scenario_server(small_explorer, tmp_path_factory.mktemp("presets")) as running:
+        yield running
+
+
+def open_small_page(browser, server: ExplorerServer):
+    page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
+    page.goto(server.url)
+    page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
+    return page
+
+
+def inside_viewport(box: dict | None) -> bool:
+    return box is not None and box["y"] >= 0 and box["y"] + box["height"] <= HEIGHT and box["x"] >= 0
+
+
+def screen_x(camera, point: tuple[float, float, float]) -> float:
+    """Where ``point`` shows across the page, in CSS pixels, through a viser camera (+z up)."""
+    position, look_at = np.asarray(camera.position), np.asarray(camera.look_at)
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    offset = np.asarray(point) - position
+    ndc = (offset @ right) / ((offset @ forward) * math.tan(camera.fov / 2) * camera.aspect)
+    return (ndc + 1.0) / 2.0 * camera.image_width
+
+
+def test_key_numbers_stay_in_view_while_a_deep_method_control_is_edited(browser, server: ExplorerServer) -> None:
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    page.get_by_role("tab", name="Method").click()
+    gate = ui.label(page, "refine gate (σ)")
+    gate.scroll_into_view_if_needed()
+    row = gate.locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+    box = row.locator("input.mantine-NumberInput-input")
+    box.fill("5")
+    box.blur()
+    ui.wait_until(lambda: tab.last.settings.cbm.refine_gate == 5.0, timeout=30)
+    assert not inside_viewport(page.locator("td", has_text="precision / recall").first.bounding_box()), \
+        "the panel's own metrics scrolled away (else this test proves nothing)"
+    pinned = page.locator("#cbm-key-numbers")
+    assert inside_viewport(pinned.bounding_box())
+    assert "precision / recall" in pinned.inner_text() and f"Frame {tab.last.frame_index}" in pinned.inner_text()
+    panel_left = WIDTH - PANEL_PX
+    assert pinned.bounding_box()["x"] + pinned.bounding_box()["width"] < panel_left
+    page.close()
+
+
+def test_side_by_side_keeps_both_copies_left_of_the_panel(browser, server: ExplorerServer) -> None:
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.wait_until(lambda: tab.client.camera.update_timestamp > 0)
+    page.get_by_role("tab", name="View").click()
+    ui.pick_option(page, "CAV boxes", "side by side")
+    ui.wait_until(lambda: tab.last.settings.view.layout == "side by side")
+    camera = tab.client.camera
+    assert camera.image_width == WIDTH
+    after = screen_x(camera, tab.view.labels["after"].position)
+    before = screen_x(camera, tab.view.labels["before"].position)
+    assert 0 < before < after < WIDTH - PANEL_PX, (before, after)
+    page.get_by_role("button", name="reset camera").click()
+    assert 0 < screen_x(tab.client.camera, tab.view.labels["after"].position) < WIDTH - PANEL_PX
+    page.close()
+
+
+def purple_pixels(page) -> int:
+    """Purple pixels (the inspector's sigma2 diamonds; the scene has none) of the page left of the
+    control panel."""
+    shot = np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB")).astype(int)
+    r, g, b = np.moveaxis(shot[:, : WIDTH - PANEL_PX], -1, 0)
+    return int(((r - g > 40) & (b - g > 40)).sum())
+
+
+def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server: ExplorerServer) -> None:
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    page.get_by_role("tab", name="Explore").click()
+    page.get_by_role("button", name="inspect the winning anchor").click()
+    ui.wait_until(lambda: tab.explore.shown is not None)
+    shown = tab.explore.shown
+    scene_left = max(float(boxes[:, 1].max()) for boxes, _ in tab.last_drawing.objects.values() if len(boxes))
+    assert shown.centre[1] > scene_left, "the panels are drawn left of the scene, away from the control panel"
+    for attempt in range(4):
+        tab.reset_camera()
+        ui.wait_until(lambda: purple_pixels(page) < 100, timeout=30)
+        page.get_by_role("button", name="look at the context panels").click()
+        ui.wait_until(lambda: abs(tab.client.camera.look_at[1] - shown.centre[1]) < shown.span, timeout=30)
+        ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
+        assert 0 < screen_x(tab.client.camera, (*shown.centre, 0.0)) < WIDTH - PANEL_PX, attempt
+    ego_id = str(tab.last.trial.ego_ids[int(tab.last.result.anchor[0])])[:8]
+    labels = tab.explore.inspector_view.labels
+    assert labels["inspector_ego"].text == f"EGO {ego_id}: context in its own frame"
+    assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: grey = σ1")
+    assert any(name.startswith("inspector_ego_tip") and label.visible for name, label in labels.items())
+    page.screenshot(path=str(ui.ARTIFACTS / "inspector-1280x720.png"))
+    page.close()
+
+
+def disabled(page, label: str) -> bool:
+    return ui.slider(page, label).get_attribute("data-disabled") == "true" or \
+        ui.slider(page, label).get_attribute("aria-disabled") == "true"
+
+
+def test_controls_that_do_nothing_are_disabled_with_the_reason(browser, server: ExplorerServer) -> None:
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    page.get_by_role("tab", name="Scenario").click()
+    ui.wait_until(lambda: disabled(page, "co-visibility eta"))
+    page.get_by_text("no effect under the range protocol").first.wait_for(timeout=10_000)
+    ui.pick_option(page, "protocol", "sind")
+    ui.wait_until(lambda: not disabled(page, "co-visibility eta") and disabled(page, "sensor range (m)"))
+
+    page.get_by_role("tab", name="Method").click()
+    assert not disabled(page, "σ3 voting (m)")
+    ui.label(page, "consensus").click()
+    ui.wait_until(lambda: not tab.settings.cbm.consensus and disabled(page, "σ3 voting (m)"))
+    page.get_by_text("consensus is off").first.wait_for(timeout=10_000)
+    ui.pick_option(page, "method", "ICP")
+    ui.wait_until(lambda: disabled(page, "σ1 angle (°)"))
+    page.get_by_text("ICP selected: CBM's parameters do not apply").first.wait_for(timeout=10_000)
+    page.close()
+
+
+def test_the_screenshot_can_include_the_control_panel(browser, server: ExplorerServer) -> None:
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    page.get_by_role("tab", name="Explore").click()
+    ui.label(page, "include the control panel").click()
+    ui.wait_until(lambda: tab.explore.with_panel.value)
+    with page.expect_download(timeout=30_000) as download:
+        page.get_by_role("button", name="screenshot of the view (PNG)").click()
+    image = np.asarray(Image.open(download.value.path()).convert("RGB"))
+    camera = tab.client.camera
+    assert image.shape[1] == camera.image_width + PANEL_WIDTH
+    panel = image[:, camera.image_width + 4:]
+    assert (panel.sum(axis=-1) < 200).sum() > 500, "the panel's text is drawn"
+    page.close()
+
+
+def pedestrians_only(folder) -> Explorer:
+    """A table of 3 frames of 6 pedestrians and nothing else."""
+    rows = ["frame,track_id,category,x,y,length,width,yaw"]
+    rows += [f"{frame},p{k},pedestrian,{3.0 * k + frame},{2.0 * (k % 3)},0.6,0.6,0.0"
+             for frame in range(3) for k in range(6)]
+    path = folder / "pedestrians.csv"
+    path.write_text("\n".join(rows) + "\n")
+    return Explorer(loaders.open(path))
+
+
+def test_a_dataset_without_vehicles_says_what_is_missing(browser, tmp_path) -> None:
+    with ui.scenario_server(pedestrians_only(tmp_path), tmp_path / "presets") as running:
+        page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
+        page.goto(running.url)
+        page.get_by_text("CBM cannot run on this frame.").first.wait_for(timeout=60_000)
+        text = page.get_by_text("What is missing").first.inner_text()
+        assert "0 vehicle(s) among its 6 objects (pedestrian)" in text
+        assert "sind" in page.get_by_text("What to try").first.inner_text()
+        assert page.get_by_text("Computing the first frame…").count() == 0
+        assert "CBM cannot run" in page.locator("#cbm-key-numbers").inner_text()
+        page.close()

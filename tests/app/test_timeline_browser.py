@@ -1,0 +1,77 @@
+"""The timeline in the metrics area: it fills as frames are computed (stepping, run all frames), marks
+the failed frames (``cbm.metrics.is_success``), and its controls step to and jump to them."""
+from __future__ import annotations
+
+import io
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from app.server import ExplorerServer
+from app.session.explorer import Explorer
+from support import browser as ui
+
+pytestmark = [pytest.mark.browser, ui.requires_chromium]
+
+FAILED = [17, 24]
+"""The frames of the synthetic scene that fail under the noisy scenario below (RTE >= 1 m or RRE >= 1 deg)."""
+
+
+@pytest.fixture(scope="module")
+def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
+    with ui.scenario_server(small_explorer, tmp_path_factory.mktemp("presets"), protocol="sind",
+                            sigma_p=1.0, sigma_theta=10.0) as running:
+        yield running
+
+
+def pixels_of(page, colour: tuple[int, int, int]) -> int:
+    """How many pixels of the timeline's chart have (nearly) ``colour``."""
+    png = page.locator(".uplot").filter(has_text="timeline").first.screenshot()
+    image = np.asarray(Image.open(io.BytesIO(png)).convert("RGB")).astype(int)
+    return int((np.abs(image - np.array(colour)).sum(axis=2) < 40).sum())
+
+
+def frame_shown(tab, frame: int) -> bool:
+    return tab.last is not None and tab.last.frame_index == frame and tab.settings.frame == frame
+
+
+def test_stepping_fills_the_timeline_and_a_settings_change_of_the_view_keeps_it(browser,
+                                                                                 server: ExplorerServer) -> None:
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    for frame in (1, 2, 3):
+        page.get_by_role("button", name="next ▶").click()
+        ui.wait_until(lambda f=frame: frame_shown(tab, f), 60)
+    x, precision = tab.controls.metrics.plot.data[:2]
+    assert {0, 1, 2, 3} <= set(x[np.isfinite(precision)].astype(int))
+    ui.wait_until(lambda: pixels_of(page, (30, 156, 60)) > 30, 30)
+    page.get_by_role("tab", name="View").click()
+    ui.label(page, "ground-truth ghosts").click()
+    ui.wait_until(lambda: tab.last.settings.view.ghosts, 60)
+    assert set(tab.history.rows) == {0, 1, 2, 3}
+    page.close()
+
+
+def test_run_all_frames_fills_the_timeline_and_failures_are_stepped_through(browser, server: ExplorerServer) -> None:
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    page.get_by_role("button", name="next failure ▶").click()
+    page.get_by_text("run all frames (Explore tab) to find every failure").first.wait_for(timeout=15_000)
+    page.get_by_role("tab", name="Explore").click()
+    page.get_by_role("button", name="run all frames").click()
+    ui.wait_until(lambda: len(tab.history.rows) == len(tab.explorer), 180)
+    assert tab.history.failures() == FAILED
+    ui.wait_until(lambda: pixels_of(page, (192, 20, 30)) > 20, 30)
+    page.get_by_role("button", name="next failure ▶").click()
+    ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
+    page.get_by_role("button", name="next failure ▶").click()
+    ui.wait_until(lambda: frame_shown(tab, FAILED[1]), 60)
+    page.get_by_role("button", name="◀ previous failure").click()
+    ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
+    ui.pick_option(page, "jump to", f"frame {FAILED[1]}")
+    ui.wait_until(lambda: frame_shown(tab, FAILED[1]), 60)
+    assert "Frame 24" in ui.header(page)
+    page.close()
