@@ -1,7 +1,7 @@
-"""The key numbers of the frame on screen, pinned to the bottom-left corner of the page: the control
-panel is one scroll area, so the metrics at its top scroll away while a slider deep in a tab is moved;
-this line never does. It also carries the lasting message of a frame CBM cannot run on
-(``unusable_markdown``)."""
+"""The key numbers of the frame on screen, pinned beside the top of the control panel: the panel is
+one scroll area, so the metrics at its top scroll away while a slider deep in a tab is moved; this
+box never does, and sits where the eye is while editing (notifications open top-left). It also
+carries the lasting message of a frame CBM cannot run on (``unusable_markdown``)."""
 from __future__ import annotations
 
 import html
@@ -17,7 +17,9 @@ from ..session.explorer import Explorer, Outcome
 from ..session.settings import Settings
 
 ELEMENT_ID = "cbm-key-numbers"
-STYLE = ("position:fixed;left:12px;bottom:12px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
+PANEL_SPAN = 384 + 16 + 24
+"""CSS pixels from the page's right edge to just left of the control panel (viser's "large" width)."""
+STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
          "border-radius:6px;background:rgba(255,255,255,0.92);box-shadow:0 1px 4px rgba(0,0,0,0.25);"
          "font:13px/1.4 system-ui,sans-serif;color:#222;pointer-events:none")
 

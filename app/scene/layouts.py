@@ -10,6 +10,8 @@ from typing import Any
 
 import numpy as np
 
+from cbm import se2
+
 from ..session.explorer import Outcome
 
 SIDE_GAP = 20.0
@@ -48,11 +50,14 @@ def single(placement: str) -> Callable[[Outcome], list[Panel]]:
 
 
 def side_by_side(outcome: Outcome) -> list[Panel]:
-    """Before on the left, after on the right, far enough apart not to overlap."""
-    boxes = np.concatenate([outcome.trial.ego_boxes[:, :2], outcome.world_boxes[:, :2], np.zeros((1, 2))])
+    """Before on the left, after on the right, far enough apart that the boxes drawn (the ego's, and
+    the CAV's where ``init`` and where the estimate put them) do not overlap."""
+    trial, result = outcome.trial, outcome.result
+    cav = [se2.apply_points(transform, trial.cav_boxes[:, :2]) for transform in (result.init, result.transform)]
+    boxes = np.concatenate([trial.ego_boxes[:, :2], *cav, np.zeros((1, 2))])
     width = float(boxes[:, 1].max() - boxes[:, 1].min()) + SIDE_GAP
-    return [Panel("before", np.array([0.0, width]), "BEFORE calibration (CAV at init)"),
-            Panel("after", np.zeros(2), "AFTER calibration (CAV at estimate)")]
+    return [Panel("before", np.array([0.0, width]), "BEFORE (CAV at init)"),
+            Panel("after", np.zeros(2), "AFTER (CAV at estimate)")]
 
 
 LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
@@ -67,10 +72,11 @@ def clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, f
                    screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """The default top-down camera (``position``, ``look_at``) for the layout centred on ``centre_y``,
     shown in the part of the page left of the control panel: raised so that two copies side by side
-    fit in that part as they would in the whole page, then ``slid_clear_of_panel``."""
-    width = screen[1]
+    fit in that part (the copies are ``2 |centre_y|`` apart, each about as wide), then
+    ``slid_clear_of_panel``."""
     x, _, z = position
-    z = (z + 1.3 * abs(centre_y)) * (width / free_width(width) if centre_y else 1.0)
+    if centre_y:
+        z = max(z, fitting_height(4.0 * abs(centre_y), screen))
     return slid_clear_of_panel((x, centre_y, z), (look_at[0], centre_y, 0.0), screen)
 
 

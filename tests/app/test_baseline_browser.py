@@ -1,8 +1,11 @@
 """Pinning a baseline: the metrics compare current and pinned, the timeline shows both, the pinned
-run's matches can be shown ghosted in the scene, and unpinning takes it all away."""
+run's matches can be shown ghosted in the scene, and unpinning takes it all away.
+
+With ``CBM_UPDATE_DOCS_IMG=1`` the test also saves the pinned timeline as docs/img/timeline.png."""
 from __future__ import annotations
 
 import contextlib
+import os
 from pathlib import Path
 
 import numpy as np
@@ -65,7 +68,8 @@ def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browse
     page.set_viewport_size({"width": 1280, "height": 720})
     dismiss_notifications(page)
     page.get_by_text("Pinned baseline").first.evaluate("e => e.scrollIntoView({block: 'start'})")
-    page.screenshot(path=str(SCREENSHOT))
+    if os.environ.get("CBM_UPDATE_DOCS_IMG") == "1":
+        page.screenshot(path=str(SCREENSHOT))
     page.get_by_role("tab", name="View").click()
     ui.label(page, "show pinned matches").click()
     ui.wait_until(lambda: not tab.last.settings.view.pinned_lines and not tab.view.lines["pinned"].visible, 60)

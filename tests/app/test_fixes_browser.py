@@ -67,6 +67,7 @@ def test_key_numbers_stay_in_view_while_a_deep_method_control_is_edited(browser,
     assert "precision / recall" in pinned.inner_text() and f"Frame {tab.last.frame_index}" in pinned.inner_text()
     panel_left = WIDTH - PANEL_PX
     assert pinned.bounding_box()["x"] + pinned.bounding_box()["width"] < panel_left
+    assert pinned.bounding_box()["y"] < 60, "the key numbers sit at the top, beside the panel's top"
     page.close()
 
 
