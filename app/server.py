@@ -5,6 +5,7 @@ import threading
 
 import viser
 
+from .scene.presentation import THEME
 from .session import kernels
 from .session.explorer import Explorer
 from .session.settings import Settings
@@ -24,7 +25,7 @@ class ExplorerServer:
         self.sessions: dict[int, ClientSession] = {}
         self._lock = threading.Lock()
         self.server = viser.ViserServer(host=host, port=port, label="CBM Explorer", verbose=verbose)
-        self.server.gui.configure_theme(show_share_button=False, control_width="large", show_logo=False)
+        self.server.gui.configure_theme(**THEME)
         self.server.scene.set_up_direction("+z")
         # Plain lighting: no environment map (it washes the boxes' tops out, and costs most of a frame in
         # software WebGL) and no shadows (nothing casts one).

@@ -12,7 +12,7 @@ import numpy as np
 from cbm import se2
 
 from ..session.explorer import Outcome
-from . import colours, geometry, presentation
+from . import captions, colours, geometry
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .text import metrics_markdown
 
@@ -53,7 +53,7 @@ class Drawing:
     """Sideways middle of the panels the layout shows (where the camera looks on reset)."""
     agents: tuple[tuple[float, float], ...] = ()
     """(x, y) of every vehicle drawn, ego and CAV of each panel (what the presentation camera frames)."""
-    label_px: float = presentation.LABEL_PX
+    label_px: float = captions.LABEL_PX
     """Height of the labels' text in CSS pixels."""
 
 
@@ -105,11 +105,11 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
     agents = tuple(tuple(map(float, se2.translation_of(pose))) for pose in (*parts.ego_poses, *parts.cav_poses))
     labels = _labels(parts, panels)
     if view.presentation:
-        labels["numbers"] = (presentation.key_numbers(outcome), presentation.numbers_position(agents))
+        labels["numbers"] = (captions.key_numbers(outcome), captions.numbers_position(agents))
     return Drawing(meshes=_meshes(parts, ego, cav, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
-                   agents=agents, label_px=presentation.label_px(view))
+                   agents=agents, label_px=captions.label_px(view))
 
 
 def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:

@@ -1,6 +1,6 @@
-"""Presentation mode and the dark theme, as far as they go beyond the drawing: the key numbers
-label, the camera over the two agents, the control panel and the page's colour scheme (all for
-one browser tab)."""
+"""Presentation mode and the dark theme, as far as they go beyond the drawing (and its text,
+``captions``): the camera over the two agents, the control panel and the page's colour scheme, all
+for one browser tab."""
 from __future__ import annotations
 
 import math
@@ -11,20 +11,14 @@ import numpy as np
 import viser
 
 from ..session.settings import ViewOptions
-from .text import number
 
 if TYPE_CHECKING:
-    from ..session.explorer import Outcome
     from .drawing import Drawing
     from .view import SceneView
 
-LABEL_PX = 14.0
-"""Height of the labels' text in CSS pixels (viser's own default is 12)."""
-PRESENTATION_LABEL_PX = 20.0
-"""In presentation mode: readable from the back of a room."""
 THEME = {"show_share_button": False, "control_width": "large", "show_logo": False}
-"""The theme ``app.server`` configures for every tab; a tab's own ``configure_theme`` replaces the
-whole theme, so it repeats these with its colour scheme."""
+"""The theme of every tab (``app.server``); a tab's own ``configure_theme`` replaces the whole theme,
+so it passes these with its colour scheme."""
 MARGIN = 14.0
 """Metres of scene kept around the agents by the presentation camera (room for the numbers below them)."""
 LOWEST = 30.0
@@ -32,25 +26,6 @@ LOWEST = 30.0
 TILT = 0.05
 """How far the presentation camera stands behind the point it looks at, per metre of height (a
 camera looking straight down has no 'up' to keep x pointing up the screen)."""
-
-
-def label_px(view: ViewOptions) -> float:
-    """Height of the labels' text for ``view``."""
-    return PRESENTATION_LABEL_PX if view.presentation else LABEL_PX
-
-
-def key_numbers(outcome: Outcome) -> str:
-    """The one line of numbers presentation mode shows in the 3D view."""
-    m = outcome.metrics
-    return (f"precision {number(m.precision)} · recall {number(m.recall)} · "
-            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}")
-
-
-def numbers_position(agents: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
-    """Where the key numbers go: just below the agents on screen (x points up), starting at their
-    left (the label's top-left corner is its anchor; y points left)."""
-    points = np.asarray(agents, float).reshape(-1, 2)
-    return float(points[:, 0].min() - 5.0), float(points[:, 1].max() + 4.0), 2.5
 
 
 def camera_over(agents: Sequence[tuple[float, float]], fov: float) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -12,9 +12,9 @@ import viser
 
 from cbm import se2
 
+from .captions import LABEL_PX
 from .drawing import Drawing, Lines, Mesh
 from .layouts import clear_of_panel, screen_of
-from .presentation import LABEL_PX
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
