@@ -139,7 +139,7 @@ class ClientSession:
             return
         self.history.merge(settings, sweep_rows(rows))
         self.controls.metrics.show_timeline(self._timeline(current.frame), self.history.failures(),
-                                            self.baseline.pinned)
+                                            self.baseline.pinned, current.frame)
 
     def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
         rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
@@ -180,7 +180,8 @@ class ClientSession:
             if relaid or staged or first:
                 presentation.aim(self.view, outcome.settings.view, picture)
             self.controls.metrics.show(picture.metrics_markdown, self._timeline(outcome.frame_index),
-                                       self.history.failures(), self.baseline.pinned, self._note)
+                                       self.history.failures(), self.baseline.pinned, outcome.frame_index,
+                                       self._note)
             self.key_numbers.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)

@@ -41,7 +41,7 @@ class Controls:
 
 def build(gui: viser.GuiApi, settings: Settings, n_frames: int, preset_names: list[str]) -> Controls:
     """The panels of a new tab, in screen order (the Explore tab is added to ``Controls.tabs`` after)."""
-    shown = metrics.build(gui)
+    shown = metrics.build(gui, n_frames)
     frames = frame.build(gui, settings, n_frames)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Scenario"):

@@ -1,6 +1,9 @@
 """The outputs above the controls: a status line (what the tab is waiting for), the frame's
-metrics, the timeline of the frames computed so far, and its controls: step to the previous or
-next failed frame, jump to a failed frame, pin the current settings as a baseline."""
+metrics, the timeline of the frames computed so far, and its controls: a frame slider under the
+chart with a mark on every failed frame (a click on it jumps there), step to the previous or next
+failed frame, jump to a failed frame, pin the current settings as a baseline.
+
+viser 1.1.1 sends no clicks on a chart; the slider under it spans the same frames."""
 from __future__ import annotations
 
 import dataclasses
@@ -9,6 +12,7 @@ from typing import Protocol
 
 import numpy as np
 import viser
+from viser._messages import GuiSliderMark
 
 from ..session.baseline import Baseline
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
@@ -36,6 +40,8 @@ class MetricsControls:
     status: viser.GuiMarkdownHandle
     text: viser.GuiMarkdownHandle
     plot: viser.GuiUplotHandle
+    scrubber: viser.GuiSliderHandle
+    """The timeline's frame: a click jumps there; a mark on each failed frame known."""
     failures: viser.GuiButtonGroupHandle
     failed: viser.GuiDropdownHandle
     pin: viser.GuiButtonHandle
@@ -46,15 +52,20 @@ class MetricsControls:
         self.status.visible = bool(status)
 
     def show(self, metrics_markdown: str, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool,
-             status: str = "") -> None:
+             frame: int, status: str = "") -> None:
         """One result: its metrics, the timeline, the failed frames known, and what to say above them."""
         self.say(status)
         self.text.content = metrics_markdown
-        self.show_timeline(timeline, failures, pinned)
+        self.show_timeline(timeline, failures, pinned, frame)
 
-    def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool) -> None:
-        """The timeline, the list of failed frames and the pin button's label."""
+    def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int) -> None:
+        """The timeline, its slider at ``frame`` with the failed frames marked, the list of failed
+        frames and the pin button's label."""
         self.plot.data = timeline
+        self.scrubber.value = frame
+        marks = tuple(GuiSliderMark(value=float(f), label=None) for f in failures)
+        if self.scrubber._marks != marks:
+            self.scrubber._marks = marks
         options = (f"{FAILED_HEADER} ({len(failures)} known)", *(f"frame {f}" for f in failures))
         if tuple(self.failed.options) != options:
             self.failed.options = options
@@ -62,18 +73,21 @@ class MetricsControls:
         self.pin.label = UNPIN if pinned else PIN
 
 
-def build(gui: viser.GuiApi) -> MetricsControls:
+def build(gui: viser.GuiApi, n_frames: int) -> MetricsControls:
     status, text = gui.add_markdown("", visible=False), gui.add_markdown("Computing the first frame…")
     plot = add_timeline(gui)
+    scrubber = gui.add_slider("go to frame", 0, max(n_frames - 1, 1), 1, 0,
+                              hint=f"click a frame to show it; dots: failed frames ({FAILED_MEANING})")
     failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
     failed = gui.add_dropdown("jump to", (f"{FAILED_HEADER} (0 known)",),
-                              hint="a failed frame known so far (viser sends no clicks on a chart: jump from here)")
+                              hint="a failed frame known so far ")
     pin = gui.add_button(PIN, hint="keep these settings and their per-frame results to compare against")
     gui.add_markdown(HINT)
-    return MetricsControls(status, text, plot, failures, failed, pin)
+    return MetricsControls(status, text, plot, scrubber, failures, failed, pin)
 
 
 def bind(c: MetricsControls, tab: TimelineTab) -> None:
+    on_user(c.scrubber, lambda: go_to(tab, int(c.scrubber.value)))
     c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
     on_user(c.failed, lambda: jump(tab, c.failed.value))
     c.pin.on_click(lambda e: toggle_pin(tab))

@@ -74,4 +74,15 @@ def test_run_all_frames_fills_the_timeline_and_failures_are_stepped_through(brow
     ui.pick_option(page, "jump to", f"frame {FAILED[1]}")
     ui.wait_until(lambda: frame_shown(tab, FAILED[1]), 60)
     assert "Frame 24" in ui.header(page)
+    click_timeline_at(page, FAILED[0], len(tab.explorer))
+    ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
     page.close()
+
+
+def click_timeline_at(page, frame: int, n_frames: int) -> None:
+    """Click the timeline's slider where ``frame`` lies, after checking it marks every failed frame."""
+    control = ui.label(page, "go to frame").get_attribute("for")
+    root = page.locator(f'[id="{control}"]')
+    ui.wait_until(lambda: root.locator(".mantine-Slider-mark").count() == len(FAILED), 30)
+    track = root.locator(".mantine-Slider-track").bounding_box()
+    page.mouse.click(track["x"] + track["width"] * frame / (n_frames - 1), track["y"] + track["height"] / 2)
