@@ -19,14 +19,19 @@ from .scene.drawing import Drawing, draw
 from .scene.pinned import with_baseline
 from .scene.view import SceneView
 from .session.baseline import Baseline
-from .session.coalesce import Coalescer
+from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
 from .session.history import FrameHistory, settings_key, sweep_rows
 from .session.kernels import Kernels
 from .session.presets import PresetError, discover, save_preset
 from .session.progress import announced
+from .session.recording import Recording
 from .session.settings import AUTO_CAV, Settings
 from .walkthrough.panel import WalkthroughPanel
+
+TIMELINE_DELAY = 0.2
+"""Seconds after the latest result before the timeline is redrawn: the chart costs the browser more
+than the rest of a result, and while a slider moves only the last result's timeline is worth drawing."""
 
 
 class ClientSession:
@@ -43,7 +48,9 @@ class ClientSession:
         self.last: Outcome | None = None
         self.last_drawing: Drawing | None = None
         self.history = FrameHistory()
+        self.recording = Recording()
         self.baseline = Baseline()
+        self._timeline_later = Later(TIMELINE_DELAY)
         self._choices: list[CavChoice] = []
         self._choices_frame = -1
         self.presets, problems = discover()
@@ -141,6 +148,11 @@ class ClientSession:
         self.controls.metrics.show_timeline(self._timeline(current.frame), self.history.failures(),
                                             self.baseline.pinned, current.frame)
 
+    def _show_timeline_soon(self, frame: int) -> None:
+        """The timeline at ``frame``, drawn ``TIMELINE_DELAY`` after the latest result."""
+        data, failures, pinned = self._timeline(frame), self.history.failures(), self.baseline.pinned
+        self._timeline_later.call(lambda: self.controls.metrics.show_timeline(data, failures, pinned, frame))
+
     def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
         rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
         return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer))
@@ -153,6 +165,7 @@ class ClientSession:
         self._playing.set()
         self.explore.close()
         self.worker.close()
+        self._timeline_later.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
         """The outcome of ``settings`` and its drawing, once CBM's kernels are ready; the status
@@ -166,12 +179,14 @@ class ClientSession:
         with announced(lambda s: say(f"Computing… {s:.1f} s")):
             outcome = self.explorer.compute(settings)
             pinned = self.baseline.outcome(self.explorer, settings)
-            return outcome, with_baseline(draw(outcome, self.explorer.map_segments), outcome, pinned)
+            return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
+                                                  self.explorer.sequence[outcome.frame_index]), outcome, pinned)
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
         """Show a result: the scene's changed nodes and the panels, in one batch sent at once."""
         outcome, picture = computed
         self.history.add(outcome)
+        self.recording.add(outcome)
         first = not self.view.meshes
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
         with self.client.atomic():
@@ -179,9 +194,8 @@ class ClientSession:
             staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
             if relaid or staged or first:
                 presentation.aim(self.view, outcome.settings.view, picture)
-            self.controls.metrics.show(picture.metrics_markdown, self._timeline(outcome.frame_index),
-                                       self.history.failures(), self.baseline.pinned, outcome.frame_index,
-                                       self._note)
+            self.controls.metrics.show(picture.metrics_markdown, self._note)
+            self._show_timeline_soon(outcome.frame_index)
             self.key_numbers.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)

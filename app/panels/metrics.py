@@ -51,12 +51,10 @@ class MetricsControls:
         self.status.content = status
         self.status.visible = bool(status)
 
-    def show(self, metrics_markdown: str, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool,
-             frame: int, status: str = "") -> None:
-        """One result: its metrics, the timeline, the failed frames known, and what to say above them."""
+    def show(self, metrics_markdown: str, status: str = "") -> None:
+        """One result's metrics, and what to say above them (the timeline follows, ``show_timeline``)."""
         self.say(status)
         self.text.content = metrics_markdown
-        self.show_timeline(timeline, failures, pinned, frame)
 
     def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int) -> None:
         """The timeline, its slider at ``frame`` with the failed frames marked, the list of failed

@@ -66,3 +66,26 @@ class Coalescer(Generic[T, R]):
                 with self._condition:
                     self._busy = False
                     self._condition.notify_all()
+
+
+class Later:
+    """``call(action)`` runs ``action`` after ``delay`` seconds on a timer thread, unless a newer
+    ``call`` comes first: only the latest of a burst runs (``close`` drops a pending one)."""
+
+    def __init__(self, delay: float) -> None:
+        self.delay = delay
+        self._lock = threading.Lock()
+        self._timer: threading.Timer | None = None
+
+    def call(self, action: Callable[[], None]) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()
+            self._timer = threading.Timer(self.delay, action)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def close(self) -> None:
+        with self._lock:
+            if self._timer is not None:
+                self._timer.cancel()

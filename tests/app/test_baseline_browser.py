@@ -61,10 +61,10 @@ def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browse
     for frame in (1, 2, 3):
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda f=frame: tab.last.frame_index == f, 60)
-    assert {0, 1, 2, 3} <= pinned_frames(tab)
+    ui.wait_until(lambda: {0, 1, 2, 3} <= pinned_frames(tab), 30)
     assert tab.view.lines["pinned"].visible
     run_all_frames(page, tab)
-    assert pinned_frames(tab) == set(range(len(tab.explorer)))
+    ui.wait_until(lambda: pinned_frames(tab) == set(range(len(tab.explorer))), 30)
     page.set_viewport_size({"width": 1280, "height": 720})
     dismiss_notifications(page)
     page.get_by_text("Pinned baseline").first.evaluate("e => e.scrollIntoView({block: 'start'})")

@@ -32,6 +32,12 @@ def pixels_of(page, colour: tuple[int, int, int]) -> int:
     return int((np.abs(image - np.array(colour)).sum(axis=2) < 40).sum())
 
 
+def plotted_frames(tab) -> set[int]:
+    """Frames whose precision the timeline's chart holds (it is drawn a moment after each result)."""
+    x, precision = tab.controls.metrics.plot.data[:2]
+    return set(x[np.isfinite(precision)].astype(int).tolist())
+
+
 def frame_shown(tab, frame: int) -> bool:
     return tab.last is not None and tab.last.frame_index == frame and tab.settings.frame == frame
 
@@ -44,8 +50,7 @@ def test_stepping_fills_the_timeline_and_a_settings_change_of_the_view_keeps_it(
     for frame in (1, 2, 3):
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda f=frame: frame_shown(tab, f), 60)
-    x, precision = tab.controls.metrics.plot.data[:2]
-    assert {0, 1, 2, 3} <= set(x[np.isfinite(precision)].astype(int))
+    ui.wait_until(lambda: {0, 1, 2, 3} <= plotted_frames(tab), 30)
     ui.wait_until(lambda: pixels_of(page, (30, 156, 60)) > 30, 30)
     page.get_by_role("tab", name="View").click()
     ui.label(page, "ground-truth ghosts").click()
