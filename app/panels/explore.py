@@ -20,6 +20,7 @@ from cbm.diagnosis import Finding
 
 from ..scene import inspector, layouts
 from ..scene.drawing import Drawing
+from ..scene.recording_html import recording_html
 from ..scene.view import SceneView
 from ..session import export, worst
 from ..session.background import Runner, Task
@@ -77,6 +78,8 @@ class ExplorePanel:
                 self.parquet = gui.add_button("per-frame metrics (Parquet)")
                 self.preset = gui.add_button("settings as a preset (TOML)")
                 self.screenshot = gui.add_button("screenshot of the view (PNG)")
+                self.recording = gui.add_button("recording of the frames computed (HTML)",
+                                                hint="a page that replays the frames shown, offline")
                 self.with_panel = gui.add_checkbox("include the control panel", False,
                                                    hint="the frame's metrics drawn beside the 3D view in the PNG")
         self._bind()
@@ -96,6 +99,7 @@ class ExplorePanel:
         self.parquet.on_click(lambda e: self._download_rows("parquet", export.metrics_parquet))
         self.preset.on_click(lambda e: self._download("cbm-explorer-preset.toml", export.preset_toml(
             self.tab.settings, self.tab.explorer.sequence.name)))
+        self.recording.on_click(lambda e: self._in_thread("Recording", self.download_recording))
         self.screenshot.on_click(lambda e: self._in_thread("Screenshot", lambda: self._download(
             f"cbm-explorer-frame-{self.tab.settings.frame}.png", self.screenshot_png())))
 
@@ -218,8 +222,18 @@ class ExplorePanel:
         if self.run is None or not self.run.rows:
             self.tab.notify("Nothing to export", "run the sequence first", "yellow")
             return
-        name = re.sub(r"[^A-Za-z0-9]+", "-", self.tab.explorer.sequence.name).strip("-")[:40]
+        name = _slug(self.tab.explorer.sequence.name)
         self._download(f"cbm-{name}-seed{self.run.settings.scenario.seed}.{suffix}", encode(list(self.run.rows)))
+
+    def download_recording(self) -> None:
+        """The frames this tab has shown under its current settings as a self-contained HTML page."""
+        recording = self.tab.recording
+        if not len(recording):
+            self.tab.notify("Nothing to export", "no frame computed yet", "yellow")
+            return
+        dataset = self.tab.explorer.sequence.name
+        page = recording_html(recording, dataset, self.tab.settings.view.presentation)
+        self._download(f"cbm-explorer-{_slug(dataset)}-{len(recording)}frames.html", page)
 
     def screenshot_png(self) -> bytes:
         """The view as PNG bytes, with the metrics panel beside it when "include the control panel" is on."""
@@ -263,6 +277,11 @@ class ExplorePanel:
                 self._failed(title, error)
 
         threading.Thread(target=guarded, name=f"{title}-{self.tab.client.client_id}", daemon=True).start()
+
+
+def _slug(name: str) -> str:
+    """A dataset's name as a file name part."""
+    return re.sub(r"[^A-Za-z0-9]+", "-", name).strip("-")[:40]
 
 
 def png(image: np.ndarray) -> bytes:
