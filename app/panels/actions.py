@@ -8,6 +8,7 @@ import viser
 
 from ..scene.drawing import Drawing
 from ..session.explorer import Explorer, Outcome
+from ..session.recording import Recording
 from ..session.settings import Settings
 
 Edit = Callable[[Settings], Settings]
@@ -18,6 +19,8 @@ class TabActions(Protocol):
 
     client: viser.ClientHandle
     explorer: Explorer
+    recording: Recording
+    """The frames shown under the current settings (for the shareable recording)."""
 
     @property
     def settings(self) -> Settings: ...
