@@ -4,8 +4,10 @@ table, reports and plots read it, the command line is thin.
     import evaluation
     table = evaluation.run(["argoverse2"], methods=("cbm", "oracle"), grid={"sigma_p": (0.3, 0.6)}, seed=0)
 
-Modules: ``run`` (datasets and a sweep into the table), ``report`` (Markdown summary), ``plots``
-(the paper's figures), ``outputs`` (the files, written atomically), ``cli`` (``evaluate.py``).
+Modules: ``run`` (datasets and a sweep into the table), ``report`` (Markdown summary),
+``aggregates`` (``metrics.json`` and the success curve), ``latex`` (``summary.tex``), ``plots`` (the
+paper's figures), ``outputs`` (the files, written atomically), ``compare`` (two runs' differences),
+``cli`` (``evaluate.py`` and ``evaluate.py compare``).
 """
 from .run import DEFAULT_METHODS, Plan, Source, plan, run, run_plan, trial_table, without_timing
 

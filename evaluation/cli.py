@@ -6,8 +6,14 @@
 Writes into ``--out``: ``trials.parquet`` and ``trials.csv`` (one row per frame, grid point and
 method: dataset, frame, method, every parameter, every metric, then ``runtime_s`` last; several
 ``--dataset`` names are run one after the other with the same frames and grid),
-``summary.md`` (also printed), ``precision_vs_eta.png`` (when the grid varies ``eta``) and
-``rre_rte.png``. Each file is written to a temporary file first and moved into place.
+``summary.md`` (also printed), ``metrics.json`` (each method's aggregate metrics under its name),
+``success_curve.csv`` and ``success_curve.png`` (success rate at RTE < t m and RRE < t deg for t
+from 0.5 to 5), ``precision_vs_eta.png`` (when the grid varies ``eta``), ``rre_rte.png`` and, with
+``--latex``, ``summary.tex``. Each file is written to a temporary file first and moved into place.
+
+    python evaluate.py compare RUN_A RUN_B [--out FOLDER]
+
+prints the per-method differences (B - A) of two runs' metrics and plots them (``evaluation.compare``).
 
 The same arguments give the same table byte for byte except the ``runtime_s`` column, which is
 wall-clock time: with ``--no-timing`` the table (CSV and Parquet) and the summary leave it out and
@@ -34,6 +40,7 @@ from cbm.methods import METHODS
 from cbm.sweep import grid_defaults
 from loaders.agents import TARGET_DISTANCE
 
+from .compare import CompareError, compare
 from .outputs import write_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
 
@@ -69,6 +76,20 @@ def build_parser() -> Parser:
                         help=f"preferred ego-CAV distance in metres (default: {TARGET_DISTANCE:g})")
     parser.add_argument("--no-timing", action="store_true",
                         help="leave the runtime out of the table and summary (then they are byte-identical run to run)")
+    parser.add_argument("--latex", action="store_true",
+                        help="also write the summary as a LaTeX table (summary.tex, booktabs)")
+    parser.epilog = "Compare two runs: %(prog)s compare RUN_A RUN_B [--out FOLDER] (see %(prog)s compare --help)."
+    return parser
+
+
+def build_compare_parser(prog: str) -> Parser:
+    """The command line of ``compare``: two run folders and where the comparison goes."""
+    parser = Parser(prog=f"{prog} compare",
+                    description="Print and plot the per-method differences (B - A) of two evaluation runs.")
+    parser.add_argument("run_a", type=Path, metavar="RUN_A", help="the baseline run folder (with metrics.json)")
+    parser.add_argument("run_b", type=Path, metavar="RUN_B", help="the run compared with it")
+    parser.add_argument("--out", type=Path, default=None,
+                        help="folder for compare.md and compare.png (default: RUN_B/compare_vs_<RUN_A name>)")
     return parser
 
 
@@ -162,9 +183,23 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(str(error)) from None
 
 
+def main_compare(argv: Sequence[str], prog: str) -> int:
+    """Compare two runs (``evaluation.compare``); 2 on bad input."""
+    parser = build_compare_parser(prog)
+    args = parser.parse_args(argv)
+    try:
+        print(compare(args.run_a, args.run_b, args.out), end="")
+    except CompareError as error:
+        parser.error(str(error))
+    return 0
+
+
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the evaluation; 2 on bad input."""
+    """Run the evaluation, or with a first argument ``compare`` compare two runs; 2 on bad input."""
     parser = build_parser()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    if argv[:1] == ["compare"]:
+        return main_compare(argv[1:], parser.prog)
     args = parser.parse_args(argv)
     try:
         planned = prepare(args)
@@ -172,6 +207,6 @@ def main(argv: Sequence[str] | None = None) -> int:
         parser.error(str(error))
     with tqdm(total=planned.trial_count, unit="trial", disable=None) as bar:
         table = run_plan(planned, workers=args.workers, progress=bar.update)
-    print(write_outputs(args.out, planned, table, timing=not args.no_timing))
-    print(f"wrote trials.parquet, trials.csv, summary.md and plots to {args.out}", file=sys.stderr)
+    print(write_outputs(args.out, planned, table, timing=not args.no_timing, latex=args.latex))
+    print(f"wrote the trials, summary, metrics.json, success curve and plots to {args.out}", file=sys.stderr)
     return 0

@@ -65,3 +65,41 @@ def plot_rre_rte(rows: list[dict[str, Any]], variants: list[str]) -> plt.Figure:
         ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     return fig
+
+
+def plot_success_curve(curve: list[tuple[float, dict[str, float]]]) -> plt.Figure:
+    """Success rate against the error threshold t (RTE < t m and RRE < t deg), one line per method."""
+    names = list(curve[0][1]) if curve else []
+    fig, ax = plt.subplots(figsize=(6.0, 4.0))
+    for k, name in enumerate(names):
+        ax.plot([t for t, _ in curve], [rates[name] * 100 for _, rates in curve],
+                marker=MARKERS[k % len(MARKERS)], markerfacecolor="none", label=name)
+    ax.set_xlabel("threshold t: RTE < t m and RRE < t deg")
+    ax.set_ylabel("success rate (%)")
+    ax.set_ylim(-2, 102)
+    ax.grid(alpha=0.3)
+    if names:
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    return fig
+
+
+def plot_differences(differences: dict[str, dict[str, float]], keys: list[str], lower_better: set[str],
+                     title: str) -> plt.Figure:
+    """One bar panel per metric key: each method's difference (run B minus run A), green where B is
+    better (lower for the keys in ``lower_better``), red where worse, grey where not measured."""
+    names = list(differences)
+    fig, axes = plt.subplots(1, len(keys), figsize=(2.6 * len(keys) + 1.0, 3.6), squeeze=False)
+    for ax, key in zip(axes.flat, keys):
+        values = [differences[n].get(key, math.nan) for n in names]
+        sign = -1.0 if key in lower_better else 1.0
+        colours = ["tab:gray" if math.isnan(v) or v == 0 else "tab:green" if sign * v > 0 else "tab:red"
+                   for v in values]
+        ax.bar(range(len(names)), [0.0 if math.isnan(v) else v for v in values], color=colours)
+        ax.axhline(0.0, color="black", linewidth=0.8)
+        ax.set_xticks(range(len(names)), names, rotation=30, ha="right", fontsize=8)
+        ax.set_title(key, fontsize=9)
+        ax.grid(alpha=0.3, axis="y")
+    fig.suptitle(title, fontsize=10)
+    fig.tight_layout()
+    return fig

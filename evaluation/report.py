@@ -10,6 +10,7 @@ import polars as pl
 
 from cbm.sweep import SCENARIO_FIELDS, Sweep, summarise
 
+from .aggregates import curve_markdown, success_curve
 from .run import Plan
 
 TABLE_ROWS = (
@@ -107,6 +108,8 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
               "oracle: least squares on the true pairs, the limit of association-based calibration."]
     if len(sweep.grid.get("eta", ())) > 1:
         parts += ["", "## Precision (%) against the co-visibility rate eta", "", eta_table(rows, variants, sweep)]
+    parts += ["", "## Success rate (%) against the error threshold (all trials)", "",
+              curve_markdown(success_curve(rows, variants))]
     return "\n".join(parts) + "\n"
 
 

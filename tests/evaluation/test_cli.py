@@ -39,7 +39,8 @@ def two_runs(tmp_path_factory):
 
 def test_a_run_writes_the_table_the_summary_and_the_plots(two_runs):
     first, _, stdout = two_runs
-    names = {"trials.parquet", "trials.csv", "summary.md", "precision_vs_eta.png", "rre_rte.png"}
+    names = {"trials.parquet", "trials.csv", "summary.md", "precision_vs_eta.png", "rre_rte.png", "metrics.json",
+             "success_curve.csv", "success_curve.png"}
     assert {p.name for p in first.iterdir()} == names
     assert stdout.startswith((first / "summary.md").read_text())
     assert "| Pre. (%) |" in stdout and "| cbm sigma2=2 | cbm sigma2=3 | icp | vips |" in stdout
@@ -59,7 +60,7 @@ def test_the_table_has_one_row_per_dataset_and_trial_with_every_parameter_and_me
 
 def test_the_same_seed_gives_byte_identical_tables_and_summary(two_runs):
     first, second, _ = two_runs
-    for name in ("trials.csv", "trials.parquet", "summary.md"):
+    for name in ("trials.csv", "trials.parquet", "summary.md", "metrics.json", "success_curve.csv"):
         assert (first / name).read_bytes() == (second / name).read_bytes(), name
 
 

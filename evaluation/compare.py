@@ -1,0 +1,130 @@
+"""Two runs side by side: per-method differences (run B minus run A) of every metric in their
+``metrics.json``, and of their success curves (``success_curve.csv``) when both have one.
+
+    python evaluate.py compare results/before results/after     # also: cbm-evaluate compare A B
+
+Prints the differences as Markdown and writes ``compare.md`` and ``compare.png`` (a bar chart of
+the differences) into ``--out`` (default: ``RUN_B/compare_vs_<name of RUN_A>/``).
+"""
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import polars as pl
+
+from .aggregates import METRIC_KEYS
+from .outputs import write_atomic
+from .plots import plot_differences, plt
+
+PLOTTED = [key for key, _ in METRIC_KEYS[:5]]
+"""The headline keys drawn in ``compare.png``: precision, recall, success rate, median RTE and RRE."""
+LOWER_IS_BETTER = {"median_rte", "median_rre", "mean_rte", "mean_rre", "ad", "median_runtime_s"}
+SETTINGS = ("success_rte_max_m", "success_rre_max_deg")
+"""Keys that say how a metric was computed, not how well a method did: not compared."""
+
+
+class CompareError(ValueError):
+    """A run folder that cannot be compared: reported in one line, exit status 2."""
+
+
+def load_metrics(run: Path) -> dict[str, dict[str, Any]]:
+    """The ``metrics.json`` of run folder ``run``; ``CompareError`` naming what is missing or wrong."""
+    if not run.exists():
+        raise CompareError(f"{run}: no such folder")
+    if not run.is_dir():
+        raise CompareError(f"{run}: not a folder")
+    path = run / "metrics.json"
+    if not path.is_file():
+        raise CompareError(f"{run} has no metrics.json: not an evaluation run, or one from before metrics.json")
+    try:
+        metrics = json.loads(path.read_text())
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        raise CompareError(f"{path}: not readable as JSON ({error})") from None
+    if not isinstance(metrics, dict) or not all(isinstance(v, dict) for v in metrics.values()):
+        raise CompareError(f"{path}: not a metrics file (expected an object of methods, each an object of metrics)")
+    return metrics
+
+
+def load_curve(run: Path) -> pl.DataFrame | None:
+    """The run's ``success_curve.csv``, or None when it has none."""
+    path = run / "success_curve.csv"
+    return pl.read_csv(path) if path.is_file() else None
+
+
+def _number(value: Any) -> float:
+    return math.nan if value is None or isinstance(value, bool) else float(value)
+
+
+def differences(a: Mapping[str, Mapping[str, Any]], b: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, float]]:
+    """For each method in both runs, B minus A of each numeric key both have (NaN where either is
+    null); settings such as the success thresholds are left out."""
+    found: dict[str, dict[str, float]] = {}
+    for name in (n for n in b if n in a):
+        keys = [k for k in b[name] if k in a[name] and k not in SETTINGS
+                and isinstance(b[name][k], (int, float, type(None))) and not isinstance(b[name][k], bool)]
+        found[name] = {k: _number(b[name][k]) - _number(a[name][k]) for k in keys}
+    return found
+
+
+def _signed(value: float) -> str:
+    return "-" if math.isnan(value) else "0" if value == 0 else f"{value:+.4g}"
+
+
+def differences_markdown(found: Mapping[str, Mapping[str, float]]) -> str:
+    """Markdown: one row per method, one column per key, cells B minus A."""
+    keys = list(dict.fromkeys(k for values in found.values() for k in values))
+    lines = [f"| method | {' | '.join(keys)} |", "|---|" + "---:|" * len(keys)]
+    lines += [f"| {name} | {' | '.join(_signed(values.get(k, math.nan)) for k in keys)} |"
+              for name, values in found.items()]
+    return "\n".join(lines)
+
+
+def curve_differences_markdown(a: pl.DataFrame, b: pl.DataFrame) -> str | None:
+    """Markdown: success-rate difference (B minus A, percentage points) per threshold and common
+    method, when both curves have the same thresholds; None otherwise."""
+    names = [c for c in b.columns[2:] if c in a.columns[2:]]
+    if not names or a["rte_max_m"].to_list() != b["rte_max_m"].to_list():
+        return None
+    lines = [f"| threshold t | {' | '.join(names)} |", "|---:|" + "---:|" * len(names)]
+    for k, t in enumerate(b["rte_max_m"].to_list()):
+        cells = [_signed(100.0 * (_number(b[n][k]) - _number(a[n][k]))) for n in names]
+        lines.append(f"| {t:g} | {' | '.join(cells)} |")
+    return "\n".join(lines)
+
+
+def compare_report(run_a: Path, run_b: Path) -> tuple[str, dict[str, dict[str, float]]]:
+    """The printed comparison of two run folders, and the differences per method."""
+    a, b = load_metrics(run_a), load_metrics(run_b)
+    found = differences(a, b)
+    parts = [f"# {run_b} minus {run_a}", "", "## Metrics (B - A)", ""]
+    parts.append(differences_markdown(found) if found else "No method is in both runs.")
+    only_a, only_b = [n for n in a if n not in b], [n for n in b if n not in a]
+    if only_a or only_b:
+        parts.append("")
+    parts += [f"Only in {run_a}: {', '.join(only_a)}"] if only_a else []
+    parts += [f"Only in {run_b}: {', '.join(only_b)}"] if only_b else []
+    curve_a, curve_b = load_curve(run_a), load_curve(run_b)
+    table = curve_differences_markdown(curve_a, curve_b) if curve_a is not None and curve_b is not None else None
+    if table:
+        parts += ["", "## Success rate (percentage points, B - A) at RTE < t m and RRE < t deg", "", table]
+    return "\n".join(parts) + "\n", found
+
+
+def compare(run_a: Path, run_b: Path, out: Path | None = None) -> str:
+    """Compare two run folders: write ``compare.md`` and ``compare.png`` into ``out`` (default
+    ``RUN_B/compare_vs_<name of RUN_A>``) and return the report. ``CompareError`` for a run that
+    cannot be read or an ``out`` that is not a folder."""
+    report, found = compare_report(run_a, run_b)
+    out = out if out is not None else run_b / f"compare_vs_{run_a.resolve().name}"
+    if out.exists() and not out.is_dir():
+        raise CompareError(f"--out: {out} exists and is not a folder")
+    out.mkdir(parents=True, exist_ok=True)
+    write_atomic(out / "compare.md", lambda p: p.write_text(report))
+    fig = plot_differences(found, PLOTTED, LOWER_IS_BETTER, f"{run_b.name} minus {run_a.name}")
+    write_atomic(out / "compare.png", lambda p: fig.savefig(p, format="png", dpi=120))
+    plt.close(fig)
+    return report
