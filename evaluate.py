@@ -1,4 +1,5 @@
-"""Evaluate CBM and the baselines on datasets: a tidy per-trial table, a Table-I-shaped summary and plots.
+"""Evaluate CBM and the baselines on datasets: a tidy per-trial table, a Table-I-shaped summary and plots
+(installed: the ``cbm-evaluate`` command).
 
     python evaluate.py --dataset argoverse2 --protocol sind --grid eta=0.2,0.6 sigma_p=0,0.3 --out results
 

@@ -64,6 +64,8 @@ class ClientSession:
         panels.metrics.bind(self.controls.metrics, self)
         for problem in problems:
             self.notify("Preset skipped", problem, "yellow")
+        for warning in explorer.sequence.warnings:
+            self.notify("Dataset loaded with gaps", warning, "yellow")
         self._playing = threading.Event()
         self._closed = threading.Event()
         self.worker: Coalescer[Settings, tuple[Outcome, Drawing]] = Coalescer(

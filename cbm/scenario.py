@@ -24,9 +24,10 @@ from typing import Any, Literal
 import numpy as np
 
 from . import se2
+from .detected import with_detections
 
 Protocol = Literal["sind", "opv2v", "range"]
-Localization = Literal["fixed", "gaussian"]
+Localization = Literal["fixed", "gaussian", "dataset"]
 
 
 @dataclass(frozen=True)
@@ -44,7 +45,8 @@ class ScenarioParams:
     """Probability that a detection's heading is turned by pi (sec. IV-A uses 0.5)."""
     localization: Localization = "fixed"
     """``fixed``: the CAV pose is off by exactly (loc_x, loc_y, loc_yaw) (sec. IV-A).
-    ``gaussian``: off by zero-mean Gaussians with those std-devs (sec. V-A, OpenCOOD's pose noise)."""
+    ``gaussian``: off by zero-mean Gaussians with those std-devs (sec. V-A, OpenCOOD's pose noise).
+    ``dataset``: the CAV pose the dataset itself reports (OPV2V ``predicted_ego_pos``; ``loc_*`` unused)."""
     loc_x: float = 3.0
     """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world x."""
     loc_y: float = 3.0
@@ -59,8 +61,9 @@ class ScenarioParams:
     def __post_init__(self) -> None:
         if self.protocol not in ("sind", "opv2v", "range"):
             raise ValueError(f"ScenarioParams.protocol must be 'sind', 'opv2v' or 'range', got {self.protocol!r}")
-        if self.localization not in ("fixed", "gaussian"):
-            raise ValueError(f"ScenarioParams.localization must be 'fixed' or 'gaussian', got {self.localization!r}")
+        if self.localization not in ("fixed", "gaussian", "dataset"):
+            raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian' or 'dataset', "
+                             f"got {self.localization!r}")
         for name in ("eta", "flip_prob"):
             _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
         for name in ("sigma_p", "sigma_theta"):
@@ -135,16 +138,23 @@ class FrameInputs:
     """Frame index: the trials of this frame draw from ``trial_rng(seed, index)``."""
     trial: Mapping[str, Any]
     """``make_trial`` keyword arguments: ``boxes``, ``ids`` and, as the protocol needs them,
-    ``ego_pose``, ``cav_pose``, ``ego_id``, ``cav_id``, ``visibility``."""
+    ``ego_pose``, ``cav_pose``, ``ego_id``, ``cav_id``, ``visibility``, ``cav_reported_pose``."""
     labels: np.ndarray | None = None
     """Class label of each object (same order as ``ids``), for the methods that take labels (VIPS)."""
     note: str = ""
     """How the agents were chosen (e.g. ``auto``), for the people reading the result."""
+    detections: Mapping[str, np.ndarray] | None = None
+    """A real detector's boxes of ``"ego"`` and / or ``"cav"`` (``(N, 7)``, each in its agent's
+    frame): they replace that agent's simulated detections (``cbm.detected.with_detections``)."""
 
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
         evaluation, sweeps and search is made here."""
-        return make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index))
+        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index))
+        if not self.detections:
+            return trial
+        agents = {"ego": self.trial.get("ego_id"), "cav": self.trial.get("cav_id")}
+        return with_detections(trial, self.detections, self.trial["boxes"], self.trial["ids"], agents)
 
 
 def make_trial(
@@ -157,13 +167,15 @@ def make_trial(
     cav_id: object | None = None,
     ego_id: object | None = None,
     visibility: Mapping[str, np.ndarray] | None = None,
+    cav_reported_pose: np.ndarray | None = None,
     rng: np.random.Generator | None = None,
 ) -> Trial:
     """Make one trial from ``(N, 7)`` world-frame ``boxes`` with unique ``ids``.
 
     sind: missing poses default to the objects' centroid with yaw 0. opv2v: both poses and
     ``visibility`` (``{"ego": ids, "cav": ids}``) are required. range: both poses are required.
-    ``visibility`` is read by opv2v only. In every protocol an agent whose id is given never
+    ``visibility`` is read by opv2v only; ``cav_reported_pose`` (the dataset's own CAV pose) by
+    ``localization="dataset"`` only, which needs it. In every protocol an agent whose id is given never
     detects itself (removed after the deal, so sind counts hold for objects other than the agents).
     ``rng`` defaults to ``np.random.default_rng(params.seed)``; the draw order is in the module docstring.
     """
@@ -184,7 +196,7 @@ def make_trial(
         cav_sees &= ids != cav_id
 
     T_true = se2.inverse(ego_pose) @ cav_pose
-    init = se2.inverse(ego_pose) @ perturbed_pose(cav_pose, localization_error(params, loc_draw))
+    init = se2.inverse(ego_pose) @ _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose)
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
     cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
     return Trial(
@@ -281,6 +293,18 @@ def localization_error(params: ScenarioParams, draw: np.ndarray) -> np.ndarray:
     """(dx, dy, dyaw[rad]) added to the CAV's world pose: fixed (sec. IV-A) or ``draw`` scaled (sec. V-A)."""
     size = np.array([params.loc_x, params.loc_y, params.loc_yaw_rad])
     return size if params.localization == "fixed" else size * draw
+
+
+def _reported_cav_pose(params: ScenarioParams, cav_pose: np.ndarray, draw: np.ndarray,
+                       dataset_pose: np.ndarray | None) -> np.ndarray:
+    """The CAV's world pose as it reports it: the true pose plus ``localization_error``, or the
+    dataset's own (``localization="dataset"``; a ``ValueError`` when the frame has none)."""
+    if params.localization != "dataset":
+        return perturbed_pose(cav_pose, localization_error(params, draw))
+    if dataset_pose is None:
+        raise ValueError("localization 'dataset' needs the CAV pose the dataset reports (OPV2V "
+                         "predicted_ego_pos); this frame's CAV has none")
+    return dataset_pose
 
 
 def perturbed_pose(pose: np.ndarray, error: np.ndarray) -> np.ndarray:

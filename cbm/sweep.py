@@ -25,6 +25,7 @@ from typing import Any
 
 import numpy as np
 
+from .detected import FALSE_POSITIVE_CLASS
 from .methods import METHODS
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
 from .scenario import FrameInputs, ScenarioParams, Trial
@@ -149,13 +150,13 @@ def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list
 
 
 def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs) -> Any:
-    """``method`` on ``trial`` with what it takes: the objects' labels (when the frame has them)
-    and the trial's true pairs."""
+    """``method`` on ``trial`` with what it takes: the objects' labels (when the frame has them; a
+    detector's false positive is a vehicle) and the trial's true pairs."""
     labels = None
     if frame.labels is not None:
         label_of = dict(zip(np.asarray(frame.trial["ids"]).tolist(), np.asarray(frame.labels).tolist()))
-        labels = (np.array([label_of[i] for i in trial.ego_ids.tolist()]),
-                  np.array([label_of[i] for i in trial.cav_ids.tolist()]))
+        labels = (np.array([label_of.get(i, FALSE_POSITIVE_CLASS) for i in trial.ego_ids.tolist()]),
+                  np.array([label_of.get(i, FALSE_POSITIVE_CLASS) for i in trial.cav_ids.tolist()]))
     return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, labels=labels,
                            true_pairs=trial.gt_pairs)
 

@@ -74,6 +74,9 @@ def build_parser() -> Parser:
     parser.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
     parser.add_argument("--cav-distance", type=float, default=TARGET_DISTANCE,
                         help=f"preferred ego-CAV distance in metres (default: {TARGET_DISTANCE:g})")
+    parser.add_argument("--detections", default=None, metavar="STAGE1_BOXES_JSON",
+                        help="CoAlign / HEAL stage1_boxes.json: a detector's boxes replace the simulated detections "
+                             "(one dataset only)")
     parser.add_argument("--no-timing", action="store_true",
                         help="leave the runtime out of the table and summary (then they are byte-identical run to run)")
     parser.add_argument("--latex", action="store_true",
@@ -174,11 +177,14 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(f"--out: {args.out} exists and is not a folder")
     if len(set(args.dataset)) != len(args.dataset):
         raise CliError("--dataset: a dataset is named twice")
+    if args.detections is not None and len(args.dataset) != 1:
+        raise CliError("--detections: give exactly one --dataset (the detections belong to one dataset)")
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
     try:
         return plan(args.dataset, methods=methods, grid=grid, seed=args.seed, protocol=args.protocol,
-                    frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance)
+                    frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
+                    detections=args.detections)
     except ValueError as error:
         raise CliError(str(error)) from None
 

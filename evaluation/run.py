@@ -57,11 +57,12 @@ def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
 
 
 def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]] | None = None,
-                cav_distance: float = TARGET_DISTANCE) -> Source:
-    """Open dataset ``name`` and make its frame inputs; ``frames(n)`` picks frame indices among
-    ``n`` (default: all). ``ValueError`` with one line when nothing can be run."""
+                cav_distance: float = TARGET_DISTANCE, detections: str | None = None) -> Source:
+    """Open dataset ``name`` (with a detector's ``detections``, a stage1_boxes.json, when given) and
+    make its frame inputs; ``frames(n)`` picks frame indices among ``n`` (default: all).
+    ``ValueError`` with one line when nothing can be run."""
     try:
-        seq = loaders.open(name)
+        seq = loaders.open(name, detections=detections)
     except ValueError as error:
         raise ValueError(str(error).splitlines()[0]) from None
     inputs, skipped = frame_inputs(seq, range(len(seq)) if frames is None else frames(len(seq)), protocol, cav_distance)
@@ -72,10 +73,11 @@ def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]]
 
 def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
          grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str = "sind",
-         frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE) -> Plan:
+         frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE,
+         detections: str | None = None) -> Plan:
     """Check the run and load its datasets; ``ValueError`` naming what is wrong."""
     sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol))
-    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance) for name in datasets))
+    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections) for name in datasets))
 
 
 def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | None = None) -> pl.DataFrame:

@@ -37,7 +37,7 @@ STEADY_BAND = (0.6, 1.6)
 def choose_ego(frame: Frame) -> str | None:
     """The ego of ``frame``: the dataset's ego if present, else the vehicle nearest the objects'
     centroid; None when there is neither."""
-    ego = frame.sequence.ego
+    ego = frame.ego
     if ego is not None and ego in agent_ids(frame):
         return ego
     vehicles = is_vehicle(frame.categories)

@@ -18,6 +18,16 @@ Per frame, read:
   pair's ``system_error_offset {delta_x, delta_y}`` added to its translation (as the DAIR-V2X
   and CoAlign code do).
 
+Real releases (DAIR-V2X-C as distributed, read as the DAIR-V2X devkit and OpenCOOD / CoAlign's
+DAIR dataset read it) have gaps and quirks, handled so:
+
+- a pair whose label or calibration file is missing is skipped; the sequence's ``warnings`` (and a
+  ``UserWarning``) give the count and the first missing file; nothing loadable is a
+  :class:`LoaderError`. A file that exists but is malformed is still a :class:`LoaderError`;
+- numbers stored as strings (``"delta_x": "-0.52"``, label sizes, calibration entries) are read as
+  numbers; any other string where a number belongs is a :class:`LoaderError` naming file and field;
+- a load over a second shows a progress bar (tqdm, on stderr).
+
 World frame: DAIR-V2X's world frame. Agents ``"vehicle"`` (the ego; typical car size) and
 ``"infrastructure"`` (a 0.6 x 0.6 x 5 m pole), at their LiDAR poses; each sees its own labels.
 The two label sets carry no shared ids, so the same object is associated across them by an
@@ -27,11 +37,13 @@ vehicle's track id and box; track ids are ``v<i>`` / ``i<j>`` (label index in th
 """
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import numpy as np
 import polars as pl
 from scipy.optimize import linear_sum_assignment
+from tqdm import tqdm
 
 from .errors import LoaderError
 from .scene import Sequence
@@ -42,6 +54,16 @@ FRAME_RATE = 10.0
 VEHICLE_SIZE = (4.9, 2.0, 1.6)
 INFRASTRUCTURE_SIZE = (0.6, 0.6, 5.0)
 DATA_INFO = Path("cooperative") / "data_info.json"
+PROGRESS_DELAY = 1.0
+"""Seconds a load runs before its progress bar appears."""
+
+
+class MissingFile(LoaderError):
+    """A label or calibration file that data_info.json names and the release lacks."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(f"{path}: missing (named by cooperative/data_info.json)")
+        self.path = path
 
 
 def recognises(path: Path) -> bool:
@@ -58,27 +80,20 @@ def load(path: str | Path) -> Sequence:
     pairs = read_json(info_file)
     if not isinstance(pairs, list) or not pairs:
         raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
-    objects, agents, seen, frame_ids = [], [], [], []
-    for k, pair in enumerate(pairs):
-        where = f"[{k}]"
-        vehicle_id = _frame_id(info_file, pair, "vehicle", where)
-        infra_id = _frame_id(info_file, pair, "infrastructure", where)
-        offset = pair.get("system_error_offset") or {"delta_x": 0.0, "delta_y": 0.0}
-        vehicle_pose = _vehicle_to_world(root, vehicle_id)
-        infra_pose = _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset")
-        vehicle_boxes = _labels(root / "vehicle-side" / "label" / "lidar" / f"{vehicle_id}.json", vehicle_pose)
-        infra_boxes = _labels(root / "infrastructure-side" / "label" / "virtuallidar" / f"{infra_id}.json", infra_pose)
-        infra_tracks = _associate(vehicle_boxes, infra_boxes)
-        for i, box in enumerate(vehicle_boxes):
-            objects.append({"frame": k, "track_id": f"v{i}", **box})
-            seen.append({"frame": k, "agent_id": "vehicle", "track_id": f"v{i}"})
-        for j, box in enumerate(infra_boxes):
-            if infra_tracks[j].startswith("i"):
-                objects.append({"frame": k, "track_id": infra_tracks[j], **box})
-            seen.append({"frame": k, "agent_id": "infrastructure", "track_id": infra_tracks[j]})
-        agents.append(_agent(k, "vehicle", vehicle_pose, VEHICLE_SIZE))
-        agents.append(_agent(k, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE))
-        frame_ids.append(vehicle_id)
+    objects, agents, seen, frame_ids, missing = [], [], [], [], []
+    for k, pair in enumerate(tqdm(pairs, desc="DAIR-V2X pairs", unit="pair", delay=PROGRESS_DELAY, leave=False)):
+        try:
+            rows = _pair_rows(root, info_file, pair, k, len(frame_ids))
+        except MissingFile as exc:
+            missing.append(exc.path)
+            continue
+        for table, new in zip((objects, seen, agents), rows[1:]):
+            table.extend(new)
+        frame_ids.append(rows[0])
+    if not frame_ids:
+        raise LoaderError(f"{info_file}: no pair could be loaded; {len(missing)} lack a label or calibration "
+                          f"file, first: {missing[0]}: missing")
+    notes = _skipped_notes(info_file, missing, len(pairs))
     return Sequence(
         name=f"dair-v2x/{root.name}",
         objects=_frame_table(objects, ["track_id", "category"], ["x", "y", "z", "length", "width", "height", "yaw"]),
@@ -87,7 +102,56 @@ def load(path: str | Path) -> Sequence:
         agents=_frame_table(agents, ["agent_id"], ["x", "y", "z", "yaw", "length", "width", "height"]),
         visibility=_frame_table(seen, ["agent_id", "track_id"], []),
         ego="vehicle",
+        warnings=notes,
     )
+
+
+def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list]:
+    """(vehicle frame id, object rows, visibility rows, agent rows) of data_info entry ``k``."""
+    where = f"[{k}]"
+    vehicle_id = _frame_id(info_file, pair, "vehicle", where)
+    infra_id = _frame_id(info_file, pair, "infrastructure", where)
+    offset = (pair.get("system_error_offset") if isinstance(pair, dict) else None) or {"delta_x": 0.0, "delta_y": 0.0}
+    vehicle_pose = _vehicle_to_world(root, vehicle_id)
+    infra_pose = _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset")
+    vehicle_boxes = _labels(root / "vehicle-side" / "label" / "lidar" / f"{vehicle_id}.json", vehicle_pose)
+    infra_boxes = _labels(root / "infrastructure-side" / "label" / "virtuallidar" / f"{infra_id}.json", infra_pose)
+    infra_tracks = _associate(vehicle_boxes, infra_boxes)
+    objects = [{"frame": frame, "track_id": f"v{i}", **box} for i, box in enumerate(vehicle_boxes)]
+    objects += [{"frame": frame, "track_id": track, **box}
+                for track, box in zip(infra_tracks, infra_boxes) if track.startswith("i")]
+    seen = [{"frame": frame, "agent_id": "vehicle", "track_id": f"v{i}"} for i in range(len(vehicle_boxes))]
+    seen += [{"frame": frame, "agent_id": "infrastructure", "track_id": track} for track in infra_tracks]
+    agents = [_agent(frame, "vehicle", vehicle_pose, VEHICLE_SIZE),
+              _agent(frame, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE)]
+    return vehicle_id, objects, seen, agents
+
+
+def _skipped_notes(info_file: Path, missing: list[Path], total: int) -> list[str]:
+    """The warning about pairs skipped for missing files (also raised as a ``UserWarning``)."""
+    if not missing:
+        return []
+    note = (f"{info_file}: skipped {len(missing)} of {total} pair(s) with a missing label or "
+            f"calibration file (first: {missing[0]})")
+    warnings.warn(note, UserWarning, stacklevel=3)
+    return [note]
+
+
+def _number(path: Path, value, where: str) -> float:
+    """``structured.number``, reading a string that holds a number (DAIR-V2X stores some so)."""
+    return number(path, _numeric(value), where)
+
+
+def _numeric(value):
+    """``value`` with strings that hold a number (also inside lists) turned into floats."""
+    if isinstance(value, list):
+        return [_numeric(v) for v in value]
+    if isinstance(value, str):
+        try:
+            return float(value)
+        except ValueError:
+            return value
+    return value
 
 
 def _frame_table(rows: list[dict], text: list[str], floats: list[str]) -> pl.DataFrame:
@@ -109,8 +173,8 @@ def _frame_id(path: Path, pair, side: str, where: str) -> str:
 def _rigid(path: Path, calib, where: str = "") -> np.ndarray:
     """4x4 transform from ``{rotation: 3x3, translation: 3x1}``."""
     out = np.eye(4)
-    out[:3, :3] = matrix(path, field(path, calib, "rotation", where), f"{where}.rotation".lstrip("."), 3, 3)
-    translation = np.array(matrix(path, field(path, calib, "translation", where),
+    out[:3, :3] = matrix(path, _numeric(field(path, calib, "rotation", where)), f"{where}.rotation".lstrip("."), 3, 3)
+    translation = np.array(matrix(path, _numeric(field(path, calib, "translation", where)),
                                   f"{where}.translation".lstrip("."), 3, 1))
     out[:3, 3] = translation[:, 0]
     return out
@@ -127,14 +191,14 @@ def _vehicle_to_world(root: Path, frame_id: str) -> np.ndarray:
 def _infrastructure_to_world(root: Path, frame_id: str, info_file: Path, offset, where: str) -> np.ndarray:
     calib_file = root / "infrastructure-side" / "calib" / "virtuallidar_to_world" / f"{frame_id}.json"
     pose = _rigid(calib_file, _read(calib_file))
-    pose[0, 3] += number(info_file, field(info_file, offset, "delta_x", where), f"{where}.delta_x")
-    pose[1, 3] += number(info_file, field(info_file, offset, "delta_y", where), f"{where}.delta_y")
+    pose[0, 3] += _number(info_file, field(info_file, offset, "delta_x", where), f"{where}.delta_x")
+    pose[1, 3] += _number(info_file, field(info_file, offset, "delta_y", where), f"{where}.delta_y")
     return pose
 
 
 def _read(path: Path):
     if not path.is_file():
-        raise LoaderError(f"{path}: missing (named by cooperative/data_info.json)")
+        raise MissingFile(path)
     return read_json(path)
 
 
@@ -153,12 +217,12 @@ def _labels(path: Path, pose: np.ndarray) -> list[dict]:
         where = f"[{i}]"
         size = field(path, label, "3d_dimensions", where)
         location = field(path, label, "3d_location", where)
-        centre = np.array([number(path, field(path, location, a, f"{where}.3d_location"), f"{where}.3d_location.{a}")
+        centre = np.array([_number(path, field(path, location, a, f"{where}.3d_location"), f"{where}.3d_location.{a}")
                            for a in "xyz"] + [1.0])
-        length, width, height = (number(path, field(path, size, a, f"{where}.3d_dimensions"),
+        length, width, height = (_number(path, field(path, size, a, f"{where}.3d_dimensions"),
                                         f"{where}.3d_dimensions.{a}")
                                  for a in "lwh")
-        yaw = number(path, field(path, label, "rotation", where), f"{where}.rotation")
+        yaw = _number(path, field(path, label, "rotation", where), f"{where}.rotation")
         x, y, z, _ = pose @ centre
         boxes.append({"category": str(field(path, label, "type", where)), "x": float(x), "y": float(y),
                       "z": float(z), "length": length, "width": width, "height": height,

@@ -4,20 +4,30 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table
+from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, v2x_sim
+from . import detections as detection_files
 from .errors import LoaderError, existing_path
 from .scene import Sequence
 
-REPOSITORY_DATA = Path(__file__).resolve().parents[1] / "data"
+REPOSITORY_DATA = Path(__file__).resolve().parent / "data"
 SYNTHETIC_NAME = re.compile(r"^synthetic(?::(?P<count>\d+))?(?::seed=(?P<seed>-?\d+))?$")
 
 
 def repository_data(name: str) -> Path:
-    """The folder of a scene shipped in the repository's ``data/`` (e.g. ``"argoverse2"``)."""
+    """The folder of a scene shipped in the package's ``loaders/data/`` (e.g. ``"argoverse2"``)."""
     return REPOSITORY_DATA / name
 
 
-def open(path_or_name: str | Path) -> Sequence:
+def open(path_or_name: str | Path, detections: str | Path | None = None) -> Sequence:
+    """Load a dataset (:func:`load`), with a detector's boxes from ``detections`` (a CoAlign / HEAL
+    ``stage1_boxes.json``, see ``loaders.detections``) attached to its frames when given."""
+    sequence = load(path_or_name)
+    if detections is None:
+        return sequence
+    return detection_files.attach(sequence, existing_path(detections, "detections file"))
+
+
+def load(path_or_name: str | Path) -> Sequence:
     """Load a dataset.
 
     ``"argoverse2"`` is the shipped default scene; ``"synthetic"``, ``"synthetic:<count>"`` and
@@ -48,12 +58,13 @@ def _loader_for(path: Path):
 
 
 def _modules() -> list:
-    return [argoverse2, sind, interaction, dair_v2x, opv2v, table]
+    return [argoverse2, sind, interaction, dair_v2x, v2x_sim, opv2v, table]
 
 
 _EXPECTED = (
     "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
     "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
     "V2XSet / V2V4Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
-    "folder (cooperative/data_info.json), or a generic table (.csv / .parquet with a frame column)"
+    "folder (cooperative/data_info.json), a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> "
+    "sensors), or a generic table (.csv / .parquet with a frame column)"
 )

@@ -1,15 +1,25 @@
 """OPV2V, V2XSet and V2V4Real scenarios: folders of per-CAV YAML annotations.
 
-Layout: ``<scenario>/<cav id>/<timestamp>.yaml``; open the scenario folder (or a single
-``.yaml`` file, as a one-frame, one-CAV scene whose agent id is its folder's name). Frames are the
-timestamps of the ego's files, at 10 Hz (``Sequence.timestamps`` = index / 10); a CAV missing a
-timestamp is absent from that frame.
+Layout (as OpenCOOD's ``BaseDataset`` walks it): ``<split>/<scenario>/<cav id>/<timestamp>.yaml``.
+Open a scenario folder, a split folder (``train/``, ``validate/``, ``test/``: its scenarios), a
+release root holding split folders (any of ``train``, ``validate``, ``test``, in that order), or a
+single ``.yaml`` file (a one-frame, one-CAV scene whose agent id is its folder's name). Several
+scenarios make one sequence: scenarios in name order within each split, frames of a scenario in a
+row; ``Sequence.scenarios`` maps each scenario name (``<split>/<scenario>`` under a root, else the
+folder name) to its first frame, ``Frame.scenario`` names a frame's scenario, frame ids are
+``<scenario name>/<timestamp>`` (just ``<timestamp>`` for one scenario), and each frame's ego is
+its scenario's (``Sequence.frame_egos``). Frames are the timestamps of the ego's files, at 10 Hz
+(``Sequence.timestamps`` = index / 10 over the whole sequence); a CAV missing a timestamp is
+absent from that frame. Loads over a second show a progress bar (tqdm, on stderr).
 
 - The ego is chosen as OpenCOOD does: CAV folders in string order, the first one, except that a
   roadside unit (V2XSet; negative id) never leads -- it moves to the end. Agents keep their folder
   names as ids (``"641"``, ``"-1"``); ``Sequence.ego`` names the ego.
 - Agent pose: the CAV's ``lidar_pose`` (the frame its detections are in). Sizes are not in the
   files: CAVs get a typical car size (4.9 x 2.0 x 1.6 m), roadside units a 0.6 x 0.6 x 5 m pole.
+- ``predicted_ego_pos`` (when a file has it): the CAV's own noisy localization, converted like
+  ``lidar_pose`` and kept as ``Sequence.predicted_poses`` (``Frame.predicted_pose``); the
+  ``dataset`` localization option of ``cbm.scenario`` uses it as the CAV's initial pose.
 - OPV2V / V2XSet (CARLA): poses and boxes are in CARLA's left-handed world; converted on read to
   ``x, -y, -yaw``; angles in degrees -> radians; ``extent`` half sizes -> full sizes; box centre =
   ``location + center`` (added in world axes). Each CAV's file lists the vehicles its LiDAR saw:
@@ -19,6 +29,8 @@ timestamp is absent from that frame.
   real sensors), mapped to the world with that CAV's ``lidar_pose``; category from ``obj_type``.
   ``ass_id`` is the cross-CAV id of the same object (-1: seen by one CAV only): associated objects
   share the track id ``"a<ass_id>"`` (the ego's box is kept), others are ``"<cav>/<id>"``.
+- LiDAR points: the ``<timestamp>.pcd`` beside a ``<timestamp>.yaml`` is that CAV's sweep in its
+  LiDAR frame (``Sequence.point_clouds``, read on demand by ``Frame.points``; CARLA's mirrored).
 """
 from __future__ import annotations
 
@@ -27,6 +39,7 @@ from pathlib import Path
 
 import numpy as np
 import polars as pl
+from tqdm import tqdm
 
 from .errors import LoaderError
 from .scene import Sequence
@@ -36,12 +49,15 @@ FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
 RSU_SIZE = (0.6, 0.6, 5.0)
 SKIPPED = ("additional", "camera_gt")
+SPLITS = ("train", "validate", "test")
+PROGRESS_DELAY = 1.0
+"""Seconds a load runs before its progress bar appears."""
 
 
 def recognises(path: Path) -> bool:
     if path.is_file():
         return path.suffix.lower() in (".yaml", ".yml")
-    return bool(_cav_folders(path))
+    return bool(_scenarios(path))
 
 
 def _is_integer(name: str) -> bool:
@@ -61,46 +77,87 @@ def _cav_folders(scenario: Path) -> list[Path]:
     return folders
 
 
+def _scenario_folders(folder: Path) -> list[Path]:
+    return sorted((p for p in folder.iterdir() if p.is_dir() and _cav_folders(p)), key=lambda p: p.name)
+
+
+def _scenarios(path: Path) -> list[tuple[str, Path]]:
+    """``(name, folder)`` of every scenario under ``path`` (a scenario, a split folder or a root of
+    split folders), in load order."""
+    if _cav_folders(path):
+        return [(path.name, path)]
+    splits = [path / split for split in SPLITS if (path / split).is_dir()]
+    if splits:
+        return [(f"{split.name}/{p.name}", p) for split in splits for p in _scenario_folders(split)]
+    return [(p.name, p) for p in _scenario_folders(path)]
+
+
 def load(path: str | Path) -> Sequence:
-    """Load an OPV2V / V2XSet / V2V4Real scenario folder or one annotation file."""
+    """Load an OPV2V / V2XSet / V2V4Real release root, split folder, scenario folder or one file."""
     path = Path(path)
     if path.is_file():
         agent = path.parent.name if _is_integer(path.parent.name) else "0"
-        files = {agent: {path.stem: path}}
-    else:
-        cavs = _cav_folders(path)
-        if not cavs:
-            raise LoaderError(f"{path}: no CAV folders (integer names) holding .yaml files")
-        files = {cav.name: {p.stem: p for p in _yaml_files(cav)} for cav in cavs}
+        parts = [_scenario(path.stem, {agent: {path.stem: path}}, 0)]
+        return _sequence(f"{path.stem}", parts, single=True)
+    scenarios = _scenarios(path)
+    if not scenarios:
+        raise LoaderError(f"{path}: no scenario folders (numbered CAV folders of .yaml files), "
+                          f"directly or under {', '.join(SPLITS)}")
+    parts, offset = [], 0
+    bar = tqdm(scenarios, desc=f"OPV2V {path.name}", unit="scenario", delay=PROGRESS_DELAY, leave=False)
+    for name, folder in bar:
+        files = {cav.name: {p.stem: p for p in _yaml_files(cav)} for cav in _cav_folders(folder)}
+        parts.append(_scenario(name, files, offset))
+        offset += len(parts[-1]["stamps"])
+    return _sequence(path.name, parts, single=len(parts) == 1 and scenarios[0][1] == path)
+
+
+def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict:
+    """One scenario's rows, with frame indices starting at ``offset``."""
     order = list(files)
     stamps = sorted(files[order[0]])
     records = {(k, cav): read_yaml(files[cav][stamp])
                for k, stamp in enumerate(stamps) for cav in order if stamp in files[cav]}
     v2v4real = any(_has_ass_id(record) for record in records.values())
-    objects, agents, seen = [], [], []
-    for k, stamp in enumerate(stamps):
-        kept: set[str] = set()
-        for cav in order:
-            if (k, cav) not in records:
-                continue
-            source = files[cav][stamp]
-            record = records[(k, cav)]
-            pose = _pose(source, record, v2v4real)
-            agents.append(_agent_row(k, cav, pose))
-            for track, row in _boxes(source, record, cav, pose, v2v4real):
-                seen.append({"frame": k, "agent_id": cav, "track_id": track})
-                if track not in kept:
-                    kept.add(track)
-                    objects.append({"frame": k, "track_id": track, **row})
-    return Sequence(
-        name=f"{'v2v4real' if v2v4real else 'opv2v'}/{path.stem if path.is_file() else path.name}",
-        objects=_table(objects, OBJECT_SCHEMA),
-        frame_ids=stamps,
-        timestamps=np.arange(len(stamps)) / FRAME_RATE,
-        agents=_table(agents, AGENT_SCHEMA),
-        visibility=_table(seen, {"frame": pl.Int64, "agent_id": pl.Utf8, "track_id": pl.Utf8}),
-        ego=order[0],
+    objects, agents, seen, predicted = [], [], [], {}
+    kept: dict[int, set[str]] = {}
+    for (k, cav), record in records.items():
+        source, frame = files[cav][stamps[k]], offset + k
+        pose = _pose(source, record, v2v4real)
+        agents.append(_agent_row(frame, cav, pose))
+        if isinstance(record, dict) and "predicted_ego_pos" in record:
+            predicted[(frame, cav)] = _pose(source, record, v2v4real, "predicted_ego_pos")
+        for track, row in _boxes(source, record, cav, pose, v2v4real):
+            seen.append({"frame": frame, "agent_id": cav, "track_id": track})
+            if track not in kept.setdefault(frame, set()):
+                kept[frame].add(track)
+                objects.append({"frame": frame, "track_id": track, **row})
+    return {"name": name, "stamps": stamps, "ego": order[0], "v2v4real": v2v4real, "objects": objects,
+            "agents": agents, "seen": seen, "predicted": predicted,
+            "points": {(offset + k, cav): (files[cav][stamps[k]].with_suffix(".pcd"), not v2v4real)
+                       for k, cav in records if files[cav][stamps[k]].with_suffix(".pcd").is_file()}}
+
+
+def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
+    """The scenarios' rows as one sequence (frame ids prefixed by the scenario unless ``single``)."""
+    starts = np.cumsum([0] + [len(p["stamps"]) for p in parts])
+    frame_ids = [s if single else f"{p['name']}/{s}" for p in parts for s in p["stamps"]]
+    kind = "v2v4real" if any(p["v2v4real"] for p in parts) else "opv2v"
+    sequence = Sequence(
+        name=f"{kind}/{name}",
+        objects=_table([r for p in parts for r in p["objects"]], OBJECT_SCHEMA),
+        frame_ids=frame_ids,
+        timestamps=np.arange(len(frame_ids)) / FRAME_RATE,
+        agents=_table([r for p in parts for r in p["agents"]], AGENT_SCHEMA),
+        visibility=_table([r for p in parts for r in p["seen"]],
+                          {"frame": pl.Int64, "agent_id": pl.Utf8, "track_id": pl.Utf8}),
+        ego=parts[0]["ego"],
+        scenarios={p["name"]: int(k) for p, k in zip(parts, starts)},
+        frame_egos=[p["ego"] for p in parts for _ in p["stamps"]],
+        predicted_poses={key: pose[:2] + pose[3:] for p in parts for key, pose in p["predicted"].items()},
     )
+    sequence.point_clouds = {key: source for p in parts for key, source in p["points"].items()}
+    return sequence
 
 
 OBJECT_SCHEMA = {"frame": pl.Int64, "track_id": pl.Utf8, "category": pl.Utf8,
@@ -118,9 +175,9 @@ def _has_ass_id(record) -> bool:
     return isinstance(vehicles, dict) and any(isinstance(v, dict) and "ass_id" in v for v in vehicles.values())
 
 
-def _pose(path: Path, record, right_handed: bool) -> tuple[float, float, float, float]:
-    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose``."""
-    x, y, z, _roll, yaw, _pitch = numbers(path, field(path, record, "lidar_pose"), "lidar_pose", 6)
+def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tuple[float, float, float, float]:
+    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose`` (or ``key``)."""
+    x, y, z, _roll, yaw, _pitch = numbers(path, field(path, record, key), key, 6)
     yaw = math.radians(yaw)
     return (x, y, z, yaw) if right_handed else (x, -y, z, -yaw)
 

@@ -11,11 +11,14 @@ from __future__ import annotations
 
 from collections.abc import Iterator
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 import polars as pl
 
 from cbm import se2
+
+from .pointcloud import cached_pcd
 
 OBJECT_COLUMNS: dict[str, pl.DataType] = {
     "track_id": pl.Utf8,
@@ -100,6 +103,12 @@ class Sequence:
     ``ego`` names the agent the dataset itself treats as the ego (e.g. Argoverse's recording car,
     OpenCOOD's ego CAV), if any. ``dropped_rows`` counts input rows skipped for missing, NaN or
     infinite values.
+
+    Optional, for releases of several scenarios (OPV2V split roots): ``scenarios`` maps each
+    scenario's name to its first frame index (in frame order); ``frame_egos`` the ego of each
+    frame when it changes with the scenario; ``predicted_poses`` maps ``(frame index, agent id)``
+    to the dataset's own noisy ``(x, y, yaw)`` of that agent (OPV2V ``predicted_ego_pos``).
+    ``warnings`` lists what the loader skipped, for the app and the CLI to show.
     """
 
     def __init__(
@@ -113,15 +122,29 @@ class Sequence:
         map: MapGeometry | None = None,
         ego: str | None = None,
         dropped_rows: int = 0,
+        scenarios: dict[str, int] | None = None,
+        frame_egos: list[str] | None = None,
+        predicted_poses: dict[tuple[int, str], tuple[float, float, float]] | None = None,
+        warnings: list[str] | None = None,
     ) -> None:
         self.name = name
         self.ego = ego
+        self.scenarios = dict(scenarios) if scenarios else None
+        self.frame_egos = list(frame_egos) if frame_egos is not None else None
+        self.predicted_poses = dict(predicted_poses or {})
+        self.warnings = list(warnings or [])
         self.frame_ids = list(frame_ids)
         self.timestamps = np.asarray(timestamps, dtype=np.float64)
         if len(self.timestamps) != len(self.frame_ids):
             raise ValueError("frame_ids and timestamps differ in length")
         self.map = map
         self.dropped_rows = int(dropped_rows)
+        self.point_clouds: dict[tuple[int, str], tuple[Path, bool]] = {}
+        """``(frame index, agent id) -> (PCD file, left-handed)`` for the datasets that ship LiDAR
+        points (read on demand by ``Frame.points``; left-handed files have y mirrored on read)."""
+        self.detections: dict[int, dict] = {}
+        """``frame index -> agent id -> loaders.detections.DetectedBoxes``: a real detector's boxes,
+        when a detections file is attached (``loaders.open(path, detections=...)``)."""
         n = len(self.frame_ids)
         self.objects, self._object_offsets = _grouped(objects, OBJECT_COLUMNS, n, [])
         self._boxes = self.objects.select(BOX_COLUMNS).to_numpy().astype(np.float64, copy=False)
@@ -173,6 +196,26 @@ class Frame:
         """Seconds."""
         return float(self.sequence.timestamps[self.index])
 
+    @property
+    def scenario(self) -> str | None:
+        """The name of the scenario this frame belongs to, or ``None`` when the dataset names none."""
+        starts = self.sequence.scenarios
+        if not starts:
+            return None
+        return max(((k, name) for name, k in starts.items() if k <= self.index), default=(0, None))[1]
+
+    @property
+    def ego(self) -> str | None:
+        """The dataset's ego in this frame (``Sequence.frame_egos``, else ``Sequence.ego``)."""
+        egos = self.sequence.frame_egos
+        return egos[self.index] if egos is not None else self.sequence.ego
+
+    def predicted_pose(self, agent_id: str) -> np.ndarray | None:
+        """``(3, 3)`` SE(2) pose the dataset itself reports for the agent (its localization, with
+        its error), or ``None`` when the dataset gives none."""
+        pose = self.sequence.predicted_poses.get((self.index, str(agent_id)))
+        return None if pose is None else se2.make(*pose)
+
     def _rows(self, offsets: np.ndarray) -> slice:
         return slice(int(offsets[self.index]), int(offsets[self.index + 1]))
 
@@ -222,6 +265,23 @@ class Frame:
         seen = {str(agents[a]): tracks[a:b] for a, b in zip(bounds[:-1], bounds[1:])}
         present = seq._agent_ids[self._rows(seq._agent_offsets)] if seq.agents is not None else []
         return {**{str(a): tracks[:0] for a in present}, **seen}
+
+    @property
+    def detections(self) -> dict | None:
+        """``agent id -> DetectedBoxes`` (each agent's detected boxes in its own frame), or ``None``
+        when no detections file gives this frame any."""
+        return self.sequence.detections.get(self.index)
+
+    def points(self, agent_id: str) -> np.ndarray | None:
+        """``(N, 3)`` float32 LiDAR points of an agent in its own sensor frame (right-handed), or
+        ``None`` when the dataset has none for this agent and frame."""
+        source = self.sequence.point_clouds.get((self.index, str(agent_id)))
+        if source is None:
+            return None
+        points = cached_pcd(source[0]).copy()
+        if source[1]:
+            points[:, 1] *= -1
+        return points
 
     def agent_pose(self, agent_id: str) -> np.ndarray:
         """``(3, 3)`` SE(2) pose of an agent in the world frame (maps agent-frame points to world)."""

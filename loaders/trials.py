@@ -11,7 +11,9 @@ CAV (else the vehicle nearest the target distance). Under the SIND protocol the 
 abstract (the protocol deals the objects out); the chosen ones set the frame of reference and do
 not detect themselves, and a frame without two vehicles uses the objects' centroid. The range and
 OPV2V protocols need an ego and a CAV; a dataset that does not say what each agent sees gets the
-objects within the sensor range under OPV2V (and a note saying so).
+objects within the sensor range under OPV2V (and a note saying so). When the dataset carries a
+detector's boxes (``loaders.open(path, detections=...)``), those of the ego and the CAV replace
+their simulated detections (``FrameInputs.detections``; ``cbm.detected`` for the true pairs).
 """
 from __future__ import annotations
 
@@ -73,10 +75,14 @@ def frame_inputs(frame: Frame, protocol: Protocol, cav: str = AUTO_CAV, target_d
         return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents")
     ego, chosen, note = agents
     inputs = frame_trial_inputs(frame, ego, chosen)
+    inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
     if protocol == "opv2v" and inputs["visibility"] is None:
         inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
         note += "; no per-agent visibility in this dataset: sensor range used"
-    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note)
+    detected = _detections(frame, ego, chosen)
+    if detected:
+        note += f"; real detections of {' and '.join(detected)}"
+    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note, detections=detected or None)
 
 
 def sequence_inputs(sequence: Sequence, frames: Iterable[int], protocol: Protocol, cav: str = AUTO_CAV,
@@ -98,6 +104,13 @@ def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AU
     ``FrameInputs.build`` (draws from ``trial_rng(seed, frame.index)``)."""
     inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range)
     return inputs.build(scenario, seed)
+
+
+def _detections(frame: Frame, ego: str, cav: str) -> dict[str, np.ndarray]:
+    """The detector's boxes (``loaders.detections``) of the ego and the CAV, by role, where the
+    frame has them: they replace the simulated detections of those agents."""
+    found = frame.detections or {}
+    return {role: found[agent].boxes for role, agent in (("ego", ego), ("cav", cav)) if agent in found}
 
 
 def _visibility_by_range(inputs: dict, sensor_range: float) -> dict[str, np.ndarray]:

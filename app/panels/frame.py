@@ -1,8 +1,9 @@
-"""The Frame folder: frame slider, step buttons, play loop and speed, and which vehicle is the CAV."""
+"""The Frame folder: frame slider, step buttons, play loop and speed, which vehicle is the CAV, and
+(for a dataset of several scenarios, e.g. an OPV2V release root) a jump to a scenario's first frame."""
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import viser
 
@@ -17,9 +18,20 @@ class FrameControls:
     play: viser.GuiCheckboxHandle
     speed: viser.GuiSliderHandle
     cav: viser.GuiDropdownHandle
+    scenario: viser.GuiDropdownHandle
+    starts: dict[str, int] = field(default_factory=dict)
+    """Scenario name -> its first frame (``Sequence.scenarios``); empty hides the scenario list."""
 
     def show(self, settings: Settings) -> None:
         self.frame.value = settings.frame
+        if self.starts:
+            self.scenario.value = scenario_of(self.starts, settings.frame)
+
+
+def scenario_of(starts: dict[str, int], frame: int) -> str:
+    """The scenario whose frames include ``frame`` (the last one starting at or before it)."""
+    begun = [name for name, first in starts.items() if first <= frame]
+    return begun[-1] if begun else next(iter(starts))
 
 
 def build(gui: viser.GuiApi, settings: Settings, n_frames: int) -> FrameControls:
@@ -29,11 +41,29 @@ def build(gui: viser.GuiApi, settings: Settings, n_frames: int) -> FrameControls
             step=gui.add_button_group("step", ("◀ prev", "next ▶")),
             play=gui.add_checkbox("play", False),
             speed=gui.add_slider("speed (frames/s)", 1, 10, 1, 4),
-            cav=gui.add_dropdown("CAV", (AUTO_CAV,), initial_value=AUTO_CAV, hint="vehicle acting as the CAV"))
+            cav=gui.add_dropdown("CAV", (AUTO_CAV,), initial_value=AUTO_CAV, hint="vehicle acting as the CAV"),
+            scenario=gui.add_dropdown("scenario", ("-",), visible=False,
+                                      hint="jump to the first frame of a scenario of this dataset"))
 
 
 def bind(c: FrameControls, tab: TabActions) -> None:
-    on_user(c.frame, lambda: tab.apply(lambda s: dataclasses.replace(s, frame=int(c.frame.value))))
+    on_user(c.frame, lambda: _slid(c, tab))
     c.step.on_click(lambda e: tab.step(-1 if e.target.value.startswith("◀") else 1))
     on_user(c.play, lambda: tab.set_playing(c.play.value))
     on_user(c.cav, lambda: tab.apply(lambda s: dataclasses.replace(s, cav=tab.cav_id(c.cav.value))))
+    scenarios = tab.explorer.sequence.scenarios or {}
+    if len(scenarios) > 1:
+        c.starts = dict(scenarios)
+        c.scenario.options = tuple(scenarios)
+        c.scenario.value = scenario_of(c.starts, tab.settings.frame)
+        c.scenario.visible = True
+        on_user(c.scenario, lambda: tab.apply(
+            lambda s: dataclasses.replace(s, frame=c.starts[c.scenario.value]), move_controls=True))
+
+
+def _slid(c: FrameControls, tab: TabActions) -> None:
+    """The frame slider moved: show that frame (and, with scenarios, name its scenario)."""
+    frame = int(c.frame.value)
+    tab.apply(lambda s: dataclasses.replace(s, frame=frame))
+    if c.starts:
+        c.scenario.value = scenario_of(c.starts, frame)

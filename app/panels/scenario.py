@@ -23,6 +23,10 @@ SLIDERS = {
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the
 sensor range in a dataset without per-agent visibility."""
+LOCALIZATIONS = ("fixed", "gaussian", "dataset")
+"""``dataset``: the CAV's own reported pose where the release has one (OPV2V's ``predicted_ego_pos``)."""
+SIMULATED_ERROR = ("loc_x", "loc_y", "loc_yaw")
+"""The sliders of a simulated localization error (unread under ``dataset``)."""
 
 
 @dataclass
@@ -41,23 +45,35 @@ class ScenarioControls:
         self.seed.value = scenario.seed
 
     def reflect(self, settings: Settings) -> None:
-        """Disable the sliders the protocol does not read, with the reason in their hint and the note."""
-        protocol = settings.scenario.protocol
-        off = []
+        """Disable the sliders the scenario does not read, with the reason in their hint and the note."""
+        reasons: dict[str, list[str]] = {}
         for name, slider in self.sliders.items():
-            hint = SLIDERS[name][4]
-            slider.disabled = protocol not in PROTOCOLS_READING.get(name, (protocol,))
-            slider.hint = f"Disabled: no effect under the {protocol} protocol. {hint}" if slider.disabled else hint
-            off += [SLIDERS[name][0]] if slider.disabled else []
-        self.note.content = f"*Disabled (no effect under the {protocol} protocol): {', '.join(off)}.*"
-        self.note.visible = bool(off)
+            why = unread_reason(settings, name)
+            slider.disabled = why is not None
+            slider.hint = SLIDERS[name][4] if why is None else f"Disabled: {why}. {SLIDERS[name][4]}"
+            if why is not None:
+                reasons.setdefault(why, []).append(SLIDERS[name][0])
+        self.note.content = "  \n".join(f"*Disabled ({why}): {', '.join(names)}.*" for why, names in reasons.items())
+        self.note.visible = bool(reasons)
+
+
+def unread_reason(settings: Settings, name: str) -> str | None:
+    """Why the scenario slider ``name`` has no effect under ``settings``; None when it acts."""
+    scenario = settings.scenario
+    if scenario.protocol not in PROTOCOLS_READING.get(name, (scenario.protocol,)):
+        return f"no effect under the {scenario.protocol} protocol"
+    if name in SIMULATED_ERROR and scenario.localization == "dataset":
+        return "the dataset's own localization is used"
+    return None
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> ScenarioControls:
     scenario = settings.scenario
     return ScenarioControls(
         protocol=gui.add_dropdown("protocol", ("range", "sind", "opv2v"), initial_value=scenario.protocol),
-        localization=gui.add_dropdown("localization error", ("fixed", "gaussian"), initial_value=scenario.localization),
+        localization=gui.add_dropdown("localization error", LOCALIZATIONS, initial_value=scenario.localization,
+                                      hint="fixed offset, gaussian draw, or the dataset's own (OPV2V's "
+                                           "predicted_ego_pos)"),
         sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
                  for name, (label, low, high, step, hint) in SLIDERS.items()},
         seed=gui.add_number("seed", scenario.seed, min=0, step=1),

@@ -12,7 +12,7 @@ from ..scene.colours import palette
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, on_user
 
-TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines")
+TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points")
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 
@@ -28,6 +28,8 @@ class ViewControls:
     reset_camera: viser.GuiButtonHandle
     presentation: viser.GuiCheckboxHandle
     dark: viser.GuiCheckboxHandle
+    points: viser.GuiCheckboxHandle
+    points_every: viser.GuiSliderHandle
     legend: viser.GuiMarkdownHandle
 
     def show(self, settings: Settings) -> None:
@@ -35,9 +37,11 @@ class ViewControls:
         self.layout.value, self.line_pairs.value = view.layout, LINE_PAIRS[view.line_pairs]
         for name in TOGGLES:
             getattr(self, name).value = getattr(view, name)
+        self.points_every.value = view.points_every
 
     def reflect(self, settings: Settings) -> None:
         self.line_pairs.visible = METHODS[settings.method].explains
+        self.points_every.disabled = not settings.view.points
         self.legend.content = palette(settings.view).legend
 
 
@@ -58,6 +62,11 @@ def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),
         dark=gui.add_checkbox("dark theme", view.dark, hint="A dark page and scene, in this browser tab only"),
+        points=gui.add_checkbox("LiDAR points", view.points,
+                                hint="The ego's and the CAV's LiDAR points (datasets with .pcd files), the "
+                                     "CAV's placed like its boxes"),
+        points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
+                                    hint="Draw every Nth LiDAR point (1: all of them)"),
         legend=gui.add_markdown(palette(view).legend))
     return controls
 
@@ -67,3 +76,4 @@ def bind(c: ViewControls, tab: TabActions) -> None:
         on_user(control, lambda n=name, h=control: tab.apply(lambda s: s.with_view(**{n: h.value})))
     on_user(c.line_pairs, lambda: tab.apply(lambda s: s.with_view(line_pairs=LINE_PAIR_KEYS[c.line_pairs.value])))
     c.reset_camera.on_click(lambda e: tab.reset_camera())
+    on_user(c.points_every, lambda: tab.apply(lambda s: s.with_view(points_every=int(c.points_every.value))))

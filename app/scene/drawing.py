@@ -10,10 +10,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cbm import se2
+from loaders import Frame
 
 from ..session.explorer import Outcome
 from . import captions, colours, geometry
 from .layouts import LAYOUTS, TITLE_AT, Panel
+from .points import PointCloud, clouds
 from .text import metrics_markdown
 
 LINE_HEIGHT = 1.7
@@ -55,6 +57,8 @@ class Drawing:
     """(x, y) of every vehicle drawn, ego and CAV of each panel (what the presentation camera frames)."""
     label_px: float = captions.LABEL_PX
     """Height of the labels' text in CSS pixels."""
+    points: dict[str, PointCloud] = field(default_factory=dict)
+    """The agents' LiDAR points (``ego_points``, ``cav_points``; empty unless the view asks for them)."""
 
 
 @dataclass
@@ -88,8 +92,8 @@ def shown_pairs(outcome: Outcome) -> np.ndarray:
     return result.pairs
 
 
-def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
-    """The scene of ``outcome`` under its view options."""
+def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | None = None) -> Drawing:
+    """The scene of ``outcome`` under its view options (``frame``: the dataset frame, for its LiDAR points)."""
     layout = LAYOUTS[outcome.settings.view.layout]
     panels = layout.panels(outcome)
     parts = _Parts()
@@ -109,7 +113,10 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray]) -> Drawing:
     return Drawing(meshes=_meshes(parts, ego, cav, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
-                   agents=agents, label_px=captions.label_px(view))
+                   agents=agents, label_px=captions.label_px(view),
+                   points=clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
+                                 (parts.ego_poses, parts.cav_poses), view.points_every,
+                                 (palette.ego_boxes, palette.cav_boxes)))
 
 
 def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:

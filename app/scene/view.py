@@ -15,6 +15,7 @@ from cbm import se2
 from .captions import LABEL_PX
 from .drawing import Drawing, Lines, Mesh
 from .layouts import clear_of_panel, screen_of
+from .points import POINT_SIZE, PointCloud
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
@@ -51,6 +52,7 @@ class SceneView:
         self.meshes: dict[str, viser.MeshHandle] = {}
         self.lines: dict[str, viser.LineSegmentsHandle] = {}
         self.labels: dict[str, viser.LabelHandle] = {}
+        self.clouds: dict[str, viser.PointCloudHandle] = {}
         self.shown: dict[str, Hashable] = {}
         """Fingerprint of what each node shows."""
         self.updates: Counter[str] = Counter()
@@ -61,7 +63,8 @@ class SceneView:
     @property
     def node_names(self) -> set[str]:
         """Names of the nodes drawn so far (visible or not)."""
-        return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values())}
+        return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values(),
+                                 *self.clouds.values())}
 
     def reset_camera(self, centre_y: float = 0.0) -> None:
         """Look down on the ego from behind, centred sideways on ``centre_y`` (higher when the
@@ -81,6 +84,9 @@ class SceneView:
                     self._lines(name, lines)
                 if lines.pose is not None:
                     _place(self.lines[name], lines.pose)
+            for name, cloud in drawing.points.items():
+                if self._changed(name, fingerprint((cloud.points,), cloud.color)):
+                    self._cloud(name, cloud)
             self.label_px = drawing.label_px
             for name in set(self.labels) - set(drawing.labels):
                 self.labels[name].visible = False
@@ -120,6 +126,17 @@ class SceneView:
             return
         handle.vertices, handle.faces = vertices, faces
         handle.color, handle.opacity, handle.visible = mesh.color, mesh.opacity, not empty
+
+    def _cloud(self, name: str, cloud: PointCloud) -> None:
+        empty = len(cloud.points) == 0
+        points = _DUMMY_VERTICES if empty else cloud.points
+        handle = self.clouds.get(name)
+        if handle is None:
+            self.clouds[name] = self.client.scene.add_point_cloud(
+                f"/scene/{name}", points, cloud.color, point_size=POINT_SIZE, precision="float32",
+                visible=not empty)
+            return
+        handle.points, handle.colors, handle.visible = points, np.array(cloud.color, np.uint8), not empty
 
     def _lines(self, name: str, lines: Lines) -> None:
         empty = len(lines.segments) == 0

@@ -1,4 +1,4 @@
-"""Named parameter sets as TOML: the shipped ones in ``presets/``, the user's in a folder of theirs.
+"""Named parameter sets as TOML: the shipped ones in ``app/presets/``, the user's in a folder of theirs.
 
 A preset file holds an optional ``description`` and the tables of ``settings.to_preset``
 (``method``, ``[scenario]``, ``[cbm]``, ``[view]``, ... with angles in degrees); it is named by its
@@ -24,7 +24,7 @@ if sys.version_info >= (3, 11):
 else:
     import tomli as tomllib
 
-SHIPPED_DIR = Path(__file__).resolve().parents[2] / "presets"
+SHIPPED_DIR = Path(__file__).resolve().parents[1] / "presets"
 ENV_VAR = "CBM_EXPLORER_PRESETS"
 
 

@@ -46,12 +46,18 @@ class ViewOptions:
     the camera over the two agents and the control panel collapsed."""
     dark: bool = False
     """The dark theme (this tab only)."""
+    points: bool = False
+    """The two agents' LiDAR points, when the dataset ships them (OPV2V ``.pcd``)."""
+    points_every: int = 10
+    """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
             raise ValueError(f"ViewOptions.layout must be one of {LAYOUTS}, got {self.layout!r}")
         if self.line_pairs not in LINE_PAIRS:
             raise ValueError(f"ViewOptions.line_pairs must be one of {tuple(LINE_PAIRS)}, got {self.line_pairs!r}")
+        if isinstance(self.points_every, bool) or not isinstance(self.points_every, int) or self.points_every < 1:
+            raise ValueError(f"ViewOptions.points_every must be an integer >= 1, got {self.points_every!r}")
 
 
 DEFAULT_SCENARIO = ScenarioParams(protocol="range", sigma_p=0.2, sigma_theta=2.0, flip_prob=0.5,

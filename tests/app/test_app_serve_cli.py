@@ -20,6 +20,8 @@ def _serve(*args: str, tmp_path: Path) -> subprocess.CompletedProcess:
     (("--port", "eighty"), "invalid int value"),
     (("--dataset", "no/such/folder"), "does not exist"),
     (("--preset", "no-such-preset"), "not found"),
+    (("--dataset", "tests/loaders/fixtures/opv2v/scenario", "--detections", "no/such/stage1_boxes.json"),
+     "stage1_boxes.json"),
 ])
 def test_bad_input_is_one_line_and_a_nonzero_exit(args: tuple[str, ...], words: str, tmp_path: Path) -> None:
     done = _serve(*args, tmp_path=tmp_path)

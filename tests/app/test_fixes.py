@@ -9,6 +9,7 @@ import numpy as np
 
 from app.panels.keynumbers import unusable_markdown
 from app.panels.method import inactive_reason
+from app.panels.scenario import unread_reason
 from app.scene import layouts
 from app.scene.text import metrics_markdown
 from app.session import export
@@ -37,6 +38,16 @@ def test_why_a_method_control_is_disabled() -> None:
     assert inactive_reason(icp, "cbm", "sigma1") == "ICP selected: CBM's parameters do not apply"
     forced = dataclasses.replace(settings, method="cbm-no-consensus")
     assert "forces consensus" in inactive_reason(forced, "cbm", "consensus")
+
+
+def test_the_simulated_localization_sliders_are_unread_under_the_datasets_own_pose() -> None:
+    fixed = Settings().with_scenario(protocol="range", localization="fixed")
+    own = fixed.with_scenario(localization="dataset")
+    assert unread_reason(fixed, "loc_x") is None and unread_reason(fixed, "sigma_p") is None
+    assert all(unread_reason(own, name) == "the dataset's own localization is used"
+               for name in ("loc_x", "loc_y", "loc_yaw"))
+    assert unread_reason(own, "sigma_p") is None
+    assert unread_reason(own, "eta") == "no effect under the range protocol"
 
 
 def test_the_default_camera_centres_the_layout_left_of_the_panel() -> None:

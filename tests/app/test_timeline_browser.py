@@ -78,7 +78,7 @@ def test_run_all_frames_fills_the_timeline_and_failures_are_stepped_through(brow
     ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
     ui.pick_option(page, "jump to", f"frame {FAILED[1]}")
     ui.wait_until(lambda: frame_shown(tab, FAILED[1]), 60)
-    assert "Frame 24" in ui.header(page)
+    ui.wait_until(lambda: "Frame 24" in ui.header(page), 30)
     click_timeline_at(page, FAILED[0], len(tab.explorer))
     ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
     page.close()

@@ -94,6 +94,8 @@ def test_the_range_protocol_on_the_shipped_scene_names_its_agents(tmp_path):
     (["--protocol", "teleport"], "invalid choice"),
     (["--dataset", "no/such/place"], "does not exist"),
     (["--workers", "0"], "--workers must be at least 1"),
+    (["--dataset", "synthetic:40", "synthetic:40:seed=1", "--detections", "stage1_boxes.json"],
+     "give exactly one --dataset"),
 ])
 def test_bad_input_is_one_line_on_stderr_and_exit_status_2(args, message, capsys, tmp_path):
     with pytest.raises(SystemExit) as stop:
@@ -141,3 +143,16 @@ def test_the_evaluation_is_an_importable_package_and_the_command_is_thin(two_run
     written = pl.read_parquet(two_runs[0] / "trials.parquet")
     assert evaluation.without_timing(table).equals(written)
     assert len((REPO / "evaluate.py").read_text().splitlines()) <= 40
+
+
+def test_a_detectors_boxes_replace_the_simulated_ones(tmp_path):
+    fixtures = REPO / "tests" / "loaders" / "fixtures"
+    common = ["--dataset", str(fixtures / "opv2v" / "scenario"), "--protocol", "opv2v", "--frames", "0:1",
+              "--methods", "cbm", "--no-timing"]
+    simulated, detected = tmp_path / "simulated", tmp_path / "detected"
+    assert evaluate_cli.main([*common, "--out", str(simulated)]) == 0
+    assert evaluate_cli.main([*common, "--detections", str(fixtures / "stage1" / "stage1_boxes.json"),
+                              "--out", str(detected)]) == 0
+    runs = [pl.read_csv(folder / "trials.csv") for folder in (simulated, detected)]
+    assert len(runs[0]) == len(runs[1]) == 1
+    assert runs[0].drop("dataset").row(0) != runs[1].drop("dataset").row(0)

@@ -9,7 +9,7 @@ import pytest
 
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 REPO = Path(__file__).resolve().parents[2]
-SHIPPED_LOG = REPO / "data" / "argoverse2" / "adcf7d18-0510-35b0-a2fa-b4cea13a6d76"
+SHIPPED_LOG = REPO / "loaders" / "data" / "argoverse2" / "adcf7d18-0510-35b0-a2fa-b4cea13a6d76"
 SHARED_DATA = REPO.parent / "shared" / "data"
 
 

@@ -1,0 +1,162 @@
+"""Real detections: CoAlign / HEAL ``stage1_boxes.json`` (per-agent boxes of a first-stage detector)
+attached to the frames of their OPV2V / V2XSet / V2V4Real / DAIR-V2X dataset.
+
+    seq = loaders.open("OPV2V/test/2021_08_18_19_48_05", detections="stage1_boxes.json")
+    seq[0].detections["641"].boxes        # (N, 7) in agent 641's own LiDAR frame
+
+The file is what CoAlign's ``opencood/tools/pose_graph_pre_calc.py`` saves: a JSON object keyed by
+OpenCOOD sample index (a string), each value ``null`` (no box) or an object with
+
+- ``cav_id_list``: the agents of the sample, the ego first;
+- ``pred_corner3d_np_list``: per agent, ``(N, 8, 3)`` box corners in that agent's own LiDAR frame
+  (not projected to the ego), in OpenCOOD's corner order (``boxes_to_corners_3d``: bottom face
+  front-left, front-right, rear-right, rear-left, then the top face in the same order);
+- ``uncertainty_np_list``: per agent, ``(N, D)`` the uncertainty head's output for each box
+  (D = 2 for x, y, 3 with yaw); kept as saved (a missing key gives ``D = 0``);
+- ``lidar_pose_clean_np``: per agent, the true LiDAR pose ``[x, y, z, roll, yaw, pitch]``
+  (metres, degrees); ``lidar_pose_np`` (the noisy one, in some forks) is not needed.
+
+Sample indices count the frames of a whole split, so each sample is matched to a frame by pose:
+the sample's ego (``cav_id_list[0]``) must be an agent of the frame, at ``lidar_pose_clean_np[0]``
+within :data:`POSE_TOLERANCE` metres. Samples that match no frame are ignored; a file of which no
+sample matches is refused. DAIR-V2X agents ``0`` / ``1`` are ``vehicle`` / ``infrastructure``.
+
+Boxes are fitted to the corners (centre = mean corner, length and yaw from the front and rear
+edge midpoints, width from the side midpoints, height from the faces) and expressed in the agent's
+LiDAR frame, right-handed: OPV2V / V2XSet (CARLA, left-handed) have y and yaw mirrored, as the
+OPV2V loader does for the world.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import LoaderError
+from .scene import Sequence
+from .structured import field, numbers, read_json
+
+POSE_TOLERANCE = 0.05
+"""Metres between a sample's ego pose and the frame's agent pose for them to be the same frame."""
+DAIR_AGENTS = {"0": "vehicle", "1": "infrastructure"}
+CORNERS = "N boxes of 8 corners of 3 numbers"
+
+
+@dataclass(frozen=True)
+class DetectedBoxes:
+    """One agent's detections in one frame."""
+
+    boxes: np.ndarray
+    """(N, 7) ``x, y, z, length, width, height, yaw`` in the agent's LiDAR frame (right-handed)."""
+    uncertainty: np.ndarray
+    """(N, D) the detector's uncertainty per box, as saved."""
+
+
+def attach(sequence: Sequence, path: Path) -> Sequence:
+    """Read ``path`` and set ``sequence.detections`` (frame index -> agent id -> boxes); returns it."""
+    samples = read_json(path)
+    if not isinstance(samples, dict):
+        raise LoaderError(f"{path}: expected a JSON object of sample index -> detections")
+    left_handed = sequence.name.startswith("opv2v/")
+    poses = _agent_positions(sequence)
+    found: dict[int, dict[str, DetectedBoxes]] = {}
+    for key, sample in samples.items():
+        if sample is None:
+            continue
+        agents = _agent_ids(path, key, sample, sequence)
+        pose = numbers(path, _nth(path, key, sample, "lidar_pose_clean_np", 0), f"{key}.lidar_pose_clean_np[0]", 6)
+        frame = _frame_at(poses.get(agents[0]), pose[0], -pose[1] if left_handed else pose[1])
+        if frame is not None:
+            found[frame] = _sample_boxes(path, key, sample, agents, left_handed)
+    if not found:
+        raise LoaderError(f"{path}: no sample matches a frame of {sequence.name} (each sample's "
+                          f"lidar_pose_clean_np[0] against its ego's pose, within {POSE_TOLERANCE} m)")
+    sequence.detections = found
+    return sequence
+
+
+def fit_boxes(corners: np.ndarray) -> np.ndarray:
+    """``(N, 7)`` boxes fitted to ``(N, 8, 3)`` corners in OpenCOOD's order."""
+    corners = np.asarray(corners, dtype=float).reshape(-1, 8, 3)
+    front, rear = corners[:, [0, 1]].mean(axis=1), corners[:, [2, 3]].mean(axis=1)
+    left, right = corners[:, [0, 3]].mean(axis=1), corners[:, [1, 2]].mean(axis=1)
+    along = front[:, :2] - rear[:, :2]
+    return np.column_stack([
+        corners.mean(axis=1),
+        np.linalg.norm(along, axis=1),
+        np.linalg.norm(left[:, :2] - right[:, :2], axis=1),
+        corners[:, 4:, 2].mean(axis=1) - corners[:, :4, 2].mean(axis=1),
+        np.arctan2(along[:, 1], along[:, 0]),
+    ])
+
+
+def _agent_positions(sequence: Sequence) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """``agent id -> (frame indices, (K, 2) positions)`` over the sequence."""
+    rows: dict[str, list[tuple[int, float, float]]] = {}
+    for frame in sequence:
+        agents = frame.agents
+        if agents is None:
+            continue
+        for agent, x, y in agents.select("agent_id", "x", "y").iter_rows():
+            rows.setdefault(agent, []).append((frame.index, x, y))
+    return {agent: (np.array([r[0] for r in got]), np.array([r[1:] for r in got])) for agent, got in rows.items()}
+
+
+def _frame_at(positions: tuple[np.ndarray, np.ndarray] | None, x: float, y: float) -> int | None:
+    """The frame whose agent is at ``(x, y)`` within the tolerance, or None."""
+    if positions is None:
+        return None
+    frames, xy = positions
+    gap = np.linalg.norm(xy - [x, y], axis=1)
+    best = int(np.argmin(gap))
+    return int(frames[best]) if gap[best] <= POSE_TOLERANCE else None
+
+
+def _agent_ids(path: Path, key: str, sample, sequence: Sequence) -> list[str]:
+    ids = field(path, sample, "cav_id_list", key)
+    if not isinstance(ids, list) or not ids:
+        raise LoaderError(f"{path}: {key}.cav_id_list: expected a non-empty list of agent ids, got {ids!r}")
+    ids = [str(i) for i in ids]
+    dair = sequence.name.startswith("dair_v2x") or sequence.ego == "vehicle"
+    return [DAIR_AGENTS.get(i, i) for i in ids] if dair else ids
+
+
+def _nth(path: Path, key: str, sample, name: str, index: int):
+    values = field(path, sample, name, key)
+    if not isinstance(values, list) or len(values) <= index:
+        raise LoaderError(f"{path}: {key}.{name}: expected one entry per agent of cav_id_list, got {values!r:.80}")
+    return values[index]
+
+
+def _sample_boxes(path: Path, key: str, sample, agents: list[str], left_handed: bool) -> dict[str, DetectedBoxes]:
+    """Every agent's boxes of one sample."""
+    uncertainties = sample.get("uncertainty_np_list")
+    out = {}
+    for k, agent in enumerate(agents):
+        where = f"{key}.pred_corner3d_np_list[{k}]"
+        corners = _array(path, _nth(path, key, sample, "pred_corner3d_np_list", k), where, CORNERS)
+        if corners.size and (corners.ndim != 3 or corners.shape[1:] != (8, 3)):
+            raise LoaderError(f"{path}: {where}: expected {CORNERS}, got shape {corners.shape}")
+        corners = corners.reshape(-1, 8, 3)
+        if left_handed:
+            corners[:, :, 1] *= -1
+        uncertainty = np.zeros((len(corners), 0))
+        if uncertainties is not None and len(corners):
+            where = f"{key}.uncertainty_np_list[{k}]"
+            uncertainty = _array(path, _nth(path, key, sample, "uncertainty_np_list", k), where)
+            if uncertainty.ndim != 2 or len(uncertainty) != len(corners):
+                raise LoaderError(f"{path}: {where}: expected {len(corners)} rows (one per box), "
+                                  f"got shape {uncertainty.shape}")
+        out[agent] = DetectedBoxes(fit_boxes(corners), uncertainty)
+    return out
+
+
+def _array(path: Path, value, where: str, expected: str = "nested lists of numbers") -> np.ndarray:
+    try:
+        array = np.array(value, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise LoaderError(f"{path}: {where}: expected {expected} ({str(exc).splitlines()[0][:120]})") from exc
+    if not np.isfinite(array).all():
+        raise LoaderError(f"{path}: {where}: expected finite numbers")
+    return array

@@ -1,0 +1,101 @@
+"""CoAlign / HEAL stage1_boxes.json as a detections source, and trials built on it.
+
+The fixture follows CoAlign's pose_graph_pre_calc.py output for the OPV2V scenario fixture: sample
+"13" is its frame 0 (ego 641 at lidar_pose_clean (10, 20) yaw 90 deg in CARLA's left-handed world),
+sample "12" belongs to another scenario (ego 500 m away) and "0" is null. Corners were made with
+OpenCOOD's boxes_to_corners_3d in each agent's left-handed LiDAR frame.
+"""
+import json
+import math
+
+import numpy as np
+import pytest
+
+import loaders
+from cbm.detected import match_to_truth
+from cbm.scenario import ScenarioParams
+from loaders.detections import fit_boxes
+from loaders.trials import build_trial
+
+SCENARIO = "opv2v/scenario"
+STAGE1 = "stage1/stage1_boxes.json"
+
+
+@pytest.fixture
+def detected(fixtures):
+    return loaders.open(fixtures / SCENARIO, detections=fixtures / STAGE1)
+
+
+def test_samples_matched_to_frames_by_ego_pose(detected):
+    assert list(detected.detections) == [0]
+    assert detected[1].detections is None
+    assert sorted(detected[0].detections) == ["641", "650"]
+
+
+def test_corners_fitted_into_right_handed_agent_frames(detected):
+    ego = detected[0].detections["641"]
+    # (1.3, -5.5), yaw -60 deg, 4.4 x 1.9 x 1.5 in the left-handed LiDAR frame -> y and yaw mirrored
+    np.testing.assert_allclose(ego.boxes[0], [1.3, 5.5, -1.1, 4.4, 1.9, 1.5, math.radians(60)], atol=1e-5)
+    np.testing.assert_allclose(ego.uncertainty, [[0.2, 0.3], [1.5, 1.4]])
+    cav = detected[0].detections["650"]
+    np.testing.assert_allclose(cav.boxes[:, [0, 1, 6]], [[14.5, 1.2, math.radians(150)], [20.4, 0.0, math.pi / 2]],
+                               atol=1e-5)
+
+
+def test_trial_uses_detections_and_truth_for_pairs(detected):
+    trial = build_trial(detected[0], ScenarioParams(protocol="opv2v", sigma_p=1.0), seed=3, cav="650")
+    # the detector's boxes, not noisy ground truth: the same whatever sigma_p and seed
+    np.testing.assert_allclose(trial.ego_boxes, detected[0].detections["641"].boxes)
+    np.testing.assert_allclose(trial.cav_boxes, detected[0].detections["650"].boxes)
+    # vehicle 700 is at (1, 5.5) in the ego frame: the detection 0.3 m off matches it; (30, -30) matches nothing
+    assert list(trial.ego_ids) == ["700", "det:ego:1"]
+    assert list(trial.cav_ids) == ["700", "641"]            # the CAV detects the ego car
+    np.testing.assert_array_equal(trial.gt_pairs, [[0, 0]])
+    np.testing.assert_allclose(trial.ego_true_xy, [[1.0, 5.5], [30.0, -30.0]], atol=1e-9)
+    np.testing.assert_allclose(trial.cav_true_xy, [[1.0, 5.5], [0.0, 0.0]], atol=1e-9)
+
+
+def test_frame_without_detections_keeps_simulated_boxes(detected):
+    trial = build_trial(detected[1], ScenarioParams(protocol="opv2v"), seed=0)
+    assert not any(str(i).startswith("det:") for i in trial.ego_ids)
+
+
+def test_fit_boxes_inverts_opencood_corners():
+    template = np.array([[1, 1, -1], [1, -1, -1], [-1, -1, -1], [-1, 1, -1],
+                         [1, 1, 1], [1, -1, 1], [-1, -1, 1], [-1, 1, 1]]) / 2
+    yaw = 2.5
+    rotation = np.array([[math.cos(yaw), -math.sin(yaw), 0], [math.sin(yaw), math.cos(yaw), 0], [0, 0, 1]])
+    corners = (template * [4.0, 2.0, 1.5]) @ rotation.T + [3.0, -2.0, 0.5]
+    np.testing.assert_allclose(fit_boxes(corners[None])[0], [3.0, -2.0, 0.5, 4.0, 2.0, 1.5, yaw], atol=1e-12)
+
+
+def test_matching_is_one_to_one_within_two_metres():
+    truth = np.array([[0.0, 0.0], [1.0, 0.0], [10.0, 0.0]])
+    detected = np.array([[0.9, 0.0], [0.2, 0.0], [13.0, 0.0]])
+    np.testing.assert_array_equal(match_to_truth(detected, truth), [1, 0, -1])
+
+
+def _rewritten(tmp_path, fixtures, change) -> str:
+    data = json.loads((fixtures / STAGE1).read_text())
+    change(data)
+    path = tmp_path / "stage1_boxes.json"
+    path.write_text(json.dumps(data))
+    return path
+
+
+def test_bad_corners_name_the_sample_and_field(tmp_path, fixtures):
+    for corners in ([[[1, 2]] * 8], [[[1, 2, 3]] * 8, [[1, 2]] * 8]):
+        path = _rewritten(tmp_path, fixtures, lambda d, c=corners: d["13"]["pred_corner3d_np_list"].__setitem__(1, c))
+        with pytest.raises(loaders.LoaderError, match=r"13.pred_corner3d_np_list\[1\]: expected N boxes of 8 corners"):
+            loaders.open(fixtures / SCENARIO, detections=path)
+
+
+def test_missing_key_and_no_matching_sample(tmp_path, fixtures):
+    path = _rewritten(tmp_path, fixtures, lambda d: d["13"].pop("cav_id_list"))
+    with pytest.raises(loaders.LoaderError, match="missing key 13.cav_id_list"):
+        loaders.open(fixtures / SCENARIO, detections=path)
+    path = _rewritten(tmp_path, fixtures, lambda d: d.pop("13"))
+    with pytest.raises(loaders.LoaderError, match="no sample matches a frame of opv2v/scenario"):
+        loaders.open(fixtures / SCENARIO, detections=path)
+    with pytest.raises(loaders.LoaderError, match="detections file .* does not exist"):
+        loaders.open(fixtures / SCENARIO, detections=tmp_path / "absent.json")
