@@ -11,15 +11,15 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Mapping
-from typing import TYPE_CHECKING
+from typing import TypeVar
 
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from . import se2
 
-if TYPE_CHECKING:
-    from .scenario import Trial
+Trial = TypeVar("Trial")
+"""A ``cbm.scenario.Trial`` (not imported: ``cbm.scenario`` builds its trials with this module)."""
 
 MATCH_RADIUS = 2.0
 """Metres: the farthest a detection may lie from the ground-truth centre it is matched to."""
