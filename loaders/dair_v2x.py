@@ -16,7 +16,11 @@ Per frame, read:
   LiDAR -> world is their product;
 - ``infrastructure-side/calib/virtuallidar_to_world/<id>.json``: infrastructure -> world, with the
   pair's ``system_error_offset {delta_x, delta_y}`` added to its translation (as the DAIR-V2X
-  and CoAlign code do).
+  and CoAlign code do);
+- LiDAR points: the ``.pcd`` files ``vehicle_pointcloud_path`` / ``infrastructure_pointcloud_path``
+  name (relative to the folder, as OpenCOOD / CoAlign's DAIR dataset joins them; ``x y z
+  intensity``, ``DATA binary``), each in its agent's LiDAR frame, the frame its labels and pose
+  use (``Sequence.point_clouds``, read on demand by ``Frame.points``; ``None`` without the file).
 
 Real releases (DAIR-V2X-C as distributed, read as the DAIR-V2X devkit and OpenCOOD / CoAlign's
 DAIR dataset read it) have gaps and quirks, handled so:
@@ -80,7 +84,7 @@ def load(path: str | Path) -> Sequence:
     pairs = read_json(info_file)
     if not isinstance(pairs, list) or not pairs:
         raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
-    objects, agents, seen, frame_ids, missing = [], [], [], [], []
+    objects, agents, seen, frame_ids, missing, clouds = [], [], [], [], [], {}
     for k, pair in enumerate(tqdm(pairs, desc="DAIR-V2X pairs", unit="pair", delay=PROGRESS_DELAY, leave=False)):
         try:
             rows = _pair_rows(root, info_file, pair, k, len(frame_ids))
@@ -89,12 +93,13 @@ def load(path: str | Path) -> Sequence:
             continue
         for table, new in zip((objects, seen, agents), rows[1:]):
             table.extend(new)
+        clouds.update(_point_files(root, pair, len(frame_ids)))
         frame_ids.append(rows[0])
     if not frame_ids:
         raise LoaderError(f"{info_file}: no pair could be loaded; {len(missing)} lack a label or calibration "
                           f"file, first: {missing[0]}: missing")
     notes = _skipped_notes(info_file, missing, len(pairs))
-    return Sequence(
+    sequence = Sequence(
         name=f"dair-v2x/{root.name}",
         objects=_frame_table(objects, ["track_id", "category"], ["x", "y", "z", "length", "width", "height", "yaw"]),
         frame_ids=frame_ids,
@@ -104,6 +109,8 @@ def load(path: str | Path) -> Sequence:
         ego="vehicle",
         warnings=notes,
     )
+    sequence.point_clouds = clouds
+    return sequence
 
 
 def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list]:
@@ -125,6 +132,26 @@ def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[s
     agents = [_agent(frame, "vehicle", vehicle_pose, VEHICLE_SIZE),
               _agent(frame, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE)]
     return vehicle_id, objects, seen, agents
+
+
+def _point_files(root: Path, pair: dict, frame: int) -> dict[tuple[int, str], tuple[Path, bool]]:
+    """``(frame, agent) -> (PCD file, False)`` for the pair's point clouds that exist (right-handed)."""
+    files = {}
+    for side in ("vehicle", "infrastructure"):
+        path = _existing_file(root, pair.get(f"{side}_pointcloud_path"))
+        if path is not None:
+            files[(frame, side)] = (path, False)
+    return files
+
+
+def _existing_file(root: Path, name) -> Path | None:
+    """``root / name`` when ``name`` is a relative path to a file there, else ``None``."""
+    if not isinstance(name, str) or not name or Path(name).is_absolute():
+        return None
+    try:
+        return root / name if (root / name).is_file() else None
+    except (OSError, ValueError):
+        return None
 
 
 def _skipped_notes(info_file: Path, missing: list[Path], total: int) -> list[str]:
