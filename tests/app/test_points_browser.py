@@ -57,5 +57,5 @@ def test_points_toggle_and_subsampling(browser, server) -> None:
     ui.wait_until(lambda: _shown(session, "ego_points") == 40 and _shown(session, "cav_points") == 40, timeout=60)
 
     ui.label(page, "LiDAR points").click()
-    ui.wait_until(lambda: _shown(session, "ego_points") == 0 and _shown(session, "cav_points") == 0, timeout=60)
-    assert not session.last.settings.view.points
+    ui.wait_until(lambda: not session.last.settings.view.points and _shown(session, "ego_points") == 0
+                  and _shown(session, "cav_points") == 0, timeout=60)
