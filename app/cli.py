@@ -6,12 +6,13 @@ from __future__ import annotations
 
 import argparse
 import os
+import signal
 import sys
-import time
+import threading
 
 import loaders
 
-from .server import ExplorerServer
+from .server import AddressError, ExplorerServer, check_free, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
 from .session.presets import PresetError, discover
@@ -45,9 +46,50 @@ def parse(argv: list[str]) -> argparse.Namespace:
     return args
 
 
+SAMPLED_FRAMES = 25
+"""Frames, evenly spread, that the start-up check tries for a usable ego and CAV."""
+
+
+def _warn(message: str) -> None:
+    print(f"{os.path.basename(sys.argv[0])}: warning: {message}", file=sys.stderr, flush=True)
+
+
+def sampled_frames(count: int, samples: int = SAMPLED_FRAMES) -> list[int]:
+    """Up to ``samples`` frame indices spread evenly over ``count`` frames, the first and last included."""
+    if count <= samples:
+        return list(range(count))
+    return sorted({round(k * (count - 1) / (samples - 1)) for k in range(samples)})
+
+
+def usable_frame(explorer: Explorer, settings: Settings) -> int | None:
+    """The first sampled frame that makes a trial (an ego and a CAV with objects) under ``settings``, or None."""
+    for index in sampled_frames(len(explorer)):
+        try:
+            explorer.trial_inputs(settings, index)
+        except ValueError:
+            continue
+        if len(explorer.sequence[index].track_ids) >= 2:
+            return index
+    return None
+
+
+def _stop_on_signals() -> threading.Event:
+    """An event set by SIGTERM or SIGINT (Ctrl-C), so that the server stops cleanly on either."""
+    stopping = threading.Event()
+    for number in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(number, lambda *_: stopping.set())
+    return stopping
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Serve the dataset until Ctrl-C; 2 on bad input."""
+    """Serve the dataset until SIGTERM or Ctrl-C (then 0); 2 on bad input."""
     args = parse(sys.argv[1:] if argv is None else argv)
+    stopping = _stop_on_signals()
+    try:
+        check_free(args.host, args.port)
+        local = is_loopback(args.host)
+    except AddressError as error:
+        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
     kernels.prepare()
     try:
         sequence = loaders.open(args.dataset, detections=args.detections)
@@ -57,21 +99,32 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"{args.dataset}: the dataset has no frames")
     presets, problems = discover()
     for problem in problems:
-        print(f"{os.path.basename(sys.argv[0])}: warning: preset skipped: {problem}", file=sys.stderr)
+        _warn(f"preset skipped: {problem}")
     if args.preset not in presets:
         return _fail(f"--preset {args.preset!r} not found; available: {', '.join(presets)}")
     try:
         settings = presets[args.preset].apply(Settings())
     except (KeyError, TypeError, ValueError) as error:
         return _fail(str(PresetError(f"{args.preset}: {error}")))
+    explorer = Explorer(sequence)
+    if usable_frame(explorer, settings) is None:
+        _warn(f"no frame has a usable pair of agents (ego and CAV) under the {settings.scenario.protocol} protocol "
+              f"among {len(sampled_frames(len(sequence)))} frames tried: CBM cannot run; the page says what is "
+              f"missing")
+    if stopping.is_set():
+        return 0
     try:
-        server = ExplorerServer(Explorer(sequence), settings, host=args.host, port=args.port)
+        server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
     except OSError as error:
         return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+    if not local:
+        _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
+              f"reach this address can use it")
     print(f"CBM Explorer on {sequence.name} ({len(sequence)} frames): open {server.url}", flush=True)
-    try:
-        while True:
-            time.sleep(3600)
-    except KeyboardInterrupt:
-        server.stop()
+    while not stopping.wait(0.1):
+        pass
+    for number in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(number, signal.SIG_IGN)
+    server.stop()
+    server.kernels.stop()
     return 0

@@ -1,6 +1,9 @@
 """The viser server: one ``ClientSession`` per browser tab over one shared ``Explorer``."""
 from __future__ import annotations
 
+import concurrent.futures
+import ipaddress
+import socket
 import threading
 
 import viser
@@ -11,20 +14,69 @@ from .session.explorer import Explorer
 from .session.settings import Settings
 from .tab import ClientSession
 
+RESOLVE_SECONDS = 5.0
+"""How long a host name may take to resolve before the server gives up on it."""
+CLOSE_SECONDS = 1.0
+"""How long ``stop`` waits for the tabs' workers to finish what they compute."""
+
+
+class AddressError(OSError):
+    """A host that does not resolve or a port that is taken; the message says which and why."""
+
+
+def resolve(host: str, port: int, timeout: float = RESOLVE_SECONDS) -> list[tuple]:
+    """The socket addresses ``host:port`` stands for (``socket.getaddrinfo``), within ``timeout``."""
+    pool = concurrent.futures.ThreadPoolExecutor(max_workers=1, thread_name_prefix="resolve")
+    future = pool.submit(socket.getaddrinfo, host, port, type=socket.SOCK_STREAM, flags=socket.AI_PASSIVE)
+    pool.shutdown(wait=False)
+    try:
+        found = future.result(timeout=timeout)
+    except concurrent.futures.TimeoutError:
+        raise AddressError(f"the host {host!r} did not resolve within {timeout:.0f} s") from None
+    except (OSError, UnicodeError) as error:
+        raise AddressError(f"the host {host!r} does not resolve: {error}") from None
+    return list(dict.fromkeys((family, address) for family, _, _, _, address in found))
+
+
+def check_free(host: str, port: int) -> None:
+    """``AddressError`` unless every address of ``host`` can be bound at ``port`` (0: any port)."""
+    for family, address in resolve(host, port):
+        with socket.socket(family, socket.SOCK_STREAM) as probe:
+            probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            try:
+                probe.bind(address)
+            except OSError as error:
+                taken = "is taken" if error.errno == 98 else f"cannot be used ({error.strerror})"
+                raise AddressError(f"port {port} on {address[0]} {taken}; choose another --port, "
+                                   f"or --port 0 for any free one") from None
+
+
+def is_loopback(host: str) -> bool:
+    """Whether every address ``host`` resolves to is this machine's loopback."""
+    return all(ipaddress.ip_address(address[0].split("%")[0]).is_loopback for _, address in resolve(host, 0))
+
 
 class ExplorerServer:
     """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``.
 
-    CBM's compiled kernels are made ready in the background from the start (``kernels.prepare``);
-    a tab's first recompute waits for them."""
+    The address is checked first (``AddressError``: the host does not resolve, the port is taken);
+    viser would otherwise move to the next free port without a word. CBM's compiled kernels are
+    made ready in the background from the start (``kernels.prepare``); a tab's first recompute
+    waits for them."""
 
     def __init__(self, explorer: Explorer, settings: Settings, host: str = "127.0.0.1", port: int = 8080,
                  verbose: bool = False) -> None:
         self.explorer, self.settings = explorer, settings
+        check_free(host, port)
         self.kernels = kernels.prepare()
         self.sessions: dict[int, ClientSession] = {}
+        self._gone: set[int] = set()
+        """Tabs that closed while their session was still being built."""
         self._lock = threading.Lock()
         self.server = viser.ViserServer(host=host, port=port, label="CBM Explorer", verbose=verbose)
+        if port and self.server.get_port() != port:
+            self.server.stop()
+            raise AddressError(f"port {port} was taken while the server started; choose another --port")
         self.server.gui.configure_theme(**THEME)
         self.server.scene.set_up_direction("+z")
         # Plain lighting: no environment map (it washes the boxes' tops out, and costs most of a frame in
@@ -41,17 +93,28 @@ class ExplorerServer:
     def _connected(self, client: viser.ClientHandle) -> None:
         session = ClientSession(client, self.explorer, self.settings, self.kernels)
         with self._lock:
-            self.sessions[client.client_id] = session
+            gone = client.client_id in self._gone
+            self._gone.discard(client.client_id)
+            if not gone:
+                self.sessions[client.client_id] = session
+        if gone:
+            session.close()
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
         with self._lock:
             session = self.sessions.pop(client.client_id, None)
+            if session is None:
+                self._gone.add(client.client_id)
         if session is not None:
             session.close()
 
     def stop(self) -> None:
+        """Close every tab's session (waiting at most ``CLOSE_SECONDS`` for their workers) and the server."""
         with self._lock:
             sessions, self.sessions = list(self.sessions.values()), {}
-        for session in sessions:
-            session.close()
+        closing = [threading.Thread(target=s.close, name="close-session", daemon=True) for s in sessions]
+        for thread in closing:
+            thread.start()
+        for thread in closing:
+            thread.join(timeout=CLOSE_SECONDS / max(1, len(closing)))
         self.server.stop()

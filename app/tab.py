@@ -23,7 +23,7 @@ from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
 from .session.history import FrameHistory, settings_key, sweep_rows
 from .session.kernels import Kernels
-from .session.presets import PresetError, discover, save_preset
+from .session.presets import PresetError, discover, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
 from .session.settings import AUTO_CAV, Settings
@@ -62,8 +62,9 @@ class ClientSession:
         self.walkthrough = WalkthroughPanel(client.gui, self.controls.tabs, self)
         panels.bind(self.controls, self)
         panels.metrics.bind(self.controls.metrics, self)
-        for problem in problems:
-            self.notify("Preset skipped", problem, "yellow")
+        self.controls.presets.skipped.content = skipped_markdown(problems)
+        if problems:
+            self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
         for warning in explorer.sequence.warnings:
             self.notify("Dataset loaded with gaps", warning, "yellow")
         self._playing = threading.Event()
@@ -128,8 +129,9 @@ class ClientSession:
         except (PresetError, OSError) as error:
             self.notify("Preset not saved", str(error), "red")
             return
-        self.presets, _ = discover()
+        self.presets, problems = discover()
         self.controls.presets.preset.options = tuple(self.presets)
+        self.controls.presets.skipped.content = skipped_markdown(problems)
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self) -> None:

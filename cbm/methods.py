@@ -8,7 +8,7 @@ function and parameter class) and one entry in ``METHODS``.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Mapping
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -27,6 +27,7 @@ from .baselines import (
 )
 from .params import CBMParams
 from .pipeline import match
+from .posegraph import match_graph
 from .result import MatchResult
 
 
@@ -54,6 +55,8 @@ class Method:
     """Builds CBM's sets: consensus margin, diagnosis, context inspector and CBM's own pairs apply."""
     requires: Mapping[str, tuple[str, Any]] = field(default_factory=dict)
     """Parameters that matter only while another has a value: ``{"sigma3": ("consensus", True)}``."""
+    takes_peers: bool = False
+    """Uses the frame's other CAV trials (``peers=``, more than two agents): the joint pose graph."""
 
     @property
     def params_key(self) -> str:
@@ -84,12 +87,13 @@ class Method:
 
     def __call__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None, *,
                  labels: tuple[np.ndarray, np.ndarray] | None = None,
-                 true_pairs: np.ndarray | None = None) -> MatchResult:
-        """Run on one trial's boxes; ``labels`` (ego, CAV) and ``true_pairs`` reach the methods that
-        take them (the oracle cannot run without ``true_pairs``)."""
-        inputs: dict[str, Any] = {}
+                 true_pairs: np.ndarray | None = None, peers: Sequence[Any] = ()) -> MatchResult:
+        """Run on one trial's boxes; ``labels`` (ego, CAV), ``true_pairs`` and ``peers`` (the
+        frame's other CAV trials) reach the methods that take them (the oracle cannot run without
+        ``true_pairs``)."""
+        inputs: dict[str, Any] = {"peers": peers} if self.takes_peers else {}
         if self.takes_labels and labels is not None:
-            inputs = {"ego_labels": labels[0], "cav_labels": labels[1]}
+            inputs.update(ego_labels=labels[0], cav_labels=labels[1])
         if self.takes_truth:
             if true_pairs is None:
                 raise ValueError(f"{self.name} needs true_pairs: it fits the true pairs")
@@ -105,6 +109,8 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("cbm", "CBM", CBMParams, match, explains=True, requires=CBM_REQUIRES),
     Method("cbm-no-consensus", "CBM without consensus", CBMParams, match, forced={"consensus": False},
            shares="cbm", explains=True, requires=CBM_REQUIRES),
+    Method("cbm-graph", "CBM + pose graph (3+ agents)", CBMParams, match_graph, shares="cbm",
+           requires=CBM_REQUIRES, takes_peers=True),
     Method("icp", "ICP", ICPParams, match_icp),
     Method("ricp", "RICP", RICPParams, match_ricp),
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),

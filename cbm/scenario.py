@@ -124,9 +124,12 @@ class Trial:
     """(3, 3) true CAV->world."""
 
 
-def trial_rng(seed: int, frame_index: int) -> np.random.Generator:
-    """The generator of frame ``frame_index`` under ``seed``: the app and the evaluation share it."""
-    return np.random.default_rng([seed, frame_index])
+def trial_rng(seed: int, frame_index: int, stream: int = 0) -> np.random.Generator:
+    """The generator of frame ``frame_index`` under ``seed``: the app and the evaluation share it.
+    ``stream`` is the CAV's rank in a frame with several (``loaders.trials``): rank 0 (the one CAV
+    of a two-agent run) draws from ``[seed, frame]`` as it always has, rank ``r`` from
+    ``[seed, frame, r]``, an independent stream."""
+    return np.random.default_rng([seed, frame_index] if stream == 0 else [seed, frame_index, stream])
 
 
 @dataclass(frozen=True)
@@ -146,15 +149,23 @@ class FrameInputs:
     detections: Mapping[str, np.ndarray] | None = None
     """A real detector's boxes of ``"ego"`` and / or ``"cav"`` (``(N, 7)``, each in its agent's
     frame): they replace that agent's simulated detections (``cbm.detected.with_detections``)."""
+    stream: int = 0
+    """The CAV's rank among the frame's CAVs: its trial draws from ``trial_rng(seed, index, stream)``."""
+    peers: tuple[FrameInputs, ...] = ()
+    """The inputs of the frame's other CAVs (more than two agents), for the joint pose estimate."""
 
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
         evaluation, sweeps and search is made here."""
-        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index))
+        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index, self.stream))
         if not self.detections:
             return trial
         agents = {"ego": self.trial.get("ego_id"), "cav": self.trial.get("cav_id")}
         return with_detections(trial, self.detections, self.trial["boxes"], self.trial["ids"], agents)
+
+    def peer_trials(self, params: ScenarioParams, seed: int) -> list[Trial]:
+        """The trials of the frame's other CAVs, as their own rows build them."""
+        return [peer.build(params, seed) for peer in self.peers]
 
 
 def make_trial(

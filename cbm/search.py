@@ -1,10 +1,14 @@
 """Parameter search: the CBM thresholds that work best on a sequence.
 
-A grid over sigma1, sigma2, sigma3 (and the distance limit) run through ``cbm.sweep`` -- each frame's
-trial is made once and every grid point matched on it -- then ranked by an objective of the
-micro-averaged metrics. A grid, rather than a sequential optimiser, because its points are
-independent (both cores work at once through the sweep's process pool), its result does not depend
-on a sampler's history, and every point it tried is in the table for the user to read.
+Two searchers rank settings by an objective of the micro-averaged metrics over the frames:
+
+- ``grid`` (default): every point of a grid over sigma1, sigma2, sigma3 (and the distance limit),
+  run through ``cbm.sweep`` -- each frame's trial made once and every grid point matched on it. Its
+  points are independent (they run on the sweep's process pool or on Ray), its result does not
+  depend on a sampler's history, and every point it tried is in the table for the user to read.
+- ``optuna``: Optuna's TPE sampler (seeded) draws ``n_trials`` settings from the box the grid spans
+  (each parameter between its smallest and largest grid value), each scored on every frame; each
+  draw depends on the scores before it, so the trials run one after another.
 """
 from __future__ import annotations
 
@@ -49,6 +53,7 @@ class Candidate:
     summary: dict[str, float]
 
 
+SEARCHERS = ("grid", "optuna")
 def _score(value: float) -> float:
     return value if math.isfinite(value) else -math.inf
 
@@ -56,11 +61,13 @@ def _score(value: float) -> float:
 def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *,
            space: Mapping[str, Sequence[float]] | None = None, objective: str = "success",
            base: Mapping[str, Any] | None = None, seed: int = 0, workers: int = 1,
-           progress: Callable[[int], None] | None = None) -> list[Candidate]:
-    """Every grid point of ``space`` scored on ``frames``, best first.
+           progress: Callable[[int], None] | None = None, searcher: str = "grid", n_trials: int | None = None,
+           ray: str | None = None) -> list[Candidate]:
+    """Every setting the ``searcher`` tried on ``frames``, scored, best first.
 
-    ``base`` holds the CBM parameters that stay fixed (e.g. the heading mode). Ties keep the grid's
-    order, so the ranking is reproducible; the same ``seed`` gives the same trials as the app.
+    ``base`` holds the CBM parameters that stay fixed (e.g. the heading mode). Ties keep the order
+    tried, so the ranking is reproducible; the same ``seed`` gives the same trials as the app (and
+    the same Optuna draws). ``n_trials`` is Optuna's budget (default: the grid's size).
     """
     space = dict(DEFAULT_SPACE if space is None else space)
     unknown = [name for name in space if name not in SEARCHABLE]
@@ -68,15 +75,59 @@ def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *,
         raise ValueError(f"space must name some of {SEARCHABLE}, got {sorted(space)}")
     if objective not in OBJECTIVES:
         raise ValueError(f"objective must be one of {sorted(OBJECTIVES)}, got {objective!r}")
+    if searcher not in SEARCHERS:
+        raise ValueError(f"searcher must be one of {', '.join(SEARCHERS)}, got {searcher!r}")
     fixed = {name: [value] for name, value in (base or {}).items() if name not in space}
-    sweep = Sweep(methods=("cbm",), grid={**fixed, **space}, seed=seed, scenario=scenario)
-    rows = run(sweep, frames, workers=workers, progress=progress)
-    names = list(space)
-    ranked = [Candidate(dict(zip(names, key)), _score(OBJECTIVES[objective](summary)), summary)
-              for key, summary in summarise(rows, by=names)]
-    return sorted(ranked, key=lambda c: -c.score)
+    score = scorer(frames, scenario, fixed, objective, seed=seed, workers=workers, progress=progress, ray=ray)
+    if searcher == "optuna":
+        tried = optuna_candidates(space, score, seed, grid_size(space) if n_trials is None else n_trials)
+    else:
+        tried = score(space)
+    return sorted(tried, key=lambda c: -c.score)
+
+
+def scorer(frames: Sequence[FrameInputs], scenario: ScenarioParams, fixed: Mapping[str, Sequence[Any]],
+           objective: str, *, seed: int = 0, workers: int = 1, progress: Callable[[int], None] | None = None,
+           ray: str | None = None) -> Callable[[Mapping[str, Sequence[float]]], list[Candidate]]:
+    """A function scoring every point of a grid on ``frames`` (one sweep, ``fixed`` parameters
+    added), in grid order."""
+    def score(space: Mapping[str, Sequence[float]]) -> list[Candidate]:
+        sweep = Sweep(methods=("cbm",), grid={**fixed, **space}, seed=seed, scenario=scenario)
+        rows = run(sweep, frames, workers=workers, progress=progress, ray=ray)
+        names = list(space)
+        return [Candidate(dict(zip(names, key)), _score(OBJECTIVES[objective](summary)), summary)
+                for key, summary in summarise(rows, by=names)]
+    return score
+
+
+def optuna_candidates(space: Mapping[str, Sequence[float]],
+                      score: Callable[[Mapping[str, Sequence[float]]], list[Candidate]],
+                      seed: int, n_trials: int) -> list[Candidate]:
+    """``n_trials`` settings drawn by a seeded TPE sampler in the box ``space`` spans, in the order tried."""
+    try:
+        import optuna
+    except ImportError:
+        raise ValueError("the optuna searcher needs Optuna, which is not installed: pip install .[optuna]") from None
+    if n_trials < 1:
+        raise ValueError(f"n_trials must be at least 1, got {n_trials}")
+    optuna.logging.set_verbosity(optuna.logging.WARNING)
+    tried: list[Candidate] = []
+
+    def objective(trial: Any) -> float:
+        point = {name: _suggest(trial, name, values) for name, values in space.items()}
+        tried.extend(score({name: (value,) for name, value in point.items()}))
+        return tried[-1].score if math.isfinite(tried[-1].score) else -1.0
+
+    study = optuna.create_study(direction="maximize", sampler=optuna.samplers.TPESampler(seed=seed))
+    study.optimize(objective, n_trials=n_trials)
+    return tried
+
+
+def _suggest(trial: Any, name: str, values: Sequence[float]) -> float:
+    low, high = float(min(values)), float(max(values))
+    return low if low == high else trial.suggest_float(name, low, high)
 
 
 def grid_size(space: Mapping[str, Sequence[float]] | None = None) -> int:
-    """How many settings a search tries."""
+    """How many settings a grid search tries."""
     return math.prod(len(values) for values in (DEFAULT_SPACE if space is None else space).values())

@@ -17,15 +17,15 @@ from __future__ import annotations
 
 import dataclasses
 import itertools
-import multiprocessing
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 from .detected import FALSE_POSITIVE_CLASS
+from .executors import run_tasks
+from .fusion import FUSION_COLUMNS, FUSIONS, fusion_columns, fusion_pose
 from .methods import METHODS
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
 from .scenario import FrameInputs, ScenarioParams, Trial
@@ -50,6 +50,8 @@ class Sweep:
     seed: int = 0
     scenario: ScenarioParams = ScenarioParams()
     """Scenario settings the grid does not vary (its ``seed`` is replaced by the sweep's)."""
+    fusion: str | None = None
+    """``nms``: each row also holds its late-fusion detections (``cbm.fusion.FUSION_COLUMNS``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "methods", tuple(self.methods))
@@ -59,6 +61,8 @@ class Sweep:
             raise ValueError(f"methods must be a non-empty selection of {sorted(METHODS)}, got {list(self.methods)}")
         if len(set(self.methods)) != len(self.methods):
             raise ValueError(f"methods must not repeat, got {list(self.methods)}")
+        if self.fusion not in (None, *FUSIONS):
+            raise ValueError(f"fusion must be one of {FUSIONS} or None, got {self.fusion!r}")
         for name, values in self.grid.items():
             self._check_grid_name(name)
             if not values:
@@ -103,7 +107,8 @@ class Sweep:
 
     def columns(self) -> list[str]:
         """Every column of a row, in order: frame, method, parameters, agents, metrics, timing."""
-        return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *METRIC_COLUMNS, *TIMING_COLUMNS]
+        fused = FUSION_COLUMNS if self.fusion else ()
+        return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *METRIC_COLUMNS, *fused, *TIMING_COLUMNS]
 
 
 def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
@@ -116,23 +121,22 @@ def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
 
 
 def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
-        progress: Callable[[int], None] | None = None) -> list[dict[str, Any]]:
+        progress: Callable[[int], None] | None = None, ray: str | None = None) -> list[dict[str, Any]]:
     """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
-    (frame, scenario point) tasks in a process pool; ``progress(n)`` is called as ``n`` rows finish."""
-    tasks = [(frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
+    (frame, scenario point) tasks in a process pool, ``ray`` (``local``, ``auto`` or an address) on
+    Ray (``cbm.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
+    stops the run with a ``cbm.executors.TaskError`` naming its frame and scenario point."""
+    tasks = [(sweep, frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
     done = progress or (lambda n: None)
-    if workers <= 1:
-        rows = []
-        for task in tasks:
-            task_rows = run_task(sweep, *task)
-            done(len(task_rows))
-            rows.extend(task_rows)
-        return rows
-    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
-        futures = [pool.submit(run_task, sweep, *task) for task in tasks]
-        for future in as_completed(futures):
-            done(len(future.result()))
-        return [row for future in futures for row in future.result()]
+    results = run_tasks(run_task, tasks, workers=workers, ray=ray, done=lambda rows: done(len(rows)),
+                        name=lambda task: task_name(*task))
+    return [row for rows in results for row in rows]
+
+
+def task_name(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> str:
+    """A task as the user knows it: its frame and the scenario grid's values."""
+    point = ", ".join(f"{n}={getattr(scenario, n)}" for n in sweep.grid if n in SCENARIO_FIELDS)
+    return f"frame {frame.index}" + (f" ({point})" if point else "")
 
 
 def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list[dict[str, Any]]:
@@ -141,24 +145,27 @@ def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list
     base = {"frame": frame.index, **dataclasses.asdict(scenario),
             "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
     init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
+    peers = frame.peer_trials(scenario, sweep.seed) if any(METHODS[m].takes_peers for m in sweep.methods) else []
     rows = []
     for method in sweep.methods:
         for params in sweep.method_points(method):
-            metrics = evaluate(run_method(method, trial, params, frame), trial)
-            rows.append(_row(sweep, base, method, params, metrics, init_error))
+            result = run_method(method, trial, params, frame, peers)
+            rows.append(_row(sweep, base, method, params, evaluate(result, trial), init_error))
+            if sweep.fusion:
+                rows[-1].update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
     return rows
 
 
-def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs) -> Any:
+def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs, peers: Sequence[Trial] = ()) -> Any:
     """``method`` on ``trial`` with what it takes: the objects' labels (when the frame has them; a
-    detector's false positive is a vehicle) and the trial's true pairs."""
+    detector's false positive is a vehicle), the trial's true pairs and the frame's other CAV trials."""
     labels = None
     if frame.labels is not None:
         label_of = dict(zip(np.asarray(frame.trial["ids"]).tolist(), np.asarray(frame.labels).tolist()))
         labels = (np.array([label_of.get(i, FALSE_POSITIVE_CLASS) for i in trial.ego_ids.tolist()]),
                   np.array([label_of.get(i, FALSE_POSITIVE_CLASS) for i in trial.cav_ids.tolist()]))
     return METHODS[method](trial.ego_boxes, trial.cav_boxes, trial.init, params, labels=labels,
-                           true_pairs=trial.gt_pairs)
+                           true_pairs=trial.gt_pairs, peers=peers)
 
 
 def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, metrics: TrialMetrics,

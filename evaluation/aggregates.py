@@ -13,6 +13,8 @@ from typing import Any
 
 import polars as pl
 
+from cbm.ap import IOU_THRESHOLDS, pooled_ap
+from cbm.fusion import decoded
 from cbm.sweep import summarise
 
 SUCCESS_RTE_M = 1.0
@@ -38,7 +40,8 @@ def method_metrics(rows: Sequence[Mapping[str, Any]], variants: Sequence[str],
                    timing: bool = True) -> dict[str, dict[str, Any]]:
     """Each method variant's micro-averaged aggregates over all its trials (as Table I), under the
     ``metrics.json`` keys, with its trial counts and the success thresholds; NaN where nothing was
-    measured. ``timing``: with the median runtime."""
+    measured. ``timing``: with the median runtime. With late fusion (the rows have ``fused``
+    detections), each method's ``ap@0.5`` and ``ap@0.7`` too (``fused_ap``)."""
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
     keys = (*METRIC_KEYS, *([RUNTIME_KEY] if timing else []))
     found: dict[str, dict[str, Any]] = {}
@@ -46,7 +49,25 @@ def method_metrics(rows: Sequence[Mapping[str, Any]], variants: Sequence[str],
         found[name] = {key: float(stats[source]) for key, source in keys}
         found[name].update(n_trials=int(stats["n_trials"]), n_estimated=int(stats["n_estimated"]),
                            success_rte_max_m=SUCCESS_RTE_M, success_rre_max_deg=SUCCESS_RRE_DEG)
+    for name, ap in fused_ap(rows, variants).items():
+        found[name].update({f"ap@{t:g}": value for t, value in ap.items()})
     return found
+
+
+def fused_ap(rows: Sequence[Mapping[str, Any]], variants: Sequence[str]) -> dict[str, dict[float, float]]:
+    """Late-fusion AP of each method variant at ``cbm.ap.IOU_THRESHOLDS``: its fused detections
+    of every trial pooled and sorted by score over the whole run (OpenCOOD's global sort), not a
+    mean of per-trial APs; empty when the rows have no fusion columns."""
+    groups: dict[str, list[tuple[list[tuple[float, bool, bool]], int]]] = {}
+    for row, variant in zip(rows, variants):
+        if row.get("fused") is None:
+            return {}
+        groups.setdefault(variant, []).append(decoded(row))
+    return {name: pooled_ap(frames) for name, frames in groups.items()}
+
+
+AP_ROWS = tuple((f"AP@{t:g} (%)", t) for t in IOU_THRESHOLDS)
+"""Summary rows of the late-fusion AP (BEV IoU thresholds)."""
 
 
 def metrics_json(metrics: Mapping[str, Mapping[str, Any]]) -> str:

@@ -9,7 +9,10 @@ method: dataset, frame, method, every parameter, every metric, then ``runtime_s`
 ``summary.md`` (also printed), ``metrics.json`` (each method's aggregate metrics under its name),
 ``success_curve.csv`` and ``success_curve.png`` (success rate at RTE < t m and RRE < t deg for t
 from 0.5 to 5), ``precision_vs_eta.png`` (when the grid varies ``eta``), ``rre_rte.png`` and, with
-``--latex``, ``summary.tex``. Each file is written to a temporary file first and moved into place.
+``--latex``, ``summary.tex``. ``--out`` is checked before the run (new, empty or a previous run's
+folder, in a writable place); the files are written into a staging folder beside it that replaces it
+only once complete, so a failed or stopped run (SIGINT, SIGTERM: exit 128 + the signal) leaves the
+older run's files whole (``evaluation.outputs``, ``evaluation.stop``).
 
     python evaluate.py compare RUN_A RUN_B [--out FOLDER]
 
@@ -29,6 +32,9 @@ from __future__ import annotations
 
 import argparse
 import math
+import multiprocessing.util
+import os
+import signal
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -36,13 +42,16 @@ from typing import Any, NoReturn
 
 from tqdm import tqdm
 
+from cbm.executors import ExecutorError, TaskError
+from cbm.fusion import FUSIONS
 from cbm.methods import METHODS
 from cbm.sweep import grid_defaults
 from loaders.agents import TARGET_DISTANCE
 
 from .compare import CompareError, compare
-from .outputs import write_outputs
+from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
+from .stop import Stopped, StopSignals
 
 
 class CliError(ValueError):
@@ -72,11 +81,20 @@ def build_parser() -> Parser:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
     parser.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
+    parser.add_argument("--ray", default=None, metavar="{local,auto,ADDRESS}",
+                        help="run the sweep on Ray: local (a local instance with --workers CPUs), auto (the cluster "
+                             "`ray start` joined) or HOST:PORT (default: the local process pool; pip install .[ray])")
+    parser.add_argument("--agents", type=int, default=2,
+                        help="the ego and N-1 CAVs: one trial row per CAV and frame, each CAV calibrated to the "
+                             "ego (default: 2; 3+ enables the cbm-graph method)")
     parser.add_argument("--cav-distance", type=float, default=TARGET_DISTANCE,
                         help=f"preferred ego-CAV distance in metres (default: {TARGET_DISTANCE:g})")
     parser.add_argument("--detections", default=None, metavar="STAGE1_BOXES_JSON",
                         help="CoAlign / HEAL stage1_boxes.json: a detector's boxes replace the simulated detections "
                              "(one dataset only)")
+    parser.add_argument("--fusion", choices=FUSIONS, default=None,
+                        help="late fusion after calibration (nms: OpenCOOD's, rotated BEV IoU 0.15) and its AP@0.5 / "
+                             "AP@0.7 in the summary and metrics.json")
     parser.add_argument("--no-timing", action="store_true",
                         help="leave the runtime out of the table and summary (then they are byte-identical run to run)")
     parser.add_argument("--latex", action="store_true",
@@ -173,8 +191,10 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(f"--seed must be a non-negative integer, got {args.seed}")
     if not (args.cav_distance >= 0 and math.isfinite(args.cav_distance)):
         raise CliError(f"--cav-distance must be a finite number >= 0, got {args.cav_distance}")
-    if args.out.exists() and not args.out.is_dir():
-        raise CliError(f"--out: {args.out} exists and is not a folder")
+    try:
+        check_out(args.out)
+    except OutError as error:
+        raise CliError(str(error)) from None
     if len(set(args.dataset)) != len(args.dataset):
         raise CliError("--dataset: a dataset is named twice")
     if args.detections is not None and len(args.dataset) != 1:
@@ -184,7 +204,7 @@ def prepare(args: argparse.Namespace) -> Plan:
     try:
         return plan(args.dataset, methods=methods, grid=grid, seed=args.seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
-                    detections=args.detections)
+                    detections=args.detections, fusion=args.fusion, agents=args.agents)
     except ValueError as error:
         raise CliError(str(error)) from None
 
@@ -201,18 +221,60 @@ def main_compare(argv: Sequence[str], prog: str) -> int:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run the evaluation, or with a first argument ``compare`` compare two runs; 2 on bad input."""
+    """Run the evaluation, or with a first argument ``compare`` compare two runs; 2 on bad input,
+    128 + the signal's number when SIGINT or SIGTERM stops it (then nothing is written)."""
     parser = build_parser()
+    command = argv is None
     argv = list(sys.argv[1:] if argv is None else argv)
     if argv[:1] == ["compare"]:
         return main_compare(argv[1:], parser.prog)
     args = parser.parse_args(argv)
+    with StopSignals() as signals:
+        try:
+            return evaluate(parser, args, signals)
+        except Stopped as stop:
+            print(f"{parser.prog}: stopped by {stop.name}; nothing written", file=sys.stderr)
+            code = 128 + stop.signum
+    if command:
+        exit_now(code)
+    return code
+
+
+def exit_now(code: int) -> NoReturn:
+    """End the process at once after a stop, everything already released (the pool's workers ended,
+    the staging folder removed): the interpreter's teardown of numpy, polars and matplotlib alone
+    takes over a second on a busy machine, and a stop must take less than two. The pool's semaphores
+    are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about."""
+    multiprocessing.util._run_finalizers(0)
+    sys.stdout.flush()
+    sys.stderr.flush()
+    os._exit(code)
+
+
+def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> int:
+    """Check, run, write the files into a staging folder and swap it onto ``--out`` (``evaluation.outputs``);
+    1 when the files cannot be written (``--out`` keeps its earlier files)."""
     try:
         planned = prepare(args)
     except CliError as error:
         parser.error(str(error))
     with tqdm(total=planned.trial_count, unit="trial", disable=None) as bar:
-        table = run_plan(planned, workers=args.workers, progress=bar.update)
-    print(write_outputs(args.out, planned, table, timing=not args.no_timing, latex=args.latex))
+        try:
+            table = run_plan(planned, workers=args.workers, progress=bar.update, ray=args.ray)
+        except (ExecutorError, TaskError) as error:
+            parser.error(str(error))
+    try:
+        staged = stage_outputs(args.out, planned, table, timing=not args.no_timing, latex=args.latex)
+        with signals.held():
+            staged.publish()
+    except OSError as error:
+        print(f"{parser.prog}: error: cannot write the run to {args.out} ({error.strerror or error}); "
+              "its earlier files are untouched", file=sys.stderr)
+        return 1
+    if signals.pending:
+        name = signal.Signals(signals.pending).name
+        print(f"{parser.prog}: stopped by {name} after the run was written to {args.out}", file=sys.stderr)
+        return 128 + signals.pending
+    print(staged.summary)
     print(f"wrote the trials, summary, metrics.json, success curve and plots to {args.out}", file=sys.stderr)
     return 0

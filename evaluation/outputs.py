@@ -1,11 +1,21 @@
-"""The files of an evaluation, each written to a temporary file beside it and moved into place:
-``trials.parquet``, ``trials.csv``, ``summary.md``, ``metrics.json``, ``success_curve.csv``,
-``success_curve.png``, ``rre_rte.png``, when the grid varies eta ``precision_vs_eta.png`` and,
-when asked for, ``summary.tex``."""
+"""The files of an evaluation: ``trials.parquet``, ``trials.csv``, ``summary.md``, ``metrics.json``,
+``success_curve.csv``, ``success_curve.png``, ``rre_rte.png``, when the grid varies eta
+``precision_vs_eta.png`` and, when asked for, ``summary.tex``.
+
+A run's files are written into a staging folder beside ``--out`` (``.<name>.partial-<pid>``) and
+the folder is swapped into place only once every file is complete: the older run's folder is
+moved aside, the new one renamed onto ``--out``, then the old one removed. A run that fails or is
+stopped removes its staging folder and leaves the older run's files untouched, so ``--out``
+always holds one whole run. ``--out`` must be new, empty or a previous run's folder
+(:func:`check_out`): a folder holding other files is refused rather than replaced.
+"""
 from __future__ import annotations
 
 import os
+import shutil
+import tempfile
 from collections.abc import Callable
+from dataclasses import dataclass
 from pathlib import Path
 
 import polars as pl
@@ -15,6 +25,14 @@ from .latex import summary_latex
 from .plots import plot_precision_vs_eta, plot_rre_rte, plot_success_curve, plt
 from .report import summary_markdown, variant_names
 from .run import Plan, without_timing
+
+OUTPUT_NAMES = frozenset({"trials.parquet", "trials.csv", "summary.md", "metrics.json", "success_curve.csv",
+                          "success_curve.png", "rre_rte.png", "precision_vs_eta.png", "summary.tex"})
+"""Every file a run may write: a folder holding only these is a previous run's, which a new run replaces."""
+
+
+class OutError(ValueError):
+    """``--out`` cannot take a run's files: the message says why, in one line."""
 
 
 def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
@@ -28,28 +46,97 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
         raise
 
 
-def write_outputs(out: Path, plan: Plan, table: pl.DataFrame, timing: bool = True, latex: bool = False) -> str:
-    """Write the table, the summary, the metrics, the success curve and the plots into ``out`` (with
+def check_out(out: Path) -> None:
+    """:class:`OutError` unless ``out`` can take a run: a new folder whose nearest existing parent
+    is a writable folder, or an existing folder (empty or a previous run's) whose parent is
+    writable (the staging folder goes there). Writability is tried by creating a temporary file."""
+    out = out.resolve()
+    if not out.name:
+        raise OutError(f"--out: {out} cannot be replaced by a run's folder; name a folder inside it")
+    if out.exists() and not out.is_dir():
+        raise OutError(f"--out: {out} exists and is not a folder")
+    if out.is_dir():
+        foreign = sorted(p.name for p in out.iterdir() if p.name not in OUTPUT_NAMES)
+        if foreign:
+            raise OutError(f"--out: {out} holds {foreign[0]!r}{' and more' if len(foreign) > 1 else ''}, "
+                           "which evaluate.py did not write; choose a new or empty folder or a previous run's")
+    parent = next(p for p in out.parents if p.exists())
+    if not parent.is_dir():
+        raise OutError(f"--out: {parent} is a file, so {out} cannot be created")
+    try:
+        tempfile.TemporaryFile(dir=parent).close()
+    except OSError as error:
+        raise OutError(f"--out: cannot write in {parent} ({error.strerror or error})") from None
+
+
+@dataclass(frozen=True)
+class Staged:
+    """A run's complete files in a staging folder beside ``out``, waiting to replace it."""
+
+    folder: Path
+    out: Path
+    summary: str
+
+    def publish(self) -> None:
+        """Swap the staging folder onto ``out``: the older run's folder is moved aside, the new one
+        renamed into place, then the old one removed (on failure the older run is put back)."""
+        aside = self.out.with_name(f".{self.out.name}.old-{os.getpid()}")
+        had_old = self.out.exists()
+        try:
+            if had_old:
+                os.rename(self.out, aside)
+            os.rename(self.folder, self.out)
+        except BaseException:
+            if had_old and aside.exists() and not self.out.exists():
+                os.rename(aside, self.out)
+            shutil.rmtree(self.folder, ignore_errors=True)
+            raise
+        shutil.rmtree(aside, ignore_errors=True)
+
+
+def staging_folder(out: Path) -> Path:
+    """Where a run's files are written before they replace ``out``: a hidden sibling named for this process."""
+    out = out.resolve()
+    return out.with_name(f".{out.name}.partial-{os.getpid()}")
+
+
+def stage_outputs(out: Path, plan: Plan, table: pl.DataFrame, timing: bool = True, latex: bool = False) -> Staged:
+    """Write every file of the run into a staging folder beside ``out``; on any failure (or a stop)
+    the staging folder is removed and ``out`` is untouched."""
+    folder = staging_folder(out)
+    folder.parent.mkdir(parents=True, exist_ok=True)
+    try:
+        folder.mkdir()
+        summary = write_files(folder, plan, table, timing, latex)
+    except BaseException:
+        shutil.rmtree(folder, ignore_errors=True)
+        raise
+    return Staged(folder, out.resolve(), summary)
+
+
+def write_files(folder: Path, plan: Plan, table: pl.DataFrame, timing: bool = True, latex: bool = False) -> str:
+    """Write the table, the summary, the metrics, the success curve and the plots into ``folder`` (with
     ``latex``, the summary as a LaTeX table too); return the summary. Without ``timing`` the table,
     the summary and the metrics leave the runtime out (then they are byte-identical run to run)."""
-    out.mkdir(parents=True, exist_ok=True)
     written = table if timing else without_timing(table)
-    write_atomic(out / "trials.parquet", lambda p: written.write_parquet(p))
-    write_atomic(out / "trials.csv", lambda p: written.write_csv(p))
+    written.write_parquet(folder / "trials.parquet")
+    written.write_csv(folder / "trials.csv")
     summary = summary_markdown(plan, table, timing)
-    write_atomic(out / "summary.md", lambda p: p.write_text(summary))
+    (folder / "summary.md").write_text(summary)
     rows = table.to_dicts()
     variants = variant_names(rows, plan.sweep)
     metrics = method_metrics(rows, variants, timing)
-    write_atomic(out / "metrics.json", lambda p: p.write_text(metrics_json(metrics)))
+    (folder / "metrics.json").write_text(metrics_json(metrics))
     if latex:
-        write_atomic(out / "summary.tex", lambda p: p.write_text(summary_latex(metrics)))
+        (folder / "summary.tex").write_text(summary_latex(metrics))
     curve = success_curve(rows, variants)
-    write_atomic(out / "success_curve.csv", lambda p: p.write_text(curve_csv(curve)))
+    (folder / "success_curve.csv").write_text(curve_csv(curve))
     figures = {"rre_rte.png": plot_rre_rte(rows, variants), "success_curve.png": plot_success_curve(curve)}
     if len(plan.sweep.grid.get("eta", ())) > 1:
         figures["precision_vs_eta.png"] = plot_precision_vs_eta(rows, variants, plan.sweep)
     for name, fig in figures.items():
-        write_atomic(out / name, lambda p, fig=fig: fig.savefig(p, format="png", dpi=120))
-        plt.close(fig)
+        try:
+            fig.savefig(folder / name, format="png", dpi=120)
+        finally:
+            plt.close(fig)
     return summary

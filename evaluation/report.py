@@ -10,7 +10,7 @@ import polars as pl
 
 from cbm.sweep import SCENARIO_FIELDS, Sweep, summarise
 
-from .aggregates import curve_markdown, success_curve
+from .aggregates import AP_ROWS, curve_markdown, fused_ap, success_curve
 from .run import Plan
 
 TABLE_ROWS = (
@@ -23,6 +23,11 @@ TABLE_ROWS = (
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
 GNSS = "GNSS (init)"
+FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`cbm.fusion`): the CAV's boxes placed by the method's pose, merged "
+               "with the ego's, duplicates removed by NMS at rotated BEV IoU 0.15; fused boxes against the true "
+               "boxes of every object either agent sees, matched greedily by score at BEV IoU 0.5 / 0.7, all "
+               "detections of the run sorted by score, VOC 2010 all-point interpolation (OpenCOOD's `eval_utils`). "
+               "Scores of simulated detections: the seeded score model of `cbm.fusion`.")
 
 
 def variant_names(rows: Sequence[dict[str, Any]], sweep: Sweep) -> list[str]:
@@ -55,6 +60,10 @@ def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> 
     lines = [f"| metric | {' | '.join(names)} |", "|---|" + "---:|" * len(names)]
     for label, key, scale in (*TABLE_ROWS, *([RUNTIME_ROW] if timing else [])):
         lines.append(f"| {label} | {' | '.join(_cell(column.get(key, math.nan), scale) for column in columns)} |")
+    ap = fused_ap(rows, variants)
+    for label, threshold in AP_ROWS if ap else ():
+        cells = [_cell(ap[n][threshold] if n in ap else math.nan, 100.0) for n in names]
+        lines.append(f"| {label} | {' | '.join(cells)} |")
     return "\n".join(lines)
 
 
@@ -99,13 +108,17 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
         frames = [f.index for f in source.inputs]
         skipped = (f"; skipped {len(source.skipped)} without an ego or a CAV: {_ranges(source.skipped)}"
                    if source.skipped else "")
-        parts.append(f"- `{source.name}`: {len(frames)} frames ({_ranges(frames)}){skipped}")
+        short = (f"; {len(source.short)} with fewer CAVs than asked (too few vehicles): {_ranges(source.short)}"
+                 if source.short else "")
+        parts.append(f"- `{source.name}`: {len(set(frames))} frames ({_ranges(sorted(set(frames)))}){skipped}{short}")
     parts += ["", "## Association and pose (micro-averaged over all trials)", "",
               table_one(rows, variants, timing=timing), "",
               "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
               "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
               "Success: RTE < 1 m and RRE < 1 deg. none / GNSS (init): the error before calibration; "
               "oracle: least squares on the true pairs, the limit of association-based calibration."]
+    if sweep.fusion:
+        parts += ["", FUSION_NOTE]
     if len(sweep.grid.get("eta", ())) > 1:
         parts += ["", "## Precision (%) against the co-visibility rate eta", "", eta_table(rows, variants, sweep)]
     parts += ["", "## Success rate (%) against the error threshold (all trials)", "",

@@ -7,12 +7,13 @@ and a sweep of methods and parameters (``cbm.sweep``) into one per-trial table.
 from __future__ import annotations
 
 from collections.abc import Callable, Iterable, Mapping, Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import polars as pl
 
 import loaders
+from cbm.executors import ray_session
 from cbm.methods import METHODS
 from cbm.scenario import FrameInputs, ScenarioParams
 from cbm.sweep import TIMING_COLUMNS, TRIAL_COLUMNS, Sweep
@@ -20,8 +21,8 @@ from cbm.sweep import run as run_sweep
 from loaders import trials
 from loaders.agents import TARGET_DISTANCE
 
-DEFAULT_METHODS = tuple(METHODS)
-"""Every method, between the references ``none`` and ``oracle``."""
+DEFAULT_METHODS = tuple(name for name, record in METHODS.items() if not record.takes_peers)
+"""Every method, between the references ``none`` and ``oracle``, but ``cbm-graph`` (``--agents`` 3 or more)."""
 
 
 @dataclass(frozen=True)
@@ -31,6 +32,8 @@ class Source:
     name: str
     inputs: list[FrameInputs]
     skipped: list[int]
+    short: list[int] = field(default_factory=list)
+    """Frames with fewer CAVs than ``--agents`` asks for (too few vehicles): fewer rows."""
 
 
 @dataclass(frozen=True)
@@ -47,17 +50,17 @@ class Plan:
 
 
 def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
-                 cav_distance: float = TARGET_DISTANCE) -> tuple[list[FrameInputs], list[int]]:
+                 cav_distance: float = TARGET_DISTANCE, agents: int = 2) -> tuple[list[FrameInputs], list[int]]:
     """What the sweep needs of each frame (``loaders.trials.frame_inputs``, as the app builds its
     trials), and the frames skipped for want of an ego or a CAV. ``ValueError`` for the OPV2V
     protocol on a dataset that does not say what each agent sees."""
     if protocol == "opv2v" and seq.visibility is None:
         raise ValueError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
-    return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance)
+    return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance, agents=agents)
 
 
 def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]] | None = None,
-                cav_distance: float = TARGET_DISTANCE, detections: str | None = None) -> Source:
+                cav_distance: float = TARGET_DISTANCE, detections: str | None = None, agents: int = 2) -> Source:
     """Open dataset ``name`` (with a detector's ``detections``, a stage1_boxes.json, when given) and
     make its frame inputs; ``frames(n)`` picks frame indices among ``n`` (default: all).
     ``ValueError`` with one line when nothing can be run."""
@@ -65,27 +68,40 @@ def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]]
         seq = loaders.open(name, detections=detections)
     except ValueError as error:
         raise ValueError(str(error).splitlines()[0]) from None
-    inputs, skipped = frame_inputs(seq, range(len(seq)) if frames is None else frames(len(seq)), protocol, cav_distance)
+    picked = range(len(seq)) if frames is None else frames(len(seq))
+    inputs, skipped = frame_inputs(seq, picked, protocol, cav_distance, agents)
     if not inputs:
         raise ValueError(f"no frame of {name} has an ego and a CAV for the {protocol} protocol")
-    return Source(name, inputs, skipped)
+    if not any(len(frame.trial["ids"]) for frame in inputs):
+        raise ValueError(f"no chosen frame of {name} has an object to match: there is nothing to calibrate "
+                         "(try other --frames, or synthetic:N with N > 0)")
+    return Source(name, inputs, skipped, trials.short_frames(inputs, agents))
 
 
 def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
          grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str = "sind",
          frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE,
-         detections: str | None = None) -> Plan:
-    """Check the run and load its datasets; ``ValueError`` naming what is wrong."""
-    sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol))
-    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections) for name in datasets))
+         detections: str | None = None, fusion: str | None = None, agents: int = 2) -> Plan:
+    """Check the run and load its datasets; ``ValueError`` naming what is wrong. ``agents``: the ego
+    and ``agents - 1`` CAVs, one trial row per CAV and frame (``loaders.trials.frame_cav_inputs``)."""
+    if agents < 2:
+        raise ValueError(f"--agents must be at least 2 (the ego and one CAV), got {agents}")
+    sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol),
+                  fusion=fusion)
+    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections, agents)
+                             for name in datasets))
 
 
-def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | None = None) -> pl.DataFrame:
+def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | None = None,
+             ray: str | None = None) -> pl.DataFrame:
     """The per-trial table of ``plan``: one row per dataset, frame, grid point and method, in that
-    order, with every parameter and metric (``trial_table``)."""
+    order, with every parameter and metric (``trial_table``). ``ray`` runs it on Ray
+    (``cbm.executors``: ``local``, ``auto`` or a cluster address), one session for every dataset."""
     rows: list[dict[str, Any]] = []
-    for source in plan.sources:
-        found = run_sweep(plan.sweep, source.inputs, workers=workers, progress=progress)
+    with ray_session(ray, workers):
+        found_by_source = [run_sweep(plan.sweep, source.inputs, workers=workers, progress=progress, ray=ray)
+                           for source in plan.sources]
+    for source, found in zip(plan.sources, found_by_source):
         rows.extend({"dataset": source.name, **row} for row in found)
     return trial_table(rows, plan.sweep)
 

@@ -12,6 +12,7 @@ Row numbers in messages are 1-based data rows (the header is not counted).
 """
 from __future__ import annotations
 
+import codecs
 import warnings
 from pathlib import Path
 
@@ -28,11 +29,29 @@ NUMERIC = (pl.Float64, pl.Float32, pl.Int64, pl.Int32, pl.Int16, pl.Int8,
 def csv_header(path: Path) -> list[str]:
     """The column names of a CSV file, as written (surrounding spaces stripped)."""
     nonempty_file(path)
+    require_text(path)
     try:
         columns = pl.read_csv(path, n_rows=0, infer_schema=False).columns
     except READ_ERRORS as exc:
         raise LoaderError(f"{path}: not a readable CSV file ({_short(exc)})") from exc
     return [c.strip() for c in columns]
+
+
+def require_text(path: Path, sample: int = 4096) -> None:
+    """:class:`LoaderError` when the start of ``path`` is not UTF-8 text (NUL bytes or invalid
+    UTF-8): a binary file is named in one line instead of its bytes printed as a header."""
+    try:
+        with path.open("rb") as file:
+            head = file.read(sample)
+        codecs.getincrementaldecoder("utf-8")().decode(head, final=False)
+        binary = b"\0" in head
+    except UnicodeDecodeError:
+        binary = True
+    except OSError as exc:
+        raise LoaderError(f"{path}: cannot read the file ({_short(exc)})") from exc
+    if binary:
+        raise LoaderError(f"{path}: binary content, not a CSV file; expected UTF-8 text with a header row "
+                          "naming the columns")
 
 
 def read_csv(path: Path, types: dict[str, pl.DataType], optional: tuple[str, ...] = ()) -> pl.DataFrame:

@@ -14,17 +14,33 @@ OPV2V protocols need an ego and a CAV; a dataset that does not say what each age
 objects within the sensor range under OPV2V (and a note saying so). When the dataset carries a
 detector's boxes (``loaders.open(path, detections=...)``), those of the ego and the CAV replace
 their simulated detections (``FrameInputs.detections``; ``cbm.detected`` for the true pairs).
+
+More than two agents (``frame_cav_inputs``, ``evaluate.py --agents N``): the CAV above, then the
+other candidates nearest the target distance, one trial each, CAV ``r`` drawing from
+``trial_rng(seed, frame, r)`` (so CAV 0's trial is the two-agent trial, draw for draw).
 """
 from __future__ import annotations
 
+import dataclasses
 import weakref
+from collections import Counter
 from collections.abc import Iterable
 
 import numpy as np
 
+from cbm import se2
 from cbm.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
 
-from .agents import TARGET_DISTANCE, agent_ids, choose_cav, choose_ego, frame_trial_inputs, steady_cav
+from .agents import (
+    TARGET_DISTANCE,
+    _cav_candidates,
+    agent_ids,
+    agent_pose,
+    choose_cav,
+    choose_ego,
+    frame_trial_inputs,
+    steady_cav,
+)
 from .scene import Frame, Sequence
 
 AUTO_CAV = "auto"
@@ -69,33 +85,60 @@ def frame_inputs(frame: Frame, protocol: Protocol, cav: str = AUTO_CAV, target_d
     """The inputs of every trial of ``frame`` under ``protocol``; ``NoTrial`` when it has none."""
     agents = agents_of(frame, cav, target_distance)
     if agents is None:
-        if protocol != "sind":
-            raise NoTrial(f"frame {frame.index} has no ego and CAV for the {protocol} protocol")
-        inputs = {"boxes": frame.boxes(), "ids": frame.track_ids}
-        return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents")
+        return _abstract_inputs(frame, protocol)
     ego, chosen, note = agents
-    inputs = frame_trial_inputs(frame, ego, chosen)
-    inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
-    if protocol == "opv2v" and inputs["visibility"] is None:
-        inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
-        note += "; no per-agent visibility in this dataset: sensor range used"
-    detected = _detections(frame, ego, chosen)
-    if detected:
-        note += f"; real detections of {' and '.join(detected)}"
-    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note, detections=detected or None)
+    return _pair_inputs(frame, protocol, ego, chosen, note, sensor_range)
+
+
+def frame_cav_inputs(frame: Frame, protocol: Protocol, agents: int = 2, cav: str = AUTO_CAV,
+                     target_distance: float = TARGET_DISTANCE,
+                     sensor_range: float = ScenarioParams.sensor_range) -> list[FrameInputs]:
+    """The inputs of the trials of ``frame`` with ``agents`` agents: one per CAV, at most
+    ``agents - 1`` (fewer when the frame has fewer candidates); ``NoTrial`` when it has none.
+
+    CAV 0 is ``frame_inputs``'s (its trial is today's two-agent trial, draw for draw); the others
+    are the remaining candidates nearest ``target_distance`` from the ego (ties to the smallest id),
+    CAV ``r`` drawing from ``trial_rng(seed, frame, r)``. Under the sind protocol each CAV trial deals
+    the objects out anew (independent visibility draws); a frame without two vehicles gives
+    ``agents - 1`` abstract CAVs. Each input carries the others as its ``peers``."""
+    if agents < 2:
+        raise ValueError(f"agents must be at least 2 (the ego and one CAV), got {agents}")
+    first = agents_of(frame, cav, target_distance)
+    if first is None:
+        abstract = _abstract_inputs(frame, protocol)
+        return _with_peers([dataclasses.replace(abstract, stream=rank) for rank in range(agents - 1)])
+    ego, chosen, note = first
+    cavs = [chosen, *other_cavs(frame, ego, chosen, target_distance)][:agents - 1]
+    return _with_peers([_pair_inputs(frame, protocol, ego, track, note if rank == 0 else "auto", sensor_range, rank)
+                        for rank, track in enumerate(cavs)])
+
+
+def other_cavs(frame: Frame, ego: str, chosen: str, target_distance: float = TARGET_DISTANCE) -> list[str]:
+    """The CAV candidates of ``frame`` other than ``chosen``, nearest ``target_distance`` from the
+    ego first (ties to the smallest id): the CAVs beyond the first when there are more than two agents."""
+    ids, xy = _cav_candidates(frame, ego)
+    gap = np.abs(np.linalg.norm(xy - se2.translation_of(agent_pose(frame, ego)), axis=1) - target_distance)
+    return [str(ids[k]) for k in np.lexsort((ids, gap)) if str(ids[k]) != chosen]
 
 
 def sequence_inputs(sequence: Sequence, frames: Iterable[int], protocol: Protocol, cav: str = AUTO_CAV,
-                    target_distance: float = TARGET_DISTANCE,
-                    sensor_range: float = ScenarioParams.sensor_range) -> tuple[list[FrameInputs], list[int]]:
-    """``frame_inputs`` of each of ``frames``, and the frames that make no trial (skipped)."""
+                    target_distance: float = TARGET_DISTANCE, sensor_range: float = ScenarioParams.sensor_range,
+                    agents: int = 2) -> tuple[list[FrameInputs], list[int]]:
+    """``frame_cav_inputs`` of each of ``frames`` (one input per frame with two agents), and the
+    frames that make no trial (skipped)."""
     inputs, skipped = [], []
     for k in frames:
         try:
-            inputs.append(frame_inputs(sequence[k], protocol, cav, target_distance, sensor_range))
+            inputs.extend(frame_cav_inputs(sequence[k], protocol, agents, cav, target_distance, sensor_range))
         except NoTrial:
             skipped.append(k)
     return inputs, skipped
+
+
+def short_frames(inputs: Iterable[FrameInputs], agents: int) -> list[int]:
+    """The frames of ``inputs`` with fewer than ``agents - 1`` CAVs (too few vehicles)."""
+    counts = Counter(item.index for item in inputs)
+    return sorted(index for index, count in counts.items() if count < agents - 1)
 
 
 def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AUTO_CAV,
@@ -104,6 +147,36 @@ def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AU
     ``FrameInputs.build`` (draws from ``trial_rng(seed, frame.index)``)."""
     inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range)
     return inputs.build(scenario, seed)
+
+
+def _abstract_inputs(frame: Frame, protocol: Protocol) -> FrameInputs:
+    """The sind trial of a frame without two vehicles (abstract agents); ``NoTrial`` otherwise."""
+    if protocol != "sind":
+        raise NoTrial(f"frame {frame.index} has no ego and CAV for the {protocol} protocol")
+    inputs = {"boxes": frame.boxes(), "ids": frame.track_ids}
+    return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents")
+
+
+def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: str, sensor_range: float,
+                 stream: int = 0) -> FrameInputs:
+    """The inputs of the trial of ``ego`` and the CAV ``chosen``, drawing from stream ``stream``."""
+    inputs = frame_trial_inputs(frame, ego, chosen)
+    inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
+    if protocol == "opv2v" and inputs["visibility"] is None:
+        inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
+        note += "; no per-agent visibility in this dataset: sensor range used"
+    detected = _detections(frame, ego, chosen)
+    if detected:
+        note += f"; real detections of {' and '.join(detected)}"
+    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note, detections=detected or None,
+                       stream=stream)
+
+
+def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:
+    """Each of ``inputs`` with the others as its ``peers`` (none with one CAV)."""
+    if len(inputs) < 2:
+        return inputs
+    return [dataclasses.replace(item, peers=tuple(other for other in inputs if other is not item)) for item in inputs]
 
 
 def _detections(frame: Frame, ego: str, cav: str) -> dict[str, np.ndarray]:

@@ -7,7 +7,7 @@ from dataclasses import dataclass, field
 
 import viser
 
-from ..session.settings import AUTO_CAV, Settings
+from ..session.settings import AUTO_CAV, MAX_CAVS, Settings
 from .actions import TabActions, on_user
 
 
@@ -18,12 +18,14 @@ class FrameControls:
     play: viser.GuiCheckboxHandle
     speed: viser.GuiSliderHandle
     cav: viser.GuiDropdownHandle
+    cavs: viser.GuiNumberHandle
     scenario: viser.GuiDropdownHandle
     starts: dict[str, int] = field(default_factory=dict)
     """Scenario name -> its first frame (``Sequence.scenarios``); empty hides the scenario list."""
 
     def show(self, settings: Settings) -> None:
         self.frame.value = settings.frame
+        self.cavs.value = settings.cavs
         if self.starts:
             self.scenario.value = scenario_of(self.starts, settings.frame)
 
@@ -42,6 +44,9 @@ def build(gui: viser.GuiApi, settings: Settings, n_frames: int) -> FrameControls
             play=gui.add_checkbox("play", False),
             speed=gui.add_slider("speed (frames/s)", 1, 10, 1, 4),
             cav=gui.add_dropdown("CAV", (AUTO_CAV,), initial_value=AUTO_CAV, hint="vehicle acting as the CAV"),
+            cavs=gui.add_number("CAVs", settings.cavs, min=1, max=MAX_CAVS, step=1,
+                                hint="how many CAVs, each calibrated to the ego and drawn in its own colour "
+                                     "(the first is the CAV above, the others the next nearest 25 m)"),
             scenario=gui.add_dropdown("scenario", ("-",), visible=False,
                                       hint="jump to the first frame of a scenario of this dataset"))
 
@@ -51,6 +56,7 @@ def bind(c: FrameControls, tab: TabActions) -> None:
     c.step.on_click(lambda e: tab.step(-1 if e.target.value.startswith("◀") else 1))
     on_user(c.play, lambda: tab.set_playing(c.play.value))
     on_user(c.cav, lambda: tab.apply(lambda s: dataclasses.replace(s, cav=tab.cav_id(c.cav.value))))
+    on_user(c.cavs, lambda: tab.apply(lambda s: dataclasses.replace(s, cavs=_cav_count(c.cavs.value))))
     scenarios = tab.explorer.sequence.scenarios or {}
     if len(scenarios) > 1:
         c.starts = dict(scenarios)
@@ -67,3 +73,8 @@ def _slid(c: FrameControls, tab: TabActions) -> None:
     tab.apply(lambda s: dataclasses.replace(s, frame=frame))
     if c.starts:
         c.scenario.value = scenario_of(c.starts, frame)
+
+
+def _cav_count(value: float) -> int:
+    """The CAVs number as a count from 1 to ``MAX_CAVS`` (typed values may fall outside or be fractional)."""
+    return min(max(int(round(value)), 1), MAX_CAVS)

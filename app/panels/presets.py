@@ -1,4 +1,5 @@
-"""The Presets tab: load a shipped or saved preset, save the current settings under a name."""
+"""The Presets tab: load a shipped or saved preset, save the current settings under a name; below,
+the preset files that were skipped and why."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -14,12 +15,14 @@ class PresetControls:
     load: viser.GuiButtonHandle
     name: viser.GuiTextHandle
     save: viser.GuiButtonHandle
+    skipped: viser.GuiMarkdownHandle
+    """Which preset files were skipped and why (empty when none was)."""
 
 
 def build(gui: viser.GuiApi, preset_names: list[str]) -> PresetControls:
     return PresetControls(preset=gui.add_dropdown("preset", tuple(preset_names) or ("(none)",)),
                           load=gui.add_button("load"), name=gui.add_text("save as", "my-preset"),
-                          save=gui.add_button("save current settings"))
+                          save=gui.add_button("save current settings"), skipped=gui.add_markdown(""))
 
 
 def bind(c: PresetControls, tab: TabActions) -> None:

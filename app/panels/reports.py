@@ -27,6 +27,7 @@ def sequence_markdown(run: SequenceRun) -> str:
              f"| RTE mean / median | {number(s['rte_mean'], ' m')} / {number(s['rte_median'], ' m')} |",
              f"| RRE mean / median | {number(s['rre_mean'], '°')} / {number(s['rre_median'], '°')} |",
              f"| frames with an estimate | {int(s['n_estimated'])} |",
+             *(f"| late-fusion AP@{t:g} (BEV IoU) | {number(100 * ap, ' %', 1)} |" for t, ap in run.fused_ap().items()),
              f"| median time per frame | {number(1000 * s['runtime_median_s'], ' ms', 1)} |"]
     if run.skipped:
         lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, run.skipped))}")

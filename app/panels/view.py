@@ -12,7 +12,7 @@ from ..scene.colours import palette
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, on_user
 
-TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points")
+TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused")
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 
@@ -31,6 +31,7 @@ class ViewControls:
     points: viser.GuiCheckboxHandle
     points_every: viser.GuiSliderHandle
     legend: viser.GuiMarkdownHandle
+    fused: viser.GuiCheckboxHandle
 
     def show(self, settings: Settings) -> None:
         view = settings.view
@@ -67,7 +68,10 @@ def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
                                      "CAV's placed like its boxes"),
         points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
                                     hint="Draw every Nth LiDAR point (1: all of them)"),
-        legend=gui.add_markdown(palette(view).legend))
+        legend=gui.add_markdown(palette(view).legend),
+        fused=gui.add_checkbox("fused boxes (late fusion)", view.fused,
+                               hint="The ego's and the CAV's boxes merged by NMS at this pose: outlines green for "
+                                    "a true positive, red for a false one (BEV IoU 0.7 against the ground truth)"))
     return controls
 
 

@@ -20,6 +20,9 @@ RIGHT = (30, 170, 60)
 WRONG = (225, 30, 30)
 MISSED = (140, 140, 140)
 GHOST = (110, 110, 110)
+CAV_COLOURS = ((204, 121, 167), (86, 180, 233), (240, 228, 66))
+"""The boxes of the second, third and fourth CAV (``Settings.cavs``): Okabe-Ito reddish purple, sky
+blue and yellow, colour-blind safe and apart from the ego's blue and the first CAV's orange."""
 MAP = {"lane_boundary": (185, 185, 185), "crossing": (225, 200, 120), "drivable_area": (215, 215, 215)}
 MAP_OTHER = (200, 200, 200)
 

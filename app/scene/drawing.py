@@ -10,10 +10,11 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cbm import se2
+from cbm.fusion import fused_against_truth
 from loaders import Frame
 
 from ..session.explorer import Outcome
-from . import captions, colours, geometry
+from . import captions, cavs, colours, geometry
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .points import PointCloud, clouds
 from .text import metrics_markdown
@@ -22,6 +23,8 @@ LINE_HEIGHT = 1.7
 """Metres above the ground at which match lines run (above most boxes)."""
 MOST_PANELS = 2
 """The most copies of the scene a layout draws (side by side): each copy has its own map nodes."""
+FUSED_Z = 0.3
+"""Metres above the ground of the fused boxes' outlines (above the boxes' tiles)."""
 
 
 @dataclass(frozen=True)
@@ -76,6 +79,8 @@ class _Parts:
     wrong: list[np.ndarray] = field(default_factory=list)
     missed: list[np.ndarray] = field(default_factory=list)
     map_poses: list[np.ndarray] = field(default_factory=list)
+    fused_tp: list[np.ndarray] = field(default_factory=list)
+    fused_fp: list[np.ndarray] = field(default_factory=list)
 
 
 def placements(outcome: Outcome) -> dict[str, np.ndarray]:
@@ -110,7 +115,9 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
     labels = _labels(parts, panels)
     if view.presentation:
         labels["numbers"] = (captions.key_numbers(outcome), captions.numbers_position(agents))
-    return Drawing(meshes=_meshes(parts, ego, cav, palette), lines=lines, labels=labels,
+    meshes = {**_meshes(parts, ego, cav, palette),
+              **{name: Mesh(*mesh) for name, mesh in cavs.other_cav_boxes(outcome, panels).items()}}
+    return Drawing(meshes=meshes, lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
                    agents=agents, label_px=captions.label_px(view),
@@ -141,6 +148,16 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
                                             colours.palette(view))
         parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
+    if view.fused:
+        _add_fused(parts, outcome, where[panel.placement], offset)
+
+
+def _add_fused(parts: _Parts, outcome: Outcome, transform: np.ndarray, offset: np.ndarray) -> None:
+    """Late fusion of the panel's placement (``cbm.fusion``): fused boxes, true / false positive at BEV IoU 0.7."""
+    fused, hits = fused_against_truth(outcome.trial, transform, outcome.world_boxes, outcome.world_ids,
+                                      outcome.settings.scenario.seed, outcome.frame_index)
+    parts.fused_tp.append(_shifted(fused.boxes[hits], offset))
+    parts.fused_fp.append(_shifted(fused.boxes[~hits], offset))
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
@@ -161,7 +178,9 @@ def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
     strokes = {"right": palette.right, "wrong": palette.wrong, "missed": palette.missed}
     return {**{name: Lines(_joined(getattr(parts, name)), s.color, s.thickness) for name, s in strokes.items()},
             "cav_before": Lines(before, palette.cav_before, 1.5),
-            "ghosts": Lines(ghosts, palette.ghost, 1.5)}
+            "ghosts": Lines(ghosts, palette.ghost, 1.5),
+            "fused_tp": Lines(_outlines(parts.fused_tp, FUSED_Z), palette.right.color, 3.0),
+            "fused_fp": Lines(_outlines(parts.fused_fp, FUSED_Z), palette.wrong.color, 3.0)}
 
 
 def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
@@ -225,6 +244,10 @@ def _shifted(boxes: np.ndarray, offset: np.ndarray) -> np.ndarray:
 def no_lines() -> np.ndarray:
     """An empty (0, 2, 3) segment array."""
     return np.zeros((0, 2, 3), np.float32)
+
+
+def _outlines(parts: list[np.ndarray], z: float) -> np.ndarray:
+    return geometry.outline_segments(np.concatenate(parts), z) if parts else no_lines()
 
 
 def _joined(parts: list[np.ndarray]) -> np.ndarray:

@@ -11,6 +11,7 @@ from cbm.metrics import is_success
 from cbm.result import MatchResult
 
 from ..session.explorer import Outcome
+from .cavs import per_cav_rows
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -65,6 +66,7 @@ def metrics_markdown(outcome: Outcome) -> str:
     if result.anchor is not None:
         lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")
     lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
+    lines.extend(per_cav_rows(outcome))
     if not result.estimated:
         lines.append("")
         lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")

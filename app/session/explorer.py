@@ -22,9 +22,9 @@ from cbm.scenario import FrameInputs, Trial
 from cbm.sweep import run_method
 from loaders import Sequence, is_vehicle
 from loaders.agents import agent_pose, choose_ego
-from loaders.trials import frame_inputs
+from loaders.trials import frame_cav_inputs, frame_inputs
 
-from .settings import Settings
+from .settings import MAX_CAVS, Settings
 
 
 @dataclass(frozen=True)
@@ -37,6 +37,16 @@ class CavChoice:
     @property
     def label(self) -> str:
         return f"{self.id[:8]} · {self.distance:.0f} m"
+
+
+@dataclass(frozen=True)
+class CavOutcome:
+    """One more CAV of a several-CAV outcome (``Settings.cavs``), calibrated to the ego on its own trial."""
+
+    cav_id: str | None
+    trial: Trial
+    result: MatchResult
+    metrics: TrialMetrics
 
 
 @dataclass(frozen=True)
@@ -61,6 +71,8 @@ class Outcome:
     findings: list[Finding]
     seconds: float
     """Server time of the whole recompute (trial, method, metrics, diagnosis)."""
+    others: tuple[CavOutcome, ...] = ()
+    """The CAVs beyond the first (``Settings.cavs`` > 1), each in its own colour."""
 
 
 class Explorer:
@@ -98,7 +110,8 @@ class Explorer:
         index = min(max(settings.frame, 0), len(self.sequence) - 1)
         inputs = self.trial_inputs(settings, index)
         trial = inputs.build(settings.scenario, settings.scenario.seed)
-        result, findings = _run(settings, trial, inputs)
+        others = self.other_cavs(settings, index) if settings.cavs > 1 else ()
+        result, findings = _run(settings, trial, inputs, [other.trial for other in others])
         metrics = evaluate(result, trial)
         limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
@@ -106,15 +119,31 @@ class Explorer:
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
                        cav_note=inputs.note, trial=trial, world_boxes=se2.apply_boxes(world_to_ego, objects["boxes"]),
                        world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
-                       findings=findings, seconds=time.perf_counter() - started)
+                       findings=findings, seconds=time.perf_counter() - started, others=others)
+
+    def other_cavs(self, settings: Settings, index: int) -> tuple[CavOutcome, ...]:
+        """The CAVs of frame ``index`` beyond the first (``loaders.trials.frame_cav_inputs``), at
+        most ``settings.cavs - 1`` of them, each run through the selected method (``cbm-graph``
+        with the others as its peers)."""
+        scenario, agents = settings.scenario, min(settings.cavs, MAX_CAVS) + 1
+        every = frame_cav_inputs(self.sequence[index], scenario.protocol, agents, settings.cav,
+                                 sensor_range=scenario.sensor_range)
+        trials = [inputs.build(scenario, scenario.seed) for inputs in every]
+        outcomes = []
+        for k, (inputs, trial) in enumerate(zip(every[1:], trials[1:]), start=1):
+            peers = trials[:k] + trials[k + 1:]
+            result = run_method(settings.method, trial, settings.params, inputs, peers)
+            outcomes.append(CavOutcome(inputs.trial.get("cav_id"), trial, result, evaluate(result, trial)))
+        return tuple(outcomes)
 
 
-def _run(settings: Settings, trial: Trial, frame: FrameInputs) -> tuple[MatchResult, list[Finding]]:
+def _run(settings: Settings, trial: Trial, frame: FrameInputs,
+         peers: list[Trial]) -> tuple[MatchResult, list[Finding]]:
     """The selected method's result and, for the methods that build CBM's sets, why it failed: the
-    sets are built once and serve both the match and the diagnosis."""
+    sets are built once and serve both the match and the diagnosis. ``peers``: the other CAVs' trials."""
     method = METHODS[settings.method]
     if not method.explains:
-        return run_method(settings.method, trial, settings.params, frame), []
+        return run_method(settings.method, trial, settings.params, frame, peers), []
     inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params))
     result = inspection.match()
     return result, diagnose(result, trial, inspection)

@@ -1,9 +1,13 @@
 """Named parameter sets as TOML: the shipped ones in ``app/presets/``, the user's in a folder of theirs.
 
-A preset file holds an optional ``description`` and the tables of ``settings.to_preset``
-(``method``, ``[scenario]``, ``[cbm]``, ``[view]``, ... with angles in degrees); it is named by its
-file stem. Keys it leaves out take the app's defaults. The user folder is
-``$CBM_EXPLORER_PRESETS`` or ``~/.config/cbm-explorer/presets``.
+A preset file holds an optional ``description``, an optional ``name`` (the name it was saved under)
+and the tables of ``settings.to_preset`` (``method``, ``[scenario]``, ``[cbm]``, ``[view]``, ...
+with angles in degrees); it is named by its file stem. Keys it leaves out take the app's defaults.
+The user folder is ``$CBM_EXPLORER_PRESETS`` or ``~/.config/cbm-explorer/presets``.
+
+Reading cannot hurt the app: a file over ``MAX_BYTES`` or nested deeper than ``MAX_DEPTH``, or one
+whose reading raises anything at all, is skipped with the reason. Files are read once and kept
+while their modification time and size stay the same.
 """
 from __future__ import annotations
 
@@ -11,10 +15,12 @@ import os
 import re
 import sys
 import tempfile
+import threading
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import tomli_w
 
 from .settings import Settings, from_preset, to_preset
@@ -26,6 +32,13 @@ else:
 
 SHIPPED_DIR = Path(__file__).resolve().parents[1] / "presets"
 ENV_VAR = "CBM_EXPLORER_PRESETS"
+MAX_BYTES = 256 * 1024
+"""Largest preset file read (a saved preset is about 1 kB)."""
+MAX_DEPTH = 16
+"""Deepest nesting of arrays and inline tables read (a saved preset has 2)."""
+MAX_NAME = 80
+"""Longest preset name, in characters."""
+_STRINGS_AND_COMMENTS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
 
 
 class PresetError(ValueError):
@@ -39,7 +52,9 @@ class Preset:
     path: Path
     shipped: bool
     tables: dict[str, Any]
-    """The file's content without ``description``."""
+    """The file's content without ``description`` and ``name``."""
+    saved_as: str = ""
+    """The name the user saved it under (the file stem for a file written by hand)."""
 
     def apply(self, current: Settings) -> Settings:
         """This preset over the app's defaults, keeping ``current``'s frame, CAV and view (the
@@ -52,20 +67,72 @@ def user_dir() -> Path:
     return Path(os.environ.get(ENV_VAR) or Path.home() / ".config" / "cbm-explorer" / "presets")
 
 
+def nesting_depth(text: str) -> int:
+    """How deep arrays and tables nest in TOML ``text`` (brackets outside strings and comments)."""
+    code = np.frombuffer(_STRINGS_AND_COMMENTS.sub("", text).encode("utf-8"), dtype=np.uint8)
+    steps = np.isin(code, (ord("["), ord("{"))).astype(np.int64) - np.isin(code, (ord("]"), ord("}")))
+    return int(np.cumsum(steps).max(initial=0))
+
+
+def _text(path: Path) -> str:
+    with path.open("rb") as handle:
+        data = handle.read(MAX_BYTES + 1)
+    if len(data) > MAX_BYTES:
+        raise PresetError(f"{path.name}: larger than {MAX_BYTES // 1024} KB; not read")
+    try:
+        text = data.decode("utf-8")
+    except UnicodeDecodeError as error:
+        raise PresetError(f"{path.name}: not UTF-8 text (UnicodeDecodeError at byte {error.start})") from None
+    if nesting_depth(text) > MAX_DEPTH:
+        raise PresetError(f"{path.name}: nested deeper than {MAX_DEPTH} levels; not read")
+    return text
+
+
 def read(path: Path, shipped: bool) -> Preset:
-    """Read and check one preset file; ``PresetError`` names the file and what is wrong."""
+    """Read and check one preset file; ``PresetError`` names the file and what is wrong, whatever
+    went wrong (size, depth, encoding, syntax, unknown keys, wrong types, recursion, I/O)."""
     try:
-        data = tomllib.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as error:
-        raise PresetError(f"{path.name}: {error}") from None
-    description = data.pop("description", "")
-    if not isinstance(description, str):
-        raise PresetError(f"{path.name}: description must be text")
-    try:
+        data = tomllib.loads(_text(path))
+        description, saved_as = data.pop("description", ""), data.pop("name", path.stem)
+        if not isinstance(description, str) or not isinstance(saved_as, str):
+            raise PresetError(f"{path.name}: description and name must be text")
         from_preset(data)
+    except PresetError:
+        raise
     except (KeyError, TypeError, ValueError) as error:
         raise PresetError(f"{path.name}: {error.args[0] if error.args else error}") from None
-    return Preset(path.stem, description, path, shipped, data)
+    except Exception as error:  # any other failure to read one file skips that file only
+        raise PresetError(f"{path.name}: {type(error).__name__}: {error}") from None
+    return Preset(path.stem, description, path, shipped, data, saved_as)
+
+
+_read_cache: dict[Path, tuple[tuple[int, int], Preset | PresetError]] = {}
+_cache_lock = threading.Lock()
+
+
+def read_cached(path: Path, shipped: bool) -> Preset:
+    """``read``, remembered while the file's modification time and size stay the same."""
+    stat = path.stat()
+    stamp = (stat.st_mtime_ns, stat.st_size)
+    with _cache_lock:
+        known = _read_cache.get(path)
+    if known is None or known[0] != stamp:
+        try:
+            result: Preset | PresetError = read(path, shipped)
+        except PresetError as error:
+            result = error
+        known = (stamp, result)
+        with _cache_lock:
+            _read_cache[path] = known
+    if isinstance(known[1], PresetError):
+        raise known[1]
+    return known[1]
+
+
+def _forget_missing(present: set[Path]) -> None:
+    with _cache_lock:
+        for path in [p for p in _read_cache if p not in present]:
+            del _read_cache[path]
 
 
 def discover(shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> tuple[dict[str, Preset], list[str]]:
@@ -73,18 +140,36 @@ def discover(shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> tupl
     shipped name) and one message per file that was skipped."""
     presets: dict[str, Preset] = {}
     problems: list[str] = []
+    seen: set[Path] = set()
     for folder, shipped in ((shipped_dir, True), (users or user_dir(), False)):
-        for path in sorted(folder.glob("*.toml")) if folder.is_dir() else []:
+        for path in _listing(folder, problems):
+            seen.add(path)
             try:
-                preset = read(path, shipped)
-            except PresetError as error:
-                problems.append(str(error))
+                preset = read_cached(path, shipped)
+            except (PresetError, OSError) as error:
+                problems.append(str(error) if isinstance(error, PresetError) else f"{path.name}: {error}")
                 continue
             if preset.name in presets:
                 problems.append(f"{path.name}: the name {preset.name!r} is taken by a shipped preset; skipped")
                 continue
             presets[preset.name] = preset
+    _forget_missing(seen)
     return presets, problems
+
+
+def _listing(folder: Path, problems: list[str]) -> list[Path]:
+    try:
+        return sorted(folder.glob("*.toml")) if folder.is_dir() else []
+    except OSError as error:
+        problems.append(f"{folder}: {error}")
+        return []
+
+
+def skipped_markdown(problems: list[str]) -> str:
+    """The Presets tab's list of skipped files and why ("" when none was)."""
+    if not problems:
+        return ""
+    return "**Preset files skipped:**\n\n" + "\n".join(f"- `{p[:300]}`" for p in problems)
 
 
 def slug(name: str) -> str:
@@ -92,17 +177,41 @@ def slug(name: str) -> str:
     return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-")
 
 
-def save_preset(name: str, settings: Settings, shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> Path:
-    """Write ``settings`` as the user preset ``name``, atomically (temporary file + rename in the
-    same folder); refuses an empty name and the name of a shipped preset."""
+def _same_name(a: str, b: str) -> bool:
+    return " ".join(a.split()).casefold() == " ".join(b.split()).casefold()
+
+
+def checked_stem(name: str, folder: Path, shipped_dir: Path = SHIPPED_DIR) -> str:
+    """The file stem ``name`` saves under; ``PresetError`` for an empty or over-long name, a shipped
+    preset's name, or a name that differs from the one already saved in that file (``../x`` and
+    ``..\\x`` are refused rather than overwrite each other)."""
+    if len(name) > MAX_NAME:
+        raise PresetError(f"a preset name may have at most {MAX_NAME} characters; this one has {len(name)}")
     stem = slug(name)
     if not stem:
         raise PresetError("a preset needs a name with at least one letter or digit")
     if (shipped_dir / f"{stem}.toml").exists():
         raise PresetError(f"{stem!r} is a shipped preset and cannot be overwritten; choose another name")
+    target = folder / f"{stem}.toml"
+    if target.exists():
+        try:
+            existing = read(target, shipped=False).saved_as
+        except PresetError:
+            existing = stem
+        if not _same_name(existing, name):
+            raise PresetError(f"{name!r} would be saved as {stem}.toml, which holds the preset {existing!r}; "
+                              f"choose another name, or save as {existing!r} to replace it")
+    return stem
+
+
+def save_preset(name: str, settings: Settings, shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> Path:
+    """Write ``settings`` as the user preset ``name``, atomically (temporary file + rename in the
+    same folder); refuses what ``checked_stem`` refuses."""
     folder = users or user_dir()
+    stem = checked_stem(name, folder, shipped_dir)
     folder.mkdir(parents=True, exist_ok=True)
-    text = tomli_w.dumps({"description": f"Saved from CBM Explorer as {name!r}.", **to_preset(settings)})
+    text = tomli_w.dumps({"description": f"Saved from CBM Explorer as {name!r}.", "name": name,
+                          **to_preset(settings)})
     handle, temporary = tempfile.mkstemp(dir=folder, prefix=f".{stem}.", suffix=".tmp")
     try:
         with os.fdopen(handle, "w", encoding="utf-8") as out:

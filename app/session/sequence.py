@@ -14,6 +14,8 @@ from typing import Any
 
 import numpy as np
 
+from cbm.ap import pooled_ap
+from cbm.fusion import decoded
 from cbm.methods import METHODS
 from cbm.scenario import FrameInputs
 from cbm.sweep import Sweep, run, summarise
@@ -28,10 +30,12 @@ CHUNK = 8
 
 
 def sweep_for(settings: Settings) -> Sweep:
-    """A one-point sweep that runs exactly the tab's method, parameters, scenario and seed."""
+    """A one-point sweep that runs exactly the tab's method, parameters, scenario and seed, with
+    late fusion (``cbm.fusion``) for the run's AP."""
     params = settings.params
     grid = {name: [getattr(params, name)] for name in METHODS[settings.method].tunable}
-    return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario)
+    return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario,
+                 fusion="nms")
 
 
 def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) -> tuple[list[FrameInputs], list[int]]:
@@ -64,6 +68,11 @@ class SequenceRun:
     def summary(self) -> dict[str, float]:
         """Micro-averaged metrics over the rows (``cbm.metrics.aggregate``); empty without rows."""
         return summarise(self.rows, by=("method",))[0][1] if self.rows else {}
+
+    def fused_ap(self) -> dict[float, float]:
+        """Late-fusion AP over the rows at each BEV IoU threshold (``cbm.ap.pooled_ap``: every
+        frame's fused detections sorted by score together); empty without rows."""
+        return pooled_ap(decoded(row) for row in self.rows) if self.rows else {}
 
     def plot_data(self) -> tuple[np.ndarray, ...]:
         """(frames, precision, recall, RTE, RRE) arrays for the per-frame plot (NaN where undefined)."""

@@ -19,6 +19,8 @@ from loaders.trials import AUTO_CAV
 Layout = Literal["overlay", "after", "before", "side by side"]
 LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
 LinePairs = Literal["refined", "own"]
+MAX_CAVS = 4
+"""The most CAVs a tab shows at once (each in its own colour, ``app.scene.colours.CAV_COLOURS``)."""
 LINE_PAIRS = {"refined": "all pairs (after refinement)", "own": "CBM's own pairs"}
 """What the match lines show for CBM: the final pairs, or CBM's own before the guided re-association."""
 
@@ -50,6 +52,9 @@ class ViewOptions:
     """The two agents' LiDAR points, when the dataset ships them (OPV2V ``.pcd``)."""
     points_every: int = 10
     """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
+    fused: bool = False
+    """Late fusion (``cbm.fusion``): outlines of the fused boxes, green a true positive, red a false
+    one (BEV IoU 0.7 against what either agent sees), at each panel's CAV pose."""
 
     def __post_init__(self) -> None:
         if self.layout not in LAYOUTS:
@@ -78,6 +83,9 @@ class Settings:
     frame: int = 0
     cav: str = AUTO_CAV
     """The vehicle acting as the CAV, or ``auto`` (the one nearest 25 m from the ego)."""
+    cavs: int = 1
+    """How many CAVs (1 to ``MAX_CAVS``): the first is ``cav``, the others the vehicles next nearest
+    25 m from the ego (``loaders.trials.frame_cav_inputs``), each calibrated to the ego."""
     method: str = "cbm"
     scenario: ScenarioParams = DEFAULT_SCENARIO
     method_params: Mapping[str, Any] = field(default_factory=default_method_params)
@@ -110,7 +118,7 @@ class Settings:
 
 
 def to_preset(settings: Settings) -> dict[str, Any]:
-    """The TOML-ready form of ``settings`` (frame and CAV left out: they belong to the dataset)."""
+    """The TOML-ready form of ``settings`` (frame, CAV and CAV count left out: they belong to the dataset)."""
     params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items() if dataclasses.fields(p)}
     return {"method": settings.method, "scenario": dataclasses.asdict(settings.scenario),
             "view": dataclasses.asdict(settings.view), **params}
@@ -131,7 +139,7 @@ def from_preset(data: Mapping[str, Any], base: Settings | None = None) -> Settin
     for name in base.method_params:
         if name in data:
             method_params[name] = _replaced(name, method_params[name], data[name])
-    return Settings(frame=base.frame, cav=base.cav, method=method,
+    return Settings(frame=base.frame, cav=base.cav, cavs=base.cavs, method=method,
                     scenario=_replaced("scenario", base.scenario, data.get("scenario", {})),
                     method_params=method_params, view=_replaced("view", base.view, data.get("view", {})))
 

@@ -1,0 +1,216 @@
+"""Where a sweep's tasks run: in this process, in a local process pool, or on Ray.
+
+    from cbm.executors import run_tasks
+    results = run_tasks(work, [(1,), (2,)], workers=2, ray="local")
+
+``run_tasks`` returns the results in task order whatever ran them, so a sweep's rows (and its
+``trials.csv``) are the same byte for byte on every executor. ``ray`` is ``None`` (the local process
+pool), ``"local"`` (start a Ray instance on this machine with ``workers`` CPUs), ``"auto"`` (join the
+cluster ``ray start`` started here) or a cluster address ``HOST:PORT``. A task that raises is never
+dropped: :class:`TaskError` names it; Ray retries a task whose worker died (``MAX_RETRIES`` times).
+Ray is an optional extra (``pip install .[ray]``).
+"""
+from __future__ import annotations
+
+import contextlib
+import multiprocessing
+import signal
+import socket
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from typing import Any
+
+MAX_RETRIES = 2
+"""Times Ray reruns a task whose worker process or node died (an exception the task raises is not retried)."""
+CONNECT_TIMEOUT_S = 10.0
+"""Seconds to wait for a cluster address to answer before giving up."""
+
+
+class ExecutorError(RuntimeError):
+    """The executor cannot run: Ray missing, or its cluster unreachable (one line for the user)."""
+
+
+class TaskError(RuntimeError):
+    """A task raised: the message names the task and the error."""
+
+
+def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], *, workers: int = 1, ray: str | None = None,
+              done: Callable[[Any], None] | None = None, name: Callable[[tuple], str] = repr) -> list[Any]:
+    """``fn(*task)`` of every task, in task order. ``done(result)`` is called as each task finishes
+    (in completion order); ``name(task)`` names a task that raised in the :class:`TaskError`."""
+    done = done or (lambda result: None)
+    if ray is not None:
+        with ray_session(ray, workers):
+            return _run_on_ray(fn, tasks, done, name)
+    if workers <= 1:
+        return [_finished(_call(fn, task, name), done) for task in tasks]
+    with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        try:
+            with ctrl_c_held():
+                futures = {pool.submit(fn, *task): i for i, task in enumerate(tasks)}
+            results: list[Any] = [None] * len(tasks)
+            for future in as_completed(futures):
+                i = futures[future]
+                results[i] = _finished(_result(future.result, tasks[i], name), done)
+            return results
+        except BaseException:
+            stop_pool(pool)
+            raise
+
+
+@contextlib.contextmanager
+def ctrl_c_held() -> Iterator[None]:
+    """SIGINT blocked while the pool starts its workers (``submit`` spawns them): they inherit the
+    block, so Ctrl-C, sent to the whole process group, reaches the parent only, which ends them
+    (``stop_pool``). A Ctrl-C meanwhile is delivered to the parent when the block lifts."""
+    previous = signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
+
+
+def stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
+    """End ``pool`` now (a stop signal or a failed task): pending tasks cancelled, every worker
+    process terminated (killed if still alive after ``grace_s``), none left orphaned."""
+    processes = list((pool._processes or {}).values())
+    pool.shutdown(wait=False, cancel_futures=True)
+    for process in processes:
+        process.terminate()
+    deadline = time.monotonic() + grace_s
+    for process in processes:
+        process.join(max(0.0, deadline - time.monotonic()))
+        if process.is_alive():
+            process.kill()
+            process.join()
+
+
+def _finished(result: Any, done: Callable[[Any], None]) -> Any:
+    done(result)
+    return result
+
+
+def _call(fn: Callable[..., Any], task: tuple, name: Callable[[tuple], str]) -> Any:
+    return _result(lambda: fn(*task), task, name)
+
+
+def _result(get: Callable[[], Any], task: tuple, name: Callable[[tuple], str]) -> Any:
+    try:
+        return get()
+    except Exception as error:
+        raise TaskError(f"task {name(task)} failed: {type(error).__name__}: {error}") from error
+
+
+def _run_on_ray(fn: Callable[..., Any], tasks: Sequence[tuple], done: Callable[[Any], None],
+                name: Callable[[tuple], str]) -> list[Any]:
+    """Submit every task, then collect them with ``ray.wait`` as they finish (progress across the cluster)."""
+    import ray
+
+    remote = ray.remote(max_retries=MAX_RETRIES)(fn)
+    shared = [ray.put(arg) for arg in _shared_arguments(tasks)]
+    refs = [remote.remote(*_with_shared(task, shared)) for task in tasks]
+    index = {ref: i for i, ref in enumerate(refs)}
+    results: list[Any] = [None] * len(tasks)
+    pending = list(refs)
+    try:
+        while pending:
+            ready, pending = ray.wait(pending, num_returns=1)
+            i = index[ready[0]]
+            results[i] = _finished(_ray_result(ray, ready[0], tasks[i], name), done)
+    finally:
+        for ref in pending:
+            ray.cancel(ref, force=True)
+    return results
+
+
+def _shared_arguments(tasks: Sequence[tuple]) -> list[Any]:
+    """The first argument when every task shares it (a sweep): stored once in Ray's object store."""
+    first = tasks[0][0] if tasks and tasks[0] else None
+    return [first] if first is not None and all(task and task[0] is first for task in tasks) else []
+
+
+def _with_shared(task: tuple, shared: list[Any]) -> tuple:
+    return (shared[0], *task[1:]) if shared else task
+
+
+def _ray_result(ray: Any, ref: Any, task: tuple, name: Callable[[tuple], str]) -> Any:
+    try:
+        return ray.get(ref)
+    except ray.exceptions.RayTaskError as error:
+        cause = error.cause if error.cause is not None else error
+        raise TaskError(f"task {name(task)} failed: {type(cause).__name__}: {cause}") from None
+    except ray.exceptions.RayError as error:
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise TaskError(f"task {name(task)} failed on the cluster after {MAX_RETRIES} retries: {first}") from None
+
+
+@contextlib.contextmanager
+def ray_session(address: str | None, workers: int = 1) -> Iterator[None]:
+    """Ray connected for the block (nothing when ``address`` is None): ``"local"`` starts a quiet
+    local instance with ``workers`` CPUs, ``"auto"`` or ``HOST:PORT`` joins a cluster. A session
+    already open is reused and left open; one this call opened is shut down after the block."""
+    if address is None:
+        yield
+        return
+    ray = import_ray()
+    if address not in ("local", "auto"):
+        check_reachable(address)
+    if ray.is_initialized():
+        yield
+        return
+    with stop_handlers_kept():
+        _connect(ray, address, workers)
+    try:
+        yield
+    finally:
+        ray.shutdown()
+
+
+@contextlib.contextmanager
+def stop_handlers_kept() -> Iterator[None]:
+    """This process's SIGINT and SIGTERM handlers put back after the block: ``ray.init`` replaces
+    SIGTERM's with one that exits at once, which would skip a clean stop (``evaluation.stop``)."""
+    if threading.current_thread() is not threading.main_thread():
+        yield
+        return
+    kept = {signum: signal.getsignal(signum) for signum in (signal.SIGINT, signal.SIGTERM)}
+    try:
+        yield
+    finally:
+        for signum, handler in kept.items():
+            if handler is not None:
+                signal.signal(signum, handler)
+
+
+def import_ray() -> Any:
+    """The ``ray`` module, or :class:`ExecutorError` saying how to install it."""
+    try:
+        import ray
+    except ImportError:
+        raise ExecutorError("--ray needs Ray, which is not installed: pip install .[ray]") from None
+    return ray
+
+
+def _connect(ray: Any, address: str, workers: int) -> None:
+    quiet = {"log_to_driver": False, "logging_level": "ERROR"}
+    if address == "local":
+        ray.init(num_cpus=max(1, workers), include_dashboard=False, **quiet)
+        return
+    try:
+        ray.init(address=address, **quiet)
+    except (ConnectionError, RuntimeError, ValueError) as error:
+        first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
+        raise ExecutorError(f"--ray {address}: cannot join the Ray cluster: {first}") from None
+
+
+def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
+    """:class:`ExecutorError` unless ``HOST:PORT`` (``ray://`` allowed) accepts a connection within ``timeout``."""
+    host, sep, port = address.removeprefix("ray://").rpartition(":")
+    if not sep or not host or not port.isdigit():
+        raise ExecutorError(f"--ray {address}: expected local, auto or HOST:PORT")
+    try:
+        socket.create_connection((host, int(port)), timeout=timeout).close()
+    except OSError as error:
+        raise ExecutorError(f"--ray {address}: the Ray cluster is unreachable ({error.strerror or error})") from None

@@ -1,0 +1,90 @@
+"""Presets cannot hurt the app (issue 16, part 2): any bad file is skipped with its reason, size
+and depth are limited, files are read once per change, and distinct names never share a file."""
+from __future__ import annotations
+
+import os
+import time
+from pathlib import Path
+
+import pytest
+
+from app.session import presets as module
+from app.session.presets import MAX_NAME, PresetError, discover, nesting_depth, read, save_preset, skipped_markdown
+from app.session.settings import Settings
+
+BAD_FILES = {
+    "deep.toml": b"x = " + b"[" * 5000 + b"]" * 5000,
+    "deepinline.toml": b"x = " + b"{a = " * 400 + b"1" + b"}" * 400,
+    "latin1.toml": b'description = "caf\xe9"\n',
+    "syntax.toml": b"[cbm\nsigma2 = 3",
+    "wrongtype.toml": b"description = 3\n",
+    "tablewrong.toml": b"cbm = 5\n",
+    "nametype.toml": b"name = [1]\n",
+    "huge.toml": b"# " + b"a" * (module.MAX_BYTES + 10) + b"\n",
+}
+
+
+def test_every_kind_of_bad_file_is_skipped_with_its_reason(tmp_path: Path) -> None:
+    for name, data in BAD_FILES.items():
+        (tmp_path / name).write_bytes(data)
+    (tmp_path / "folder.toml").mkdir()
+    (tmp_path / "good.toml").write_text("[cbm]\nsigma2 = 2\n")
+    presets, problems = discover(users=tmp_path)
+    assert "good" in presets
+    skipped = {p.split(":")[0] for p in problems}
+    assert skipped == set(BAD_FILES) | {"folder.toml"}
+    text = "\n".join(problems)
+    assert "nested deeper than" in text and "larger than 256 KB" in text and "UnicodeDecodeError" in text
+    assert "IsADirectoryError" in text
+    markdown = skipped_markdown(problems)
+    assert markdown.startswith("**Preset files skipped:**") and markdown.count("\n- ") == len(problems)
+    assert skipped_markdown([]) == ""
+
+
+def test_recursion_inside_the_parser_is_caught_too(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    monkeypatch.setattr(module, "MAX_DEPTH", 10**6)
+    path = tmp_path / "deep.toml"
+    path.write_bytes(BAD_FILES["deep.toml"])
+    with pytest.raises(PresetError, match="RecursionError"):
+        read(path, shipped=False)
+
+
+def test_nesting_depth_ignores_brackets_in_strings_and_comments() -> None:
+    assert nesting_depth('[cbm]\nsigma2 = 2 # [[[[\nname = "[[[["\nx = [[1], [2]]\n') == 2
+    assert nesting_depth("'''\n[[[\n'''") == 0
+
+
+def test_files_are_read_once_until_they_change(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
+    path = tmp_path / "mine.toml"
+    path.write_text("[cbm]\nsigma2 = 2\n")
+    reads: list[Path] = []
+    original = module.read
+    monkeypatch.setattr(module, "read", lambda p, shipped: reads.append(p) or original(p, shipped))
+    discover(users=tmp_path)
+    discover(users=tmp_path)
+    assert reads.count(path) == 1
+    path.write_text("[cbm]\nsigma2 = 3.5\n")
+    os.utime(path, ns=(time.time_ns() + 10**9, time.time_ns() + 10**9))
+    presets, _ = discover(users=tmp_path)
+    assert reads.count(path) == 2 and presets["mine"].apply(Settings()).cbm.sigma2 == 3.5
+
+
+def test_distinct_names_never_share_a_file(tmp_path: Path) -> None:
+    first = save_preset("../x", Settings(), users=tmp_path)
+    with pytest.raises(PresetError, match=r"which holds the preset '\.\./x'"):
+        save_preset("..\\x", Settings(), users=tmp_path)
+    assert first == tmp_path / "x.toml" and read(first, shipped=False).saved_as == "../x"
+    assert save_preset(" ../X ", Settings().with_params("cbm", sigma2=5.0), users=tmp_path) == first, \
+        "the same name again (case and spaces aside) replaces its own preset"
+    assert read(first, shipped=False).apply(Settings()).cbm.sigma2 == 5.0
+    (tmp_path / "hand.toml").write_text("[cbm]\nsigma2 = 2\n")
+    save_preset("hand", Settings(), users=tmp_path)
+    with pytest.raises(PresetError, match="hand.toml"):
+        save_preset("Hand!", Settings(), users=tmp_path)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["hand.toml", "x.toml"], "no temporary file is left"
+
+
+def test_a_long_name_gets_a_clear_message(tmp_path: Path) -> None:
+    with pytest.raises(PresetError, match=f"at most {MAX_NAME} characters; this one has 300"):
+        save_preset("a" * 300, Settings(), users=tmp_path)
+    assert save_preset("b" * MAX_NAME, Settings(), users=tmp_path).name == "b" * MAX_NAME + ".toml"
