@@ -33,6 +33,7 @@ from .reports import search_markdown, sequence_markdown, worst_markdown
 
 NO_RUN = "(run the sequence first)"
 NO_SEARCH = "(search first)"
+WAITING = "*waiting for another tab's job…*"
 
 
 class ExplorePanel:
@@ -40,7 +41,8 @@ class ExplorePanel:
 
     def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, tab: TabActions) -> None:
         self.gui, self.tab = gui, tab
-        self.runner = Runner(self._progress, self._failed, self._finished, name=f"explore-{tab.client.client_id}")
+        self.runner = Runner(self._progress, self._failed, self._finished, name=f"explore-{tab.client.client_id}",
+                             waiting=self._waiting)
         self.run: SequenceRun | None = None
         self.findings: dict[int, list[Finding]] = {}
         self.searched: SearchResult | None = None
@@ -50,6 +52,7 @@ class ExplorePanel:
         self.inspector_view = SceneView(tab.client)
         with tabs.add_tab("Explore"):
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
+            self.queued = gui.add_markdown(WAITING, visible=False)
             self.cancel = gui.add_button("cancel", color="red", visible=False)
             with gui.add_folder("Sequence run"):
                 self.run_button = gui.add_button("run all frames", hint="the current settings on every frame")
@@ -259,11 +262,14 @@ class ExplorePanel:
         self.run_button.disabled = self.search_button.disabled = True
         return True
 
+    def _waiting(self, queued: bool) -> None:
+        self.queued.visible = queued
+
     def _progress(self, fraction: float) -> None:
         self.progress.value = round(100.0 * fraction, 1)
 
     def _finished(self) -> None:
-        self.progress.visible, self.cancel.visible = False, False
+        self.progress.visible, self.cancel.visible, self.queued.visible = False, False, False
         self.run_button.disabled = self.search_button.disabled = False
 
     def _failed(self, title: str, error: BaseException) -> None:
