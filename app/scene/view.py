@@ -47,8 +47,8 @@ def _place(handle: viser.SceneNodeHandle, pose: np.ndarray) -> None:
 class SceneView:
     """The nodes of one client's scene, created once and updated in place."""
 
-    def __init__(self, client: viser.ClientHandle) -> None:
-        self.client = client
+    def __init__(self, client: viser.ClientHandle, root: str = "/scene", labels_root: str = "/labels") -> None:
+        self.client, self.root, self.labels_root = client, root, labels_root
         self.meshes: dict[str, viser.MeshHandle] = {}
         self.lines: dict[str, viser.LineSegmentsHandle] = {}
         self.labels: dict[str, viser.LabelHandle] = {}
@@ -76,29 +76,74 @@ class SceneView:
     def show(self, drawing: Drawing) -> None:
         """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""
         with self.client.atomic():
-            for name, mesh in drawing.meshes.items():
-                if self._changed(name, fingerprint((mesh.vertices, mesh.faces), mesh.color, mesh.opacity)):
-                    self._mesh(name, mesh)
-            for name, lines in drawing.lines.items():
-                if self._changed(name, fingerprint((lines.segments,), lines.color, lines.thickness)):
-                    self._lines(name, lines)
-                if lines.pose is not None:
-                    _place(self.lines[name], lines.pose)
+            self._show_meshes(drawing.meshes)
+            self._show_lines(drawing.lines)
             for name, cloud in drawing.points.items():
                 if self._changed(name, fingerprint((cloud.points,), cloud.color)):
                     self._cloud(name, cloud)
             self.label_px = drawing.label_px
-            for name in set(self.labels) - set(drawing.labels):
-                self.labels[name].visible = False
-            for name, (text, position) in drawing.labels.items():
-                self.label(name, text, position)
+            self._show_labels(drawing.labels)
+
+    def show_only(self, meshes: dict[str, Mesh], lines: dict[str, Lines],
+                  labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
+        """Show these nodes and hide the view's others (a view whose set of nodes changes, such as
+        the walkthrough's steps)."""
+        with self.client.atomic():
+            for name in set(self.meshes) - set(meshes):
+                self._hide(self.meshes, name)
+            for name in set(self.lines) - set(lines):
+                self._hide(self.lines, name)
+            self._show_meshes(meshes)
+            self._show_lines(lines)
+            self._show_labels(labels)
+
+    def hide_all(self) -> None:
+        """Hide every node of the view (shown again by the next ``show`` or ``show_only``)."""
+        with self.client.atomic():
+            for handles in (self.meshes, self.lines, self.clouds, self.labels):
+                for name in list(handles):
+                    self._hide(handles, name)
+
+    def place(self, name: str, pose: np.ndarray) -> None:
+        """Stand mesh ``name`` (when drawn) at the SE(2) ``pose``: one pose update."""
+        if name in self.meshes:
+            _place(self.meshes[name], pose)
+
+    @property
+    def visible_names(self) -> set[str]:
+        """Names of the view's nodes now shown."""
+        handles = (*self.meshes.values(), *self.lines.values(), *self.clouds.values(), *self.labels.values())
+        return {h.name for h in handles if h.visible}
+
+    def _show_meshes(self, meshes: dict[str, Mesh]) -> None:
+        for name, mesh in meshes.items():
+            if self._changed(name, fingerprint((mesh.vertices, mesh.faces), mesh.color, mesh.opacity)):
+                self._mesh(name, mesh)
+
+    def _show_lines(self, lines: dict[str, Lines]) -> None:
+        for name, line_set in lines.items():
+            if self._changed(name, fingerprint((line_set.segments,), line_set.color, line_set.thickness)):
+                self._lines(name, line_set)
+            if line_set.pose is not None:
+                _place(self.lines[name], line_set.pose)
+
+    def _show_labels(self, labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
+        for name in set(self.labels) - set(labels):
+            self.labels[name].visible = False
+        for name, (text, position) in labels.items():
+            self.label(name, text, position)
+
+    def _hide(self, handles: dict, name: str) -> None:
+        """Hide node ``name``; forget what it showed, so that showing it again redraws it."""
+        handles[name].visible = False
+        self.shown.pop(name, None)
 
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name``, its text ``label_px`` high (more for ``LARGER`` ones)."""
         scale = self.label_px * LARGER.get(name, 1.0) / VISER_LABEL_PX
         handle = self.labels.get(name)
         if handle is None:
-            self.labels[name] = self.client.scene.add_label(f"/labels/{name}", text, position=position,
+            self.labels[name] = self.client.scene.add_label(f"{self.labels_root}/{name}", text, position=position,
                                                             font_screen_scale=scale)
         else:
             handle.text, handle.position, handle.visible, handle.font_screen_scale = text, position, True, scale
@@ -121,7 +166,7 @@ class SceneView:
         handle = self.meshes.get(name)
         if handle is None:
             self.meshes[name] = self.client.scene.add_mesh_simple(
-                f"/scene/{name}", vertices, faces, color=mesh.color, opacity=mesh.opacity, flat_shading=True,
+                f"{self.root}/{name}", vertices, faces, color=mesh.color, opacity=mesh.opacity, flat_shading=True,
                 side="double", cast_shadow=False, receive_shadow=False, visible=not empty)
             return
         handle.vertices, handle.faces = vertices, faces
@@ -133,7 +178,7 @@ class SceneView:
         handle = self.clouds.get(name)
         if handle is None:
             self.clouds[name] = self.client.scene.add_point_cloud(
-                f"/scene/{name}", points, cloud.color, point_size=POINT_SIZE, precision="float32",
+                f"{self.root}/{name}", points, cloud.color, point_size=POINT_SIZE, precision="float32",
                 visible=not empty)
             return
         handle.points, handle.colors, handle.visible = points, np.array(cloud.color, np.uint8), not empty
@@ -145,7 +190,7 @@ class SceneView:
         handle = self.lines.get(name)
         if handle is None:
             self.lines[name] = self.client.scene.add_line_segments(
-                f"/scene/{name}", points, colors, thickness=lines.thickness, thickness_units="screen",
+                f"{self.root}/{name}", points, colors, thickness=lines.thickness, thickness_units="screen",
                 visible=not empty)
             return
         handle.points, handle.colors, handle.visible, handle.thickness = points, colors, not empty, lines.thickness
