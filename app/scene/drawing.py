@@ -13,7 +13,7 @@ from cbm import se2
 from cbm.fusion import fused_against_truth
 from loaders import Frame
 
-from ..session.explorer import Outcome
+from ..session.explorer import Outcome, classified_pairs
 from . import captions, cavs, colours, geometry
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .points import PointCloud, clouds
@@ -88,15 +88,6 @@ def placements(outcome: Outcome) -> dict[str, np.ndarray]:
     return {"before": outcome.result.init, "after": outcome.result.transform, "truth": outcome.trial.T_true}
 
 
-def shown_pairs(outcome: Outcome) -> np.ndarray:
-    """The pairs the match lines show: CBM's own (before the re-association) when the view asks
-    for them and the method has them, else the method's final pairs."""
-    result = outcome.result
-    if outcome.settings.view.line_pairs == "own" and result.context_pairs is not None:
-        return result.context_pairs
-    return result.pairs
-
-
 def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | None = None) -> Drawing:
     """The scene of ``outcome`` under its view options (``frame``: the dataset frame, for its LiDAR points)."""
     layout = LAYOUTS[outcome.settings.view.layout]
@@ -144,7 +135,7 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
         seen = np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))
         parts.ghosts.append(_shifted(outcome.world_boxes[seen], offset))
     if view.lines:
-        right, wrong, missed = _match_lines(trial, shown_pairs(outcome), trial.ego_boxes[:, :2] + offset, cav[:, :2],
+        right, wrong, missed = _match_lines(trial, outcome.shown_pairs, trial.ego_boxes[:, :2] + offset, cav[:, :2],
                                             colours.palette(view))
         parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
@@ -216,11 +207,7 @@ def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarra
                  palette: colours.Palette) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Segments of right pairs, wrong pairs, and true pairs the method missed, each solid or
     dashed as the palette's stroke says."""
-    truth = {tuple(p) for p in trial.gt_pairs.tolist()}
-    found = {tuple(p) for p in pairs.tolist()}
-    right = np.array([p for p in found if p in truth], dtype=int).reshape(-1, 2)
-    wrong = np.array([p for p in found if p not in truth], dtype=int).reshape(-1, 2)
-    missed = np.array([p for p in truth if p not in found], dtype=int).reshape(-1, 2)
+    right, wrong, missed = classified_pairs(pairs, trial.gt_pairs)
     drawn = [(ego_xy[p[:, 0]], cav_xy[p[:, 1]], stroke.dash)
              for p, stroke in ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
     return tuple(geometry.segments(a, b, LINE_HEIGHT) if dash is None else geometry.dashed(a, b, LINE_HEIGHT, dash)

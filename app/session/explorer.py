@@ -74,6 +74,25 @@ class Outcome:
     others: tuple[CavOutcome, ...] = ()
     """The CAVs beyond the first (``Settings.cavs`` > 1), each in its own colour."""
 
+    @property
+    def shown_pairs(self) -> np.ndarray:
+        """The pairs the match lines show: CBM's own (before the re-association) when the view asks
+        for them and the method has them, else the method's final pairs."""
+        if self.settings.view.line_pairs == "own" and self.result.context_pairs is not None:
+            return self.result.context_pairs
+        return self.result.pairs
+
+
+def classified_pairs(pairs: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Pairs found and true: (right, wrong, missed), each (K, 2) int sorted."""
+    true = {tuple(p) for p in np.asarray(truth, int).reshape(-1, 2).tolist()}
+    found = {tuple(p) for p in np.asarray(pairs, int).reshape(-1, 2).tolist()}
+
+    def array(chosen: set) -> np.ndarray:
+        return np.array(sorted(chosen), dtype=int).reshape(-1, 2)
+
+    return array(found & true), array(found - true), array(true - found)
+
 
 class Explorer:
     """One loaded dataset, shared read-only by every tab."""

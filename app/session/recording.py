@@ -19,7 +19,7 @@ import numpy as np
 from cbm import se2
 from cbm.metrics import is_success
 
-from .explorer import Outcome
+from .explorer import Outcome, classified_pairs
 from .history import settings_key
 from .settings import Settings
 
@@ -54,25 +54,6 @@ def top_down(boxes: np.ndarray) -> np.ndarray:
     return np.asarray(boxes, dtype=float).reshape(-1, 7)[:, [0, 1, 3, 4, 6]]
 
 
-def classified_pairs(pairs: np.ndarray, truth: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Pairs found and true: (right, wrong, missed), each (K, 2) int sorted."""
-    true = {tuple(p) for p in np.asarray(truth, int).reshape(-1, 2).tolist()}
-    found = {tuple(p) for p in np.asarray(pairs, int).reshape(-1, 2).tolist()}
-
-    def array(chosen: set) -> np.ndarray:
-        return np.array(sorted(chosen), dtype=int).reshape(-1, 2)
-
-    return array(found & true), array(found - true), array(true - found)
-
-
-def shown_pairs(outcome: Outcome) -> np.ndarray:
-    """The pairs the app's match lines show: CBM's own when the view asks for them, else the final."""
-    result = outcome.result
-    if outcome.settings.view.line_pairs == "own" and result.context_pairs is not None:
-        return result.context_pairs
-    return result.pairs
-
-
 def _pose(transform: np.ndarray) -> tuple[float, float, float]:
     x, y = se2.translation_of(transform)
     return float(x), float(y), float(se2.yaw_of(transform))
@@ -105,7 +86,7 @@ def record_of(outcome: Outcome) -> FrameRecord:
     """The record of one outcome."""
     trial, result = outcome.trial, outcome.result
     after = result.transform if result.estimated else trial.init
-    right, wrong, missed = classified_pairs(shown_pairs(outcome), trial.gt_pairs)
+    right, wrong, missed = classified_pairs(outcome.shown_pairs, trial.gt_pairs)
     return FrameRecord(
         frame=outcome.frame_index, agents=f"ego {str(outcome.ego_id)[:8]} · CAV {str(outcome.cav_id)[:8]}",
         ego=top_down(trial.ego_boxes), cav_before=top_down(se2.apply_boxes(trial.init, trial.cav_boxes)),

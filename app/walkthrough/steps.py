@@ -15,7 +15,7 @@ from ..scene.colours import CAV_BOXES, EGO_BOXES, GHOST, MISSED, RIGHT, WRONG
 from ..scene.drawing import Lines, Mesh
 from ..scene.inspector import BAND, REGION
 from ..scene.text import number
-from ..session.explorer import Outcome
+from ..session.explorer import Outcome, classified_pairs
 from . import shapes
 from .facts import Facts, gather, pose_error
 
@@ -282,9 +282,7 @@ def outcome_step(facts: Facts) -> Step:
     """Step 9: the CAV's boxes at the final pose, the truth outlined, the pairs and the metrics."""
     trial, result, m = facts.trial, facts.result, facts.metrics
     moved = se2.apply_boxes(result.transform, trial.cav_boxes)
-    truth = facts.truth()
-    right = np.array([p for p in result.pairs.tolist() if tuple(p) in truth], dtype=int).reshape(-1, 2)
-    wrong = np.array([p for p in result.pairs.tolist() if tuple(p) not in truth], dtype=int).reshape(-1, 2)
+    right, wrong, _ = classified_pairs(result.pairs, trial.gt_pairs)
     before = pose_error(result.init, trial.T_true)
     text = (f"{m.n_matched} pairs matched, {m.n_correct} right, of {m.n_true} co-visible objects: precision "
             f"{number(m.precision)}, recall {number(m.recall)}. The pose is off by {number(m.rte, ' m')} and "

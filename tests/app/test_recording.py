@@ -10,8 +10,8 @@ import pytest
 
 from app.scene import colours
 from app.scene.recording_html import DATA_ID, recording_html
-from app.session.explorer import Explorer, Outcome
-from app.session.recording import Recording, classified_pairs, record_of, top_down
+from app.session.explorer import Explorer, Outcome, classified_pairs
+from app.session.recording import Recording, record_of, top_down
 from app.session.settings import Settings, ViewOptions
 from cbm import se2
 
