@@ -87,22 +87,29 @@ def agent_pose(frame: Frame, agent_id: str) -> np.ndarray:
 
 def frame_trial_inputs(frame: Frame, ego_id: str, cav_id: str) -> dict[str, Any]:
     """The keyword arguments of ``cbm.scenario.make_trial`` for this frame and agent pair (all but
-    ``params`` and ``rng``): ``boxes, ids, ego_pose, cav_pose, cav_id, ego_id, visibility``.
+    ``params`` and ``rng``): ``boxes, ids, ego_pose, cav_pose, cav_id, ego_id, visibility``; objects
+    of the sequence's ``left_out_of_trials`` categories are not among them.
 
     ``visibility`` is ``{"ego": ids, "cav": ids}`` when the dataset says what both agents see,
     else None (then only the sind and range protocols apply).
     """
     seen = frame.visibility
     both_seen = seen is not None and ego_id in seen and cav_id in seen
+    kept = in_trials(frame)
     return {
-        "boxes": frame.boxes(),
-        "ids": frame.track_ids,
+        "boxes": frame.boxes()[kept],
+        "ids": frame.track_ids[kept],
         "ego_pose": agent_pose(frame, ego_id),
         "cav_pose": agent_pose(frame, cav_id),
         "cav_id": cav_id,
         "ego_id": ego_id,
         "visibility": {"ego": seen[ego_id], "cav": seen[cav_id]} if both_seen else None,
     }
+
+
+def in_trials(frame: Frame) -> np.ndarray:
+    """Which of the frame's objects take part in trials (not of a ``left_out_of_trials`` category)."""
+    return ~np.isin(frame.categories, list(frame.sequence.left_out_of_trials))
 
 
 def agent_ids(frame: Frame) -> np.ndarray:

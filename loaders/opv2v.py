@@ -17,9 +17,12 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   names as ids (``"641"``, ``"-1"``); ``Sequence.ego`` names the ego.
 - Agent pose: the CAV's ``lidar_pose`` (the frame its detections are in). Sizes are not in the
   files: CAVs get a typical car size (4.9 x 2.0 x 1.6 m), roadside units a 0.6 x 0.6 x 5 m pole.
-- ``predicted_ego_pos`` (when a file has it): the CAV's own noisy localization, converted like
-  ``lidar_pose`` and kept as ``Sequence.predicted_poses`` (``Frame.predicted_pose``); the
-  ``dataset`` localization option of ``cbm.scenario`` uses it as the CAV's initial pose.
+- Reported pose: ``lidar_pose`` is the sensor's true pose, ``true_ego_pos`` the vehicle body's
+  true pose and ``predicted_ego_pos`` the body's noisy (GNSS) pose, all converted alike. The LiDAR
+  pose the CAV reports is the sensor moved by the body's error, ``predicted_ego_pos ∘
+  true_ego_pos⁻¹ ∘ lidar_pose`` (SE(2)), kept as ``Sequence.predicted_poses``
+  (``Frame.predicted_pose``) when a file has both body poses; the ``dataset`` localization option
+  of ``cbm.scenario`` uses it as the CAV's initial pose.
 - OPV2V / V2XSet (CARLA): poses and boxes are in CARLA's left-handed world; converted on read to
   ``x, -y, -yaw``; angles in degrees -> radians; ``extent`` half sizes -> full sizes; box centre =
   ``location + center`` (added in world axes). Each CAV's file lists the vehicles its LiDAR saw:
@@ -41,6 +44,9 @@ import numpy as np
 import polars as pl
 from tqdm import tqdm
 
+from cbm import se2
+
+from .categories import normalised
 from .errors import LoaderError
 from .scene import Sequence
 from .structured import field, number, numbers, read_yaml
@@ -48,7 +54,13 @@ from .structured import field, number, numbers, read_yaml
 FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
 RSU_SIZE = (0.6, 0.6, 5.0)
-SKIPPED = ("additional", "camera_gt")
+SKIPPED = ("additional", "camera_gt", "gnss_imu")
+"""Name parts of yaml files beside the annotations that are not annotations (Adver-City's
+``<frame>_gnss_imu.yaml``, OPV2V's additional and camera ground-truth files)."""
+BLOCK_CATEGORY = {"vehicles": "car", "walkers": "pedestrian"}
+CATEGORY_NAMES = {"walker": "pedestrian", "pedestrian": "pedestrian", "car": "car", "van": "van", "truck": "truck",
+                  "bus": "bus", "motorcycle": "motorcycle", "bicycle": "bicycle", "cyclist": "bicycle"}
+"""Actor classes of the OPV2V-family releases (normalised) -> our category names."""
 SPLITS = ("train", "validate", "test")
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
@@ -69,12 +81,12 @@ def _yaml_files(folder: Path) -> list[Path]:
 
 
 def _cav_folders(scenario: Path) -> list[Path]:
-    """CAV folders in OpenCOOD's order: string order, a leading roadside unit moved to the end."""
+    """CAV folders in OpenCOOD's order (string order, roadside units last), with every roadside unit
+    moved to the end: OpenCOOD moves only a leading one, which makes Adver-City's second RSU ``-2``
+    the ego of a scenario with two."""
     folders = sorted((p for p in scenario.iterdir() if p.is_dir() and _is_integer(p.name) and _yaml_files(p)),
                      key=lambda p: p.name)
-    if folders and int(folders[0].name) < 0:
-        folders = folders[1:] + folders[:1]
-    return folders
+    return [p for p in folders if int(p.name) >= 0] + [p for p in folders if int(p.name) < 0]
 
 
 def _scenario_folders(folder: Path) -> list[Path]:
@@ -82,14 +94,18 @@ def _scenario_folders(folder: Path) -> list[Path]:
 
 
 def _scenarios(path: Path) -> list[tuple[str, Path]]:
-    """``(name, folder)`` of every scenario under ``path`` (a scenario, a split folder or a root of
-    split folders), in load order."""
+    """``(name, folder)`` of every scenario under ``path`` (a scenario, a split folder, a root of
+    split folders, or a root of run folders as Adver-City's ``data_dumping/<run>/<scenario>``), in
+    load order."""
     if _cav_folders(path):
         return [(path.name, path)]
     splits = [path / split for split in SPLITS if (path / split).is_dir()]
-    if splits:
-        return [(f"{split.name}/{p.name}", p) for split in splits for p in _scenario_folders(split)]
-    return [(p.name, p) for p in _scenario_folders(path)]
+    if not splits:
+        direct = [(p.name, p) for p in _scenario_folders(path)]
+        splits = [] if direct else sorted(p for p in path.iterdir() if p.is_dir())
+        if direct:
+            return direct
+    return [(f"{split.name}/{p.name}", p) for split in splits for p in _scenario_folders(split)]
 
 
 def load(path: str | Path) -> Sequence:
@@ -119,21 +135,24 @@ def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict
     records = {(k, cav): read_yaml(files[cav][stamp])
                for k, stamp in enumerate(stamps) for cav in order if stamp in files[cav]}
     v2v4real = any(_has_ass_id(record) for record in records.values())
-    objects, agents, seen, predicted = [], [], [], {}
+    objects, agents, seen, predicted, left_out = [], [], [], {}, set()
     kept: dict[int, set[str]] = {}
     for (k, cav), record in records.items():
         source, frame = files[cav][stamps[k]], offset + k
         pose = _pose(source, record, v2v4real)
         agents.append(_agent_row(frame, cav, pose))
-        if isinstance(record, dict) and "predicted_ego_pos" in record:
-            predicted[(frame, cav)] = _pose(source, record, v2v4real, "predicted_ego_pos")
-        for track, row in _boxes(source, record, cav, pose, v2v4real):
+        reported = _reported_lidar_pose(source, record, pose, v2v4real)
+        if reported is not None:
+            predicted[(frame, cav)] = reported
+        for block, track, row in _boxes(source, record, cav, pose, v2v4real):
+            if block != "vehicles":
+                left_out.add(row["category"])
             seen.append({"frame": frame, "agent_id": cav, "track_id": track})
             if track not in kept.setdefault(frame, set()):
                 kept[frame].add(track)
                 objects.append({"frame": frame, "track_id": track, **row})
     return {"name": name, "stamps": stamps, "ego": order[0], "v2v4real": v2v4real, "objects": objects,
-            "agents": agents, "seen": seen, "predicted": predicted,
+            "agents": agents, "seen": seen, "predicted": predicted, "left_out": left_out,
             "points": {(offset + k, cav): (files[cav][stamps[k]].with_suffix(".pcd"), not v2v4real)
                        for k, cav in records if files[cav][stamps[k]].with_suffix(".pcd").is_file()}}
 
@@ -157,6 +176,7 @@ def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
         predicted_poses={key: pose[:2] + pose[3:] for p in parts for key, pose in p["predicted"].items()},
     )
     sequence.point_clouds = {key: source for p in parts for key, source in p["points"].items()}
+    sequence.left_out_of_trials = frozenset().union(*(p["left_out"] for p in parts))
     return sequence
 
 
@@ -182,6 +202,24 @@ def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tu
     return (x, y, z, yaw) if right_handed else (x, -y, z, -yaw)
 
 
+def _reported_lidar_pose(path: Path, record, lidar: tuple[float, float, float, float],
+                         right_handed: bool) -> tuple[float, float, float, float] | None:
+    """The LiDAR pose the CAV itself reports, ``x, y, z, yaw`` (right-handed world): the true LiDAR
+    pose moved by the body's localization error, ``predicted_ego_pos ∘ true_ego_pos⁻¹ ∘ lidar_pose``
+    (SE(2)); None when the file lacks ``predicted_ego_pos`` or ``true_ego_pos``."""
+    if not isinstance(record, dict) or not {"predicted_ego_pos", "true_ego_pos"} <= record.keys():
+        return None
+    body_error = se2.make(*_planar(_pose(path, record, right_handed, "predicted_ego_pos"))) @ se2.inverse(
+        se2.make(*_planar(_pose(path, record, right_handed, "true_ego_pos"))))
+    reported = body_error @ se2.make(*_planar(lidar))
+    x, y = se2.translation_of(reported)
+    return float(x), float(y), lidar[2], se2.yaw_of(reported)
+
+
+def _planar(pose: tuple[float, float, float, float]) -> tuple[float, float, float]:
+    return pose[0], pose[1], pose[3]
+
+
 def _agent_row(frame: int, cav: str, pose: tuple[float, float, float, float]) -> dict:
     length, width, height = RSU_SIZE if int(cav) < 0 else CAV_SIZE
     x, y, z, yaw = pose
@@ -190,33 +228,53 @@ def _agent_row(frame: int, cav: str, pose: tuple[float, float, float, float]) ->
 
 
 def _boxes(path: Path, record, cav: str, pose, v2v4real: bool):
-    """``(track_id, box row)`` for every vehicle in one CAV's file, in the right-handed world."""
+    """``(block, track_id, box row)`` for every actor in one CAV's file (``vehicles`` and any other actor
+    block such as Adver-City's ``walkers``), in the right-handed world."""
     vehicles = field(path, record, "vehicles")
-    if vehicles is None:
-        return
-    if not isinstance(vehicles, dict):
+    if vehicles is not None and not isinstance(vehicles, dict):
         raise LoaderError(f"{path}: vehicles: expected a mapping of vehicle id -> annotation")
-    for vehicle_id, entry in vehicles.items():
-        where = f"vehicles[{vehicle_id}]"
-        location = numbers(path, field(path, entry, "location", where), f"{where}.location", 3)
-        center = numbers(path, field(path, entry, "center", where), f"{where}.center", 3)
-        extent = numbers(path, field(path, entry, "extent", where), f"{where}.extent", 3)
-        yaw = math.radians(numbers(path, field(path, entry, "angle", where), f"{where}.angle", 2)[1])
-        if min(extent) <= 0:
-            raise LoaderError(f"{path}: {where}.extent: expected positive half sizes, got {extent}")
-        x, y, z = (a + b for a, b in zip(location, center))
-        if v2v4real:
-            x, y, yaw = _to_world(pose, x, y, yaw)
-            z += pose[2]
-            ass_id = int(number(path, field(path, entry, "ass_id", where), f"{where}.ass_id"))
-            track = f"a{ass_id}" if ass_id != -1 else f"{cav}/{vehicle_id}"
-            category = str(entry.get("obj_type", "car"))
-        else:
-            y, yaw = -y, -yaw
-            track, category = str(vehicle_id), "car"
-        yield track, {"category": category, "x": x, "y": y, "z": z,
-                      "length": 2 * extent[0], "width": 2 * extent[1], "height": 2 * extent[2],
-                      "yaw": math.atan2(math.sin(yaw), math.cos(yaw))}
+    for block in _actor_blocks(record):
+        for actor_id, entry in (record[block] or {}).items():
+            yield (block, *_box(path, block, actor_id, entry, cav, pose, v2v4real))
+
+
+def _actor_blocks(record: dict) -> list[str]:
+    """``vehicles`` first, then every other top-level mapping of id -> ``{location, extent, ...}``."""
+    others = [key for key, value in record.items() if key != "vehicles" and isinstance(value, dict) and value
+              and all(isinstance(entry, dict) and {"location", "extent"} <= entry.keys() for entry in value.values())]
+    return ["vehicles", *sorted(others, key=str)]
+
+
+def _box(path: Path, block: str, actor_id, entry, cav: str, pose, v2v4real: bool) -> tuple[str, dict]:
+    where = f"{block}[{actor_id}]"
+    location = numbers(path, field(path, entry, "location", where), f"{where}.location", 3)
+    center = (numbers(path, field(path, entry, "center", where), f"{where}.center", 3)
+              if block == "vehicles" or "center" in entry else [0.0, 0.0, 0.0])
+    extent = numbers(path, field(path, entry, "extent", where), f"{where}.extent", 3)
+    yaw = math.radians(numbers(path, field(path, entry, "angle", where), f"{where}.angle", 2)[1])
+    if min(extent) <= 0:
+        raise LoaderError(f"{path}: {where}.extent: expected positive half sizes, got {extent}")
+    x, y, z = (a + b for a, b in zip(location, center))
+    if v2v4real:
+        x, y, yaw = _to_world(pose, x, y, yaw)
+        z += pose[2]
+        ass_id = int(number(path, field(path, entry, "ass_id", where), f"{where}.ass_id"))
+        track = f"a{ass_id}" if ass_id != -1 else f"{cav}/{actor_id}"
+    else:
+        y, yaw = -y, -yaw
+        track = str(actor_id)
+    return track, {"category": category(entry, block), "x": x, "y": y, "z": z,
+                   "length": 2 * extent[0], "width": 2 * extent[1], "height": 2 * extent[2],
+                   "yaw": math.atan2(math.sin(yaw), math.cos(yaw))}
+
+
+def category(entry: dict, block: str) -> str:
+    """An actor's category: its ``class`` (Adver-City) or ``obj_type`` (V2V4Real), else its block's
+    (``vehicles``: car, ``walkers``: pedestrian), mapped by :data:`CATEGORY_NAMES`; unknown names kept."""
+    name = entry.get("class", entry.get("obj_type"))
+    if not isinstance(name, str) or not name.strip():
+        return BLOCK_CATEGORY.get(block, block)
+    return CATEGORY_NAMES.get(normalised(name), name.strip())
 
 
 def _to_world(pose, x: float, y: float, yaw: float) -> tuple[float, float, float]:

@@ -142,6 +142,10 @@ class Sequence:
         self.point_clouds: dict[tuple[int, str], tuple[Path, bool]] = {}
         """``(frame index, agent id) -> (PCD file, left-handed)`` for the datasets that ship LiDAR
         points (read on demand by ``Frame.points``; left-handed files have y mirrored on read)."""
+        self.left_out_of_trials: frozenset[str] = frozenset()
+        """Categories of ``objects`` that trials leave out unless the user includes them (set it to an
+        empty set): the OPV2V family's pedestrians (``walkers``), which the release's vehicle-only
+        benchmarks never match."""
         self.detections: dict[int, dict] = {}
         """``frame index -> agent id -> loaders.detections.DetectedBoxes``: a real detector's boxes,
         when a detections file is attached (``loaders.open(path, detections=...)``)."""

@@ -39,6 +39,7 @@ from .agents import (
     choose_cav,
     choose_ego,
     frame_trial_inputs,
+    in_trials,
     steady_cav,
 )
 from .scene import Frame, Sequence
@@ -168,8 +169,8 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     detected = _detections(frame, ego, chosen)
     if detected:
         note += f"; real detections of {' and '.join(detected)}"
-    return FrameInputs(frame.index, inputs, labels=frame.categories, note=note, detections=detected or None,
-                       stream=stream)
+    return FrameInputs(frame.index, inputs, labels=frame.categories[in_trials(frame)], note=note,
+                       detections=detected or None, stream=stream)
 
 
 def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:

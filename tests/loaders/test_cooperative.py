@@ -53,7 +53,7 @@ def test_v2v4real_per_cav_frames_and_ass_id(fixtures):
     np.testing.assert_allclose(_box(frame, "a7"), [100.0, 60.0, 2.8, 4.0, 2.0, 1.6, math.pi / 2], atol=1e-9)
     np.testing.assert_allclose(_box(frame, "0/4")[:2], [95.0, 55.0], atol=1e-9)
     np.testing.assert_allclose(_box(frame, "1/2")[:2], [100.0, 67.0], atol=1e-9)
-    assert frame.categories[list(frame.track_ids).index("0/4")] == "Truck"
+    assert frame.categories[list(frame.track_ids).index("0/4")] == "truck"  # V2V4Real obj_type Truck, in our names
     assert {k: sorted(v) for k, v in frame.visibility.items()} == {"0": ["0/4", "a7"], "1": ["1/2", "a7"]}
 
 
