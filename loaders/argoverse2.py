@@ -23,7 +23,7 @@ import numpy as np
 import polars as pl
 from scipy.spatial.transform import Rotation
 
-from .errors import READ_ERRORS, LoaderError
+from .errors import READ_ERRORS, LoaderError, nonempty_file
 from .scene import MapGeometry, Sequence
 from .tables import drop_unusable, read_arrow, require_rows
 
@@ -159,7 +159,7 @@ def _read_map(log: Path) -> MapGeometry | None:
     files = sorted((log / "map").glob("log_map_archive_*.json"))
     if not files:
         return None
-    path = files[0]
+    path = nonempty_file(files[0])
     try:
         data = json.loads(path.read_bytes())
     except READ_ERRORS as exc:

@@ -49,7 +49,7 @@ import polars as pl
 from scipy.optimize import linear_sum_assignment
 from tqdm import tqdm
 
-from .errors import LoaderError
+from .errors import LfsPointer, LoaderError
 from .scene import Sequence
 from .structured import field, matrix, number, read_json
 
@@ -58,6 +58,7 @@ FRAME_RATE = 10.0
 VEHICLE_SIZE = (4.9, 2.0, 1.6)
 INFRASTRUCTURE_SIZE = (0.6, 0.6, 5.0)
 DATA_INFO = Path("cooperative") / "data_info.json"
+I2V = Path("cooperative") / "calib" / "lidar_i2v"
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
 
@@ -84,21 +85,23 @@ def load(path: str | Path) -> Sequence:
     pairs = read_json(info_file)
     if not isinstance(pairs, list) or not pairs:
         raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
-    objects, agents, seen, frame_ids, missing, clouds = [], [], [], [], [], {}
+    objects, agents, seen, frame_ids, missing, clouds, relative = [], [], [], [], [], {}, []
     for k, pair in enumerate(tqdm(pairs, desc="DAIR-V2X pairs", unit="pair", delay=PROGRESS_DELAY, leave=False)):
         try:
             rows = _pair_rows(root, info_file, pair, k, len(frame_ids))
-        except MissingFile as exc:
-            missing.append(exc.path)
+        except (MissingFile, LfsPointer) as exc:
+            missing.append(exc)
             continue
-        for table, new in zip((objects, seen, agents), rows[1:]):
+        for table, new in zip((objects, seen, agents), rows[1:4]):
             table.extend(new)
+        if rows[4]:
+            relative.append(rows[0])
         clouds.update(_point_files(root, pair, len(frame_ids)))
         frame_ids.append(rows[0])
     if not frame_ids:
         raise LoaderError(f"{info_file}: no pair could be loaded; {len(missing)} lack a label or calibration "
-                          f"file, first: {missing[0]}: missing")
-    notes = _skipped_notes(info_file, missing, len(pairs))
+                          f"file, first: {missing[0]}")
+    notes = _skipped_notes(info_file, missing, len(pairs)) + _relative_notes(root, relative, len(frame_ids))
     sequence = Sequence(
         name=f"dair-v2x/{root.name}",
         objects=_frame_table(objects, ["track_id", "category"], ["x", "y", "z", "length", "width", "height", "yaw"]),
@@ -113,14 +116,13 @@ def load(path: str | Path) -> Sequence:
     return sequence
 
 
-def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list]:
-    """(vehicle frame id, object rows, visibility rows, agent rows) of data_info entry ``k``."""
+def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list, bool]:
+    """(vehicle frame id, object rows, visibility rows, agent rows, whether the poses come from
+    ``cooperative/calib/lidar_i2v``) of data_info entry ``k``."""
     where = f"[{k}]"
     vehicle_id = _frame_id(info_file, pair, "vehicle", where)
     infra_id = _frame_id(info_file, pair, "infrastructure", where)
-    offset = (pair.get("system_error_offset") if isinstance(pair, dict) else None) or {"delta_x": 0.0, "delta_y": 0.0}
-    vehicle_pose = _vehicle_to_world(root, vehicle_id)
-    infra_pose = _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset")
+    vehicle_pose, infra_pose, relative = _poses(root, info_file, pair, where, vehicle_id, infra_id)
     vehicle_boxes = _labels(root / "vehicle-side" / "label" / "lidar" / f"{vehicle_id}.json", vehicle_pose)
     infra_boxes = _labels(root / "infrastructure-side" / "label" / "virtuallidar" / f"{infra_id}.json", infra_pose)
     infra_tracks = _associate(vehicle_boxes, infra_boxes)
@@ -131,7 +133,41 @@ def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[s
     seen += [{"frame": frame, "agent_id": "infrastructure", "track_id": track} for track in infra_tracks]
     agents = [_agent(frame, "vehicle", vehicle_pose, VEHICLE_SIZE),
               _agent(frame, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE)]
-    return vehicle_id, objects, seen, agents
+    return vehicle_id, objects, seen, agents, relative
+
+
+def _poses(root: Path, info_file: Path, pair, where: str, vehicle_id: str,
+           infra_id: str) -> tuple[np.ndarray, np.ndarray, bool]:
+    """The vehicle's and the infrastructure's LiDAR -> world poses (4x4) and whether they are the
+    relative fallback: with the world calibration, DAIR-V2X's world frame and ``system_error_offset``
+    added to the infrastructure's translation; without it (a subset lacking ``lidar_to_novatel`` /
+    ``novatel_to_world`` / ``virtuallidar_to_world``), ``cooperative/calib/lidar_i2v/<vehicle
+    frame>.json`` with the vehicle's LiDAR frame as the world. That file already includes the
+    offset (DAIR-V2X's ``tools/dataset_converter/calib_i2v.py`` adds it before composing), so it is
+    not added again."""
+    try:
+        offset = (pair.get("system_error_offset") if isinstance(pair, dict) else None) or {"delta_x": 0.0,
+                                                                                            "delta_y": 0.0}
+        return (_vehicle_to_world(root, vehicle_id),
+                _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset"), False)
+    except MissingFile as world_missing:
+        i2v_file = root / I2V / f"{vehicle_id}.json"
+        if not i2v_file.is_file():
+            raise world_missing from None
+        calib = _read(i2v_file)
+        return np.eye(4), _rigid(i2v_file, calib.get("transform", calib) if isinstance(calib, dict) else calib), True
+
+
+def _relative_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
+    """The one warning naming the pairs whose poses come from ``lidar_i2v`` (also a ``UserWarning``)."""
+    if not vehicle_frames:
+        return []
+    shown = ", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else "")
+    note = (f"{root / I2V}: {len(vehicle_frames)} of {loaded} pair(s) have no vehicle or infrastructure world "
+            f"calibration and use lidar_i2v (infrastructure LiDAR -> vehicle LiDAR, system_error_offset "
+            f"included): their world frame is the vehicle's LiDAR frame (vehicle frames {shown})")
+    warnings.warn(note, UserWarning, stacklevel=3)
+    return [note]
 
 
 def _point_files(root: Path, pair: dict, frame: int) -> dict[tuple[int, str], tuple[Path, bool]]:
@@ -154,12 +190,13 @@ def _existing_file(root: Path, name) -> Path | None:
         return None
 
 
-def _skipped_notes(info_file: Path, missing: list[Path], total: int) -> list[str]:
+def _skipped_notes(info_file: Path, missing: list[LoaderError], total: int) -> list[str]:
     """The warning about pairs skipped for missing files (also raised as a ``UserWarning``)."""
     if not missing:
         return []
+    pointers = sum(isinstance(exc, LfsPointer) for exc in missing)
     note = (f"{info_file}: skipped {len(missing)} of {total} pair(s) with a missing label or "
-            f"calibration file (first: {missing[0]})")
+            f"calibration file{f' ({pointers} Git LFS pointer(s))' if pointers else ''} (first: {missing[0].path})")
     warnings.warn(note, UserWarning, stacklevel=3)
     return [note]
 

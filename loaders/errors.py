@@ -36,10 +36,35 @@ def existing_path(path: str | Path, what: str = "dataset path") -> Path:
     return resolved
 
 
+class LfsPointer(LoaderError):
+    """A Git LFS pointer file where the data belongs (a repository cloned without ``git lfs``)."""
+
+    def __init__(self, path: Path) -> None:
+        super().__init__(f"{path} is a Git LFS pointer, not the data: run `git lfs pull` in the dataset's repository")
+        self.path = path
+
+
+LFS_POINTER = b"version https://git-lfs.github.com/spec/v1"
+LFS_POINTER_MAX_BYTES = 1024
+"""A pointer file is a few lines of text (``version``, ``oid sha256:...``, ``size``), well under this."""
+
+
 def nonempty_file(path: Path) -> Path:
-    """``path`` after checking that it is a file with at least one byte."""
+    """``path`` after checking that it is a file with at least one byte that is not a Git LFS pointer."""
     if not path.is_file():
         raise LoaderError(f"{path}: expected a file")
-    if path.stat().st_size == 0:
+    size = path.stat().st_size
+    if size == 0:
         raise LoaderError(f"{path}: the file is empty")
+    if size <= LFS_POINTER_MAX_BYTES and is_lfs_pointer(path):
+        raise LfsPointer(path)
     return path
+
+
+def is_lfs_pointer(path: Path) -> bool:
+    """Whether ``path`` is a Git LFS pointer file (``version https://git-lfs.github.com/spec/v1`` first)."""
+    try:
+        with path.open("rb") as file:
+            return file.read(len(LFS_POINTER)) == LFS_POINTER
+    except OSError:
+        return False

@@ -19,11 +19,12 @@ of the recording (metres); frames are the files' ``frame_id`` values (9.99 Hz), 
 """
 from __future__ import annotations
 
+import warnings
 from pathlib import Path
 
 import polars as pl
 
-from .errors import LoaderError
+from .errors import LfsPointer, LoaderError, is_lfs_pointer
 from .scene import Sequence
 from .tables import csv_header, drop_unusable, read_csv, require_rows
 from .tracks import indexed_frames, pedestrian_boxes, with_heights
@@ -52,13 +53,19 @@ def load(path: str | Path) -> Sequence:
     """Load a SinD recording folder (or one of its track files)."""
     path = Path(path)
     folder = path.parent if path.is_file() else path
-    parts, dropped = [], 0
+    parts, dropped, pointers = [], 0, []
     for name, reader in ((VEHICLE_FILE, _vehicles), (PEDESTRIAN_FILE, _pedestrians)):
         if (folder / name).is_file():
-            boxes, lost = reader(folder / name)
-            parts.append(_with_meta_classes(boxes, folder / META_FILES[name]))
+            try:
+                boxes, lost = reader(folder / name)
+                parts.append(_with_meta_classes(boxes, folder / META_FILES[name], pointers))
+            except LfsPointer as exc:
+                pointers.append(exc)
+                continue
             dropped += lost
     if not parts:
+        if pointers:
+            raise pointers[0]
         raise LoaderError(f"{folder}: no SinD track file; expected {VEHICLE_FILE} or {PEDESTRIAN_FILE}")
     objects, frame_ids, timestamps = indexed_frames(parts)
     return Sequence(
@@ -67,7 +74,18 @@ def load(path: str | Path) -> Sequence:
         frame_ids=[int(f) for f in frame_ids],
         timestamps=timestamps,
         dropped_rows=dropped,
+        warnings=_skipped_pointers(pointers),
     )
+
+
+def _skipped_pointers(pointers: list[LfsPointer]) -> list[str]:
+    """One warning naming the Git LFS pointer files skipped (also raised as a ``UserWarning``)."""
+    if not pointers:
+        return []
+    note = (f"skipped {len(pointers)} Git LFS pointer file(s), not the data: "
+            f"{', '.join(str(p.path) for p in pointers)}; run `git lfs pull` in the dataset's repository")
+    warnings.warn(note, UserWarning, stacklevel=3)
+    return [note]
 
 
 def _exact_header(path: Path, expected: list[str]) -> None:
@@ -96,11 +114,17 @@ def _pedestrians(path: Path) -> tuple[pl.DataFrame, int]:
     return pedestrian_boxes(points).drop("vx", "vy"), dropped
 
 
-def _with_meta_classes(boxes: pl.DataFrame, meta: Path) -> pl.DataFrame:
-    """Replace ``agent_type`` by the meta file's class of each track, where it has one."""
+def _with_meta_classes(boxes: pl.DataFrame, meta: Path, pointers: list[LfsPointer]) -> pl.DataFrame:
+    """Replace ``agent_type`` by the meta file's class of each track, where it has one (a meta
+    file that is a Git LFS pointer is added to ``pointers`` and not used)."""
     if not meta.is_file():
         return boxes
-    classes = (read_csv(meta, {"trackId": pl.Utf8, "class": pl.Utf8})
+    try:
+        table = read_csv(meta, {"trackId": pl.Utf8, "class": pl.Utf8})
+    except LfsPointer as exc:
+        pointers.append(exc)
+        return boxes
+    classes = (table
                .drop_nulls().unique("trackId", keep="first")
                .rename({"trackId": "track_id", "class": "meta_class"}))
     return (boxes.join(classes, on="track_id", how="left", maintain_order="left")
@@ -110,7 +134,7 @@ def _with_meta_classes(boxes: pl.DataFrame, meta: Path) -> pl.DataFrame:
 
 def _name(folder: Path) -> str:
     meta = folder / "recording_metas.csv"
-    if meta.is_file():
+    if meta.is_file() and not is_lfs_pointer(meta):
         info = read_csv(meta, {"RecordingID": pl.Utf8, "City": pl.Utf8})
         if info.height:
             return f"sind/{info['City'][0]} recording {info['RecordingID'][0]}"
