@@ -16,7 +16,7 @@ from loaders import Frame
 from ..session.explorer import Outcome, classified_pairs
 from . import captions, cavs, colours, geometry
 from .layouts import LAYOUTS, TITLE_AT, Panel
-from .points import PointCloud, clouds
+from .points import PointCloud, clouds, problems_markdown
 from .text import metrics_markdown
 
 LINE_HEIGHT = 1.7
@@ -108,13 +108,12 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
         labels["numbers"] = (captions.key_numbers(outcome), captions.numbers_position(agents))
     meshes = {**_meshes(parts, ego, cav, palette),
               **{name: Mesh(*mesh) for name, mesh in cavs.other_cav_boxes(outcome, panels).items()}}
+    points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
+                    (parts.ego_poses, parts.cav_poses), view.points_every, (palette.ego_boxes, palette.cav_boxes))
     return Drawing(meshes=meshes, lines=lines, labels=labels,
-                   metrics_markdown=metrics_markdown(outcome), objects=objects,
+                   metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
-                   agents=agents, label_px=captions.label_px(view),
-                   points=clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
-                                 (parts.ego_poses, parts.cav_poses), view.points_every,
-                                 (palette.ego_boxes, palette.cav_boxes)))
+                   agents=agents, label_px=captions.label_px(view), points=points)
 
 
 def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:
