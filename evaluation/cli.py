@@ -42,12 +42,14 @@ from typing import Any, NoReturn
 
 from tqdm import tqdm
 
+import loaders
 from cbm.executors import ExecutorError, TaskError
 from cbm.fusion import FUSIONS
 from cbm.methods import METHODS
 from cbm.sweep import grid_defaults
 from loaders.agents import TARGET_DISTANCE
 
+from . import calibration_check
 from .compare import CompareError, compare
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
@@ -97,6 +99,10 @@ def build_parser() -> Parser:
                              "AP@0.7 in the summary and metrics.json")
     parser.add_argument("--no-timing", action="store_true",
                         help="leave the runtime out of the table and summary (then they are byte-identical run to run)")
+    parser.add_argument("--check-calibration", nargs="?", const="1,1", default=None, metavar="M,DEG",
+                        help="check each --dataset's own transform against its own labels instead of evaluating: "
+                             "writes calibration_check.csv / .png and the frames off by more than M metres or DEG "
+                             "degrees (default 1,1) to --out (evaluation.calibration_check)")
     parser.add_argument("--latex", action="store_true",
                         help="also write the summary as a LaTeX table (summary.tex, booktabs)")
     parser.epilog = "Compare two runs: %(prog)s compare RUN_A RUN_B [--out FOLDER] (see %(prog)s compare --help)."
@@ -229,6 +235,8 @@ def main(argv: Sequence[str] | None = None) -> int:
     if argv[:1] == ["compare"]:
         return main_compare(argv[1:], parser.prog)
     args = parser.parse_args(argv)
+    if args.check_calibration is not None:
+        return check_calibration(parser, args)
     with StopSignals() as signals:
         try:
             return evaluate(parser, args, signals)
@@ -238,6 +246,23 @@ def main(argv: Sequence[str] | None = None) -> int:
     if command:
         exit_now(code)
     return code
+
+
+def check_calibration(parser: Parser, args: argparse.Namespace) -> int:
+    """``--check-calibration``: the dataset-calibration check of every ``--dataset`` (2 on bad input)."""
+    try:
+        thresholds = calibration_check.parse_thresholds(args.check_calibration)
+        calibration_check.check_out_folder(args.out)
+        rows = []
+        for name in args.dataset:
+            sequence = loaders.open(name)
+            rows += calibration_check.check_sequence(sequence, parse_frames(args.frames, len(sequence)), thresholds)
+    except ValueError as error:
+        parser.error(str(error))
+    print(calibration_check.write_check(rows, thresholds, args.out), end="")
+    print(f"wrote calibration_check.csv, calibration_check.png and calibration_flagged.md to {args.out}",
+          file=sys.stderr)
+    return 0
 
 
 def exit_now(code: int) -> NoReturn:

@@ -85,7 +85,7 @@ def load(path: str | Path) -> Sequence:
     pairs = read_json(info_file)
     if not isinstance(pairs, list) or not pairs:
         raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
-    objects, agents, seen, frame_ids, missing, clouds, relative = [], [], [], [], [], {}, []
+    objects, agents, seen, frame_ids, missing, clouds, relative, views = [], [], [], [], [], {}, [], {}
     for k, pair in enumerate(tqdm(pairs, desc="DAIR-V2X pairs", unit="pair", delay=PROGRESS_DELAY, leave=False)):
         try:
             rows = _pair_rows(root, info_file, pair, k, len(frame_ids))
@@ -96,6 +96,7 @@ def load(path: str | Path) -> Sequence:
             table.extend(new)
         if rows[4]:
             relative.append(rows[0])
+        views.update(rows[5])
         clouds.update(_point_files(root, pair, len(frame_ids)))
         frame_ids.append(rows[0])
     if not frame_ids:
@@ -113,12 +114,13 @@ def load(path: str | Path) -> Sequence:
         warnings=notes,
     )
     sequence.point_clouds = clouds
+    sequence.agent_views = views
     return sequence
 
 
-def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list, bool]:
+def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list, bool, dict]:
     """(vehicle frame id, object rows, visibility rows, agent rows, whether the poses come from
-    ``cooperative/calib/lidar_i2v``) of data_info entry ``k``."""
+    ``cooperative/calib/lidar_i2v``, each agent's own labelled boxes) of data_info entry ``k``."""
     where = f"[{k}]"
     vehicle_id = _frame_id(info_file, pair, "vehicle", where)
     infra_id = _frame_id(info_file, pair, "infrastructure", where)
@@ -133,7 +135,14 @@ def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[s
     seen += [{"frame": frame, "agent_id": "infrastructure", "track_id": track} for track in infra_tracks]
     agents = [_agent(frame, "vehicle", vehicle_pose, VEHICLE_SIZE),
               _agent(frame, "infrastructure", infra_pose, INFRASTRUCTURE_SIZE)]
-    return vehicle_id, objects, seen, agents, relative
+    views = {(frame, "vehicle"): _view([f"v{i}" for i in range(len(vehicle_boxes))], vehicle_boxes),
+             (frame, "infrastructure"): _view(infra_tracks, infra_boxes)}
+    return vehicle_id, objects, seen, agents, relative, views
+
+
+def _view(tracks: list[str], boxes: list[dict]) -> tuple[np.ndarray, np.ndarray]:
+    columns = ["x", "y", "z", "length", "width", "height", "yaw"]
+    return np.array(tracks, dtype=str), np.array([[b[c] for c in columns] for b in boxes], float).reshape(-1, 7)
 
 
 def _poses(root: Path, info_file: Path, pair, where: str, vehicle_id: str,

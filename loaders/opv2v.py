@@ -135,7 +135,7 @@ def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict
     records = {(k, cav): read_yaml(files[cav][stamp])
                for k, stamp in enumerate(stamps) for cav in order if stamp in files[cav]}
     v2v4real = any(_has_ass_id(record) for record in records.values())
-    objects, agents, seen, predicted, left_out = [], [], [], {}, set()
+    objects, agents, seen, predicted, left_out, views = [], [], [], {}, set(), {}
     kept: dict[int, set[str]] = {}
     for (k, cav), record in records.items():
         source, frame = files[cav][stamps[k]], offset + k
@@ -144,15 +144,20 @@ def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict
         reported = _reported_lidar_pose(source, record, pose, v2v4real)
         if reported is not None:
             predicted[(frame, cav)] = reported
+        view = views.setdefault((frame, cav), ([], []))
         for block, track, row in _boxes(source, record, cav, pose, v2v4real):
             if block != "vehicles":
                 left_out.add(row["category"])
+            view[0].append(track)
+            view[1].append([row[c] for c in ("x", "y", "z", "length", "width", "height", "yaw")])
             seen.append({"frame": frame, "agent_id": cav, "track_id": track})
             if track not in kept.setdefault(frame, set()):
                 kept[frame].add(track)
                 objects.append({"frame": frame, "track_id": track, **row})
     return {"name": name, "stamps": stamps, "ego": order[0], "v2v4real": v2v4real, "objects": objects,
             "agents": agents, "seen": seen, "predicted": predicted, "left_out": left_out,
+            "views": {key: (np.array(ids, dtype=str), np.array(boxes, float).reshape(-1, 7))
+                      for key, (ids, boxes) in views.items()},
             "points": {(offset + k, cav): (files[cav][stamps[k]].with_suffix(".pcd"), not v2v4real)
                        for k, cav in records if files[cav][stamps[k]].with_suffix(".pcd").is_file()}}
 
@@ -177,6 +182,7 @@ def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
     )
     sequence.point_clouds = {key: source for p in parts for key, source in p["points"].items()}
     sequence.left_out_of_trials = frozenset().union(*(p["left_out"] for p in parts))
+    sequence.agent_views = {key: view for p in parts for key, view in p["views"].items()}
     return sequence
 
 

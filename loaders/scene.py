@@ -142,6 +142,11 @@ class Sequence:
         self.point_clouds: dict[tuple[int, str], tuple[Path, bool]] = {}
         """``(frame index, agent id) -> (PCD file, left-handed)`` for the datasets that ship LiDAR
         points (read on demand by ``Frame.points``; left-handed files have y mirrored on read)."""
+        self.agent_views: dict[tuple[int, str], tuple[np.ndarray, np.ndarray]] = {}
+        """``(frame index, agent id) -> (track ids, (N, 7) world boxes)``: each object as that agent's own
+        labels give it, mapped to the world with the dataset's pose of that agent (DAIR-V2X-C,
+        the OPV2V family); ``objects`` keeps one box per object. What the dataset-calibration check
+        compares (``evaluation.calibration_check``)."""
         self.left_out_of_trials: frozenset[str] = frozenset()
         """Categories of ``objects`` that trials leave out unless the user includes them (set it to an
         empty set): the OPV2V family's pedestrians (``walkers``), which the release's vehicle-only
@@ -275,6 +280,11 @@ class Frame:
         """``agent id -> DetectedBoxes`` (each agent's detected boxes in its own frame), or ``None``
         when no detections file gives this frame any."""
         return self.sequence.detections.get(self.index)
+
+    def agent_view(self, agent_id: str) -> tuple[np.ndarray, np.ndarray] | None:
+        """``(track ids, (N, 7) world boxes)`` of the objects as this agent's own labels give them
+        (``Sequence.agent_views``), or ``None`` when the dataset keeps no per-agent labels."""
+        return self.sequence.agent_views.get((self.index, str(agent_id)))
 
     def points(self, agent_id: str) -> np.ndarray | None:
         """``(N, 3)`` float32 LiDAR points of an agent in its own sensor frame (right-handed), or

@@ -1,0 +1,186 @@
+"""Every loader on a release in its exact published layout and encoding (``support.releases``: written
+by the libraries the producers use), opened through ``loaders.open`` and shown as the app's first
+frame; then what each release gets right that hand-made fixtures missed."""
+from __future__ import annotations
+
+import dataclasses
+import math
+import shutil
+
+import numpy as np
+import pytest
+
+import loaders
+from app.scene import drawing
+from app.session.explorer import Explorer
+from app.session.settings import Settings
+from cbm import se2
+from cbm.scenario import ScenarioParams
+from loaders.trials import build_trial
+from support import releases
+
+WRITERS = {
+    "opv2v": lambda root: releases.opv2v_root(root / "OPV2V"),
+    "v2xset": lambda root: releases.v2xset_scenario(root / "2021_08_20_21_48_35"),
+    "adver_city": lambda root: releases.adver_city_run(root / "data_dumping"),
+    "v2v4real": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0"),
+    "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
+    "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
+                                                            world_calib=False),
+    "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
+    "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
+    "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
+    "interaction": lambda root: shutil.copy(releases.FIXTURES / "interaction" / "vehicle_tracks_000.csv", root),
+}
+EXPECTED = {  # release -> (frames, agents of the first frame)
+    "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
+    "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
+    "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
+    "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
+}
+
+
+@pytest.fixture(scope="module")
+def corpus(tmp_path_factory) -> dict:
+    root = tmp_path_factory.mktemp("releases")
+    out = {}
+    for name, write in WRITERS.items():
+        (root / name).mkdir()
+        out[name] = write(root / name)
+    return out
+
+
+def opened(release: str, path):
+    """The release opened; those that say what they skipped or used instead warn once."""
+    if release in ("sind_without_lfs", "dair_v2x_c_subset"):
+        with pytest.warns(UserWarning):
+            return loaders.open(path)
+    return loaders.open(path)
+
+
+@pytest.mark.parametrize("release", list(WRITERS))
+def test_each_release_opens_and_shows_its_first_frame(corpus, release):
+    sequence = opened(release, corpus[release])
+    frames, agents = EXPECTED[release]
+    if frames is not None:
+        assert len(sequence) == frames
+    if agents is not None:
+        assert sequence[0].agents["agent_id"].to_list() == agents
+    explorer = Explorer(sequence)
+    settings = Settings() if agents else Settings().with_scenario(protocol="sind")
+    outcome = explorer.compute(dataclasses.replace(settings, view=dataclasses.replace(settings.view, points=True)))
+    picture = drawing.draw(outcome, explorer.map_segments, sequence[outcome.frame_index])
+    assert "precision" in picture.metrics_markdown and "LiDAR points not shown" not in picture.metrics_markdown
+    assert len(outcome.trial.ego_boxes) + len(outcome.trial.cav_boxes) == len(outcome.trial.ego_ids) + len(
+        outcome.trial.cav_ids) > 0
+
+
+def test_opv2v_reported_lidar_pose_carries_exactly_the_gnss_error(corpus):
+    frame = loaders.open(corpus["opv2v"])[0]
+    true_lidar, reported = frame.agent_pose("650"), frame.predicted_pose("650")
+    x, y, yaw = releases.AGENTS["650"]
+    dx, dy, dyaw = releases.GNSS_ERROR["650"]
+    body, predicted_body = se2.make(x, y, yaw), se2.make(x + dx, y + dy, yaw + math.radians(dyaw))
+    # the GNSS error of the file, expressed at the sensor: the body's error applied to the true LiDAR pose
+    expected = predicted_body @ se2.inverse(body) @ true_lidar
+    np.testing.assert_allclose(reported, expected, atol=1e-6)
+    lever = np.linalg.norm(se2.translation_of(true_lidar) - [x, y])
+    assert lever == pytest.approx(0.5, abs=1e-6)                       # the mount offset the old reading kept
+    rotation_part = 2 * lever * math.sin(math.radians(dyaw) / 2)
+    gap = np.linalg.norm(se2.translation_of(reported) - se2.translation_of(true_lidar))
+    assert abs(gap - math.hypot(dx, dy)) <= rotation_part + 1e-3        # 0.05 m, not 0.5 m
+    assert se2.yaw_of(reported) - se2.yaw_of(true_lidar) == pytest.approx(math.radians(dyaw), abs=1e-9)
+    ego = loaders.open(corpus["opv2v"])[0]
+    np.testing.assert_allclose(ego.predicted_pose("641"), ego.agent_pose("641"), atol=1e-9)  # no error: the truth
+
+
+def test_opv2v_dataset_localization_init_is_the_reported_pose(corpus):
+    frame = loaders.open(corpus["opv2v"])[0]
+    trial = build_trial(frame, ScenarioParams(protocol="opv2v", localization="dataset"), seed=0, cav="650")
+    np.testing.assert_allclose(trial.init, se2.inverse(frame.agent_pose("641")) @ frame.predicted_pose("650"))
+    assert np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)) < 0.1
+
+
+def test_opv2v_open3d_ascii_sweeps_fall_inside_their_boxes(corpus):
+    frame = loaders.open(corpus["opv2v"])[0]
+    points = frame.points("650")
+    world = se2.apply_points(frame.agent_pose("650"), points[:, :2])
+    box = frame.boxes()[list(frame.track_ids).index("700")]
+    local = se2.apply_points(se2.inverse(se2.make(box[0], box[1], box[6])), world)
+    inside = (np.abs(local[:, 0]) <= box[3] / 2) & (np.abs(local[:, 1]) <= box[4] / 2)
+    assert inside[:4].all()                         # the sweep's first four points are car 700's
+    np.testing.assert_allclose(points[-64:, 2], -1.9, atol=1e-6)   # the ground ring, 1.9 m below the sensor
+
+
+def test_adver_city_walkers_classes_and_two_roadside_units(corpus):
+    sequence = loaders.open(corpus["adver_city"])
+    frame = sequence[0]
+    assert sequence.scenarios == {"2024_07_12_14_13_22/unj_cn_d": 0} and frame.ego == "641"
+    categories = dict(zip(frame.track_ids, frame.categories))
+    assert categories["1300"] == categories["1301"] == "pedestrian" and categories["702"] == "van"
+    assert categories["704"] == "truck"
+    walker = frame.boxes()[list(frame.track_ids).index("1300")]
+    np.testing.assert_allclose(walker[[0, 1, 2, 3, 4]], [9.0, 8.0, 0.93, 0.38, 0.38], atol=1e-9)  # no center key
+    assert sequence.left_out_of_trials == {"pedestrian"}
+    trial = build_trial(frame, ScenarioParams(protocol="opv2v"), seed=0, cav="650")
+    assert not any(str(i).startswith("13") for i in np.concatenate([trial.ego_ids, trial.cav_ids]))
+    sequence.left_out_of_trials = frozenset()
+    included = build_trial(sequence[0], ScenarioParams(protocol="opv2v"), seed=0, cav="650")
+    assert "1300" in set(map(str, included.ego_ids))
+
+
+def test_dair_compressed_sweeps_load_and_lie_in_their_boxes(corpus):
+    frame = loaders.open(corpus["dair_v2x_c"])[0]
+    for agent in ("vehicle", "infrastructure"):
+        points = frame.points(agent)
+        world = se2.apply_points(frame.agent_pose(agent), points[:, :2])
+        box = frame.boxes()[0]
+        local = se2.apply_points(se2.inverse(se2.make(box[0], box[1], box[6])), world)
+        assert ((np.abs(local[:, 0]) <= box[3] / 2) & (np.abs(local[:, 1]) <= box[4] / 2)).sum() == 4
+
+
+def test_dair_subset_uses_lidar_i2v_without_adding_the_offset_twice(corpus):
+    full = loaders.open(corpus["dair_v2x_c"])
+    with pytest.warns(UserWarning, match=r"3 of 3 pair\(s\) have no vehicle or infrastructure world calibration "
+                                         r"and use lidar_i2v.*vehicle frames 000010, 000011, 000012"):
+        subset = loaders.open(corpus["dair_v2x_c_subset"])
+    assert len(subset.warnings) == 1
+    for k in range(3):
+        relative = se2.inverse(full[k].agent_pose("vehicle")) @ full[k].agent_pose("infrastructure")
+        np.testing.assert_allclose(subset[k].agent_pose("infrastructure"), relative, atol=1e-9)
+        np.testing.assert_allclose(subset[k].agent_pose("vehicle"), np.eye(3), atol=1e-12)
+        truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
+        np.testing.assert_allclose(relative, truth, atol=1e-9)
+
+
+def test_dair_pair_missing_a_file_is_skipped_and_counted(corpus, tmp_path):
+    root = shutil.copytree(corpus["dair_v2x_c_subset"], tmp_path / "subset")
+    (root / "infrastructure-side" / "label" / "virtuallidar" / "000021.json").unlink()
+    (root / "cooperative" / "calib" / "lidar_i2v" / "000012.json").write_bytes(releases.LFS_POINTER)
+    with pytest.warns(UserWarning) as caught:
+        sequence = loaders.open(root)
+    assert sequence.frame_ids == ["000010"]
+    skipped = [w for w in sequence.warnings if "skipped" in w]
+    assert len(skipped) == 1 and "skipped 2 of 3 pair(s)" in skipped[0] and "1 Git LFS pointer" in skipped[0]
+    assert len(caught) == 2
+
+
+def test_sind_pedestrians_load_beside_an_lfs_pointer(corpus):
+    with pytest.warns(UserWarning, match=r"Veh_smoothed_tracks.csv.*run `git lfs pull`"):
+        sequence = loaders.open(corpus["sind_without_lfs"])
+    assert set(sequence.objects["category"].unique()) == {"pedestrian"} and len(sequence) > 10
+    assert "skipped 1 Git LFS pointer file(s)" in sequence.warnings[0]
+
+
+def test_sind_with_only_a_pointer_names_it(tmp_path):
+    (tmp_path / "Veh_smoothed_tracks.csv").write_bytes(releases.LFS_POINTER)
+    with pytest.raises(loaders.LoaderError, match=r"Veh_smoothed_tracks.csv is a Git LFS pointer, not the data: "
+                                                  r"run `git lfs pull` in the dataset's repository"):
+        loaders.open(tmp_path)
+
+
+def test_argoverse2_pose_table_as_an_lfs_pointer_names_it(corpus, tmp_path):
+    log = shutil.copytree(corpus["argoverse2"], tmp_path / "logs") / "adcf7d18-0510-35b0-a2fa-b4cea13a6d76"
+    (log / "city_SE3_egovehicle.feather").write_bytes(releases.LFS_POINTER)
+    with pytest.raises(loaders.LoaderError, match=r"city_SE3_egovehicle.feather is a Git LFS pointer"):
+        loaders.open(log)
