@@ -50,6 +50,9 @@ class Thresholds:
     degrees: float = 1.0
 
 
+DEFAULT_THRESHOLDS = Thresholds()
+
+
 @dataclass(frozen=True)
 class FrameCheck:
     """One frame and CAV: the dataset's transform against the two estimates."""
@@ -115,7 +118,8 @@ def disagreement(estimate: np.ndarray | None, dataset: np.ndarray) -> tuple[floa
     return float(rte(estimate, dataset)), float(rre(estimate, dataset))
 
 
-def check_sequence(sequence: Sequence, frames: list[int], thresholds: Thresholds = Thresholds()) -> list[FrameCheck]:
+def check_sequence(sequence: Sequence, frames: list[int],
+                   thresholds: Thresholds = DEFAULT_THRESHOLDS) -> list[FrameCheck]:
     """Every frame of ``frames`` and every agent with labels of its own besides the frame's ego."""
     if not sequence.agent_views:
         raise ValueError(f"{sequence.name}: the dataset keeps no per-agent labels (DAIR-V2X-C and the OPV2V "

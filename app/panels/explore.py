@@ -28,6 +28,7 @@ from ..session.explorer import Outcome
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
 from ..session.sequence import SequenceRun, run_sequence
 from .actions import TabActions
+from .calibration import CalibrationFolder
 from .plot import add_frame_plot
 from .reports import search_markdown, sequence_markdown, worst_markdown
 
@@ -76,6 +77,7 @@ class ExplorePanel:
                 self.search_table = gui.add_markdown("")
                 self.best = gui.add_dropdown("setting", (NO_SEARCH,))
                 self.apply = gui.add_button("apply to the sliders")
+            self.calibration = CalibrationFolder(gui, tab)
             with gui.add_folder("Export"):
                 self.csv = gui.add_button("per-frame metrics (CSV)")
                 self.parquet = gui.add_button("per-frame metrics (Parquet)")
