@@ -15,8 +15,6 @@ from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
-import pydantic
-import pypcd4
 
 from .errors import READ_ERRORS, LoaderError, nonempty_file
 
@@ -40,8 +38,13 @@ def read_pcd(path: Path) -> np.ndarray:
     return xyz[np.isfinite(xyz).all(axis=1)]
 
 
-def _parsed(path: Path) -> pypcd4.PointCloud:
-    """The file parsed by pypcd4, its failures turned into a :class:`LoaderError`."""
+def _parsed(path: Path):
+    """The file parsed by pypcd4 (a ``pypcd4.PointCloud``), its failures turned into a
+    :class:`LoaderError`. pypcd4 (with pydantic) is imported on the first sweep read: it adds about
+    half a second to ``import loaders``, which most sessions never need."""
+    import pydantic
+    import pypcd4
+
     try:
         return pypcd4.PointCloud.from_path(path)
     except pydantic.ValidationError as exc:
@@ -50,7 +53,7 @@ def _parsed(path: Path) -> pypcd4.PointCloud:
         raise LoaderError(f"{path}: {_body_problem(path, exc)}") from exc
 
 
-def _header_problem(exc: pydantic.ValidationError) -> str:
+def _header_problem(exc) -> str:
     """What is wrong with a header, in its own keys (``missing SIZE, TYPE``)."""
     missing = [str(error["loc"][0]).upper() for error in exc.errors() if error["type"] == "missing"]
     if missing:
