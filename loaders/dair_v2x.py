@@ -17,6 +17,9 @@ Per frame, read:
 - ``infrastructure-side/calib/virtuallidar_to_world/<id>.json``: infrastructure -> world, with the
   pair's ``system_error_offset {delta_x, delta_y}`` added to its translation (as the DAIR-V2X
   and CoAlign code do);
+- without those world calibration files (shared subsets): ``cooperative/calib/lidar_i2v/<vehicle
+  id>.json`` (infrastructure LiDAR -> vehicle LiDAR, offset already included by DAIR-V2X's
+  ``calib_i2v.py``), the vehicle's LiDAR frame being that pair's world; one warning names them;
 - LiDAR points: the ``.pcd`` files ``vehicle_pointcloud_path`` / ``infrastructure_pointcloud_path``
   name (relative to the folder, as OpenCOOD / CoAlign's DAIR dataset joins them; ``x y z
   intensity``, ``DATA binary``), each in its agent's LiDAR frame, the frame its labels and pose
@@ -25,8 +28,8 @@ Per frame, read:
 Real releases (DAIR-V2X-C as distributed, read as the DAIR-V2X devkit and OpenCOOD / CoAlign's
 DAIR dataset read it) have gaps and quirks, handled so:
 
-- a pair whose label or calibration file is missing is skipped; the sequence's ``warnings`` (and a
-  ``UserWarning``) give the count and the first missing file; nothing loadable is a
+- a pair whose label or calibration file is missing (or a Git LFS pointer) is skipped; the
+  sequence's ``warnings`` (and a ``UserWarning``) give the count and the first missing file; nothing loadable is a
   :class:`LoaderError`. A file that exists but is malformed is still a :class:`LoaderError`;
 - numbers stored as strings (``"delta_x": "-0.52"``, label sizes, calibration entries) are read as
   numbers; any other string where a number belongs is a :class:`LoaderError` naming file and field;

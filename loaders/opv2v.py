@@ -12,8 +12,10 @@ its scenario's (``Sequence.frame_egos``). Frames are the timestamps of the ego's
 (``Sequence.timestamps`` = index / 10 over the whole sequence); a CAV missing a timestamp is
 absent from that frame. Loads over a second show a progress bar (tqdm, on stderr).
 
-- The ego is chosen as OpenCOOD does: CAV folders in string order, the first one, except that a
-  roadside unit (V2XSet; negative id) never leads -- it moves to the end. Agents keep their folder
+- The ego is chosen as OpenCOOD does: CAV folders in string order, the first one, except that
+  roadside units (V2XSet, Adver-City; negative ids) never lead -- all of them move to the end.
+  Adver-City's ``data_dumping/<run>/<scenario>`` nests one level deeper: a folder of run folders
+  opens every scenario (``<run>/<scenario>``). Agents keep their folder
   names as ids (``"641"``, ``"-1"``); ``Sequence.ego`` names the ego.
 - Agent pose: the CAV's ``lidar_pose`` (the frame its detections are in). Sizes are not in the
   files: CAVs get a typical car size (4.9 x 2.0 x 1.6 m), roadside units a 0.6 x 0.6 x 5 m pole.
@@ -27,7 +29,12 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   ``x, -y, -yaw``; angles in degrees -> radians; ``extent`` half sizes -> full sizes; box centre =
   ``location + center`` (added in world axes). Each CAV's file lists the vehicles its LiDAR saw:
   that is the per-CAV visibility; an object's box is taken from the first CAV (in ego order) that
-  lists it. Category ``car``.
+  lists it. Besides ``vehicles``, every top-level block of ``{id: {location, extent, ...}}`` is
+  read (Adver-City's ``walkers``, whose ``location`` is the centre: no ``center`` key); the
+  category is the entry's ``class`` / ``obj_type`` mapped by :data:`CATEGORY_NAMES`, else ``car``
+  (``vehicles``) or ``pedestrian`` (``walkers``). Categories of the other blocks are left out of
+  trials (``Sequence.left_out_of_trials``). Each CAV's labelled boxes are kept as its
+  ``Sequence.agent_views``.
 - V2V4Real (recognised by ``ass_id`` keys): boxes are in each CAV's own LiDAR frame (right-handed,
   real sensors), mapped to the world with that CAV's ``lidar_pose``; category from ``obj_type``.
   ``ass_id`` is the cross-CAV id of the same object (-1: seen by one CAV only): associated objects
