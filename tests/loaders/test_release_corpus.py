@@ -184,3 +184,21 @@ def test_argoverse2_pose_table_as_an_lfs_pointer_names_it(corpus, tmp_path):
     (log / "city_SE3_egovehicle.feather").write_bytes(releases.LFS_POINTER)
     with pytest.raises(loaders.LoaderError, match=r"city_SE3_egovehicle.feather is a Git LFS pointer"):
         loaders.open(log)
+
+
+def test_adver_city_documented_sample_reports_the_gnss_error_to_the_millimetre(tmp_path):
+    """Adver-City's documented frame (its docs/annotations.md): LiDAR 0.49 m from the body origin;
+    a GNSS error of (0.03, 0.04) m on the body moves the reported LiDAR pose by 0.05 m, not 0.5 m."""
+    body = [213.65081787109375, -5.478086948394775, 0.0357675738632679, -0.00433349609375, -174.12957763671875,
+            -0.2315092533826828]
+    lidar = [214.1405487060547, -5.427590370178223, 1.9377721548080444, -0.00433349609375, -174.12957763671875,
+             -0.2315092533826828]
+    record = releases.cav_record("650", 0, adver_city=True)
+    record.update(lidar_pose=lidar, true_ego_pos=body, predicted_ego_pos=[body[0] + 0.03, body[1] + 0.04, *body[2:]])
+    releases.dump_yaml(tmp_path / "s" / "650" / "000060.yaml", record)
+    frame = loaders.open(tmp_path / "s")[0]
+    gap = se2.translation_of(frame.predicted_pose("650")) - se2.translation_of(frame.agent_pose("650"))
+    assert np.linalg.norm(gap) == pytest.approx(0.05, abs=1e-6)
+    np.testing.assert_allclose(gap, [0.03, -0.04], atol=1e-6)           # y mirrored: CARLA is left-handed
+    old_reading = np.hypot(body[0] + 0.03 - lidar[0], body[1] + 0.04 - lidar[1])
+    assert old_reading > 0.45
