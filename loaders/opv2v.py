@@ -19,7 +19,7 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   files: CAVs get a typical car size (4.9 x 2.0 x 1.6 m), roadside units a 0.6 x 0.6 x 5 m pole.
 - ``predicted_ego_pos`` (when a file has it): the CAV's own noisy localization, converted like
   ``lidar_pose`` and kept as ``Sequence.predicted_poses`` (``Frame.predicted_pose``); the
-  ``dataset`` localization option of ``cbm.scenario`` uses it as the CAV's initial pose.
+  ``dataset`` localization option of ``evaluation.scenario`` uses it as the CAV's initial pose.
 - OPV2V / V2XSet (CARLA): poses and boxes are in CARLA's left-handed world; converted on read to
   ``x, -y, -yaw``; angles in degrees -> radians; ``extent`` half sizes -> full sizes; box centre =
   ``location + center`` (added in world axes). Each CAV's file lists the vehicles its LiDAR saw:
