@@ -35,7 +35,7 @@ else:
     import tomli as tomllib
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("app", "cbm", "loaders", "evaluation")
+PACKAGES = ("app", "cbm", "loaders", "evaluation", "presets")
 BUILD_FILES = ("pyproject.toml", "README.md", "LICENSE")
 START_TIMEOUT = 180.0
 
