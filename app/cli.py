@@ -1,6 +1,7 @@
 """The ``cbm-explorer`` command (also ``python serve.py``): the live CBM calibration explorer in the browser.
 
     cbm-explorer [--dataset PATH_OR_NAME] [--preset NAME] [--host 127.0.0.1] [--port 8080]
+    cbm-explorer --list-presets
 """
 from __future__ import annotations
 
@@ -40,6 +41,8 @@ def parse(argv: list[str]) -> argparse.Namespace:
                         help="CoAlign / HEAL stage1_boxes.json: a detector's boxes replace the simulated detections")
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default: loopback only)")
     parser.add_argument("--port", type=int, default=8080, help="port (0: any free port)")
+    parser.add_argument("--list-presets", action="store_true",
+                        help="list the shipped presets and the ones in your presets folder, then exit")
     args = parser.parse_args(argv)
     if not 0 <= args.port <= 65535:
         parser.error(f"--port must be between 0 and 65535, got {args.port}")
@@ -81,9 +84,23 @@ def _stop_on_signals() -> threading.Event:
     return stopping
 
 
+def list_presets() -> int:
+    """Print every preset a ``--preset`` may name, one line each: name, where it comes from, description."""
+    presets, problems = discover()
+    for problem in problems:
+        _warn(f"preset skipped: {problem}")
+    width = max((len(name) for name in presets), default=0)
+    for name, preset in presets.items():
+        origin = "shipped" if preset.shipped else "yours"
+        print(f"{name:<{width}}  {origin:<7}  {preset.description}".rstrip())
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     """Serve the dataset until SIGTERM or Ctrl-C (then 0); 2 on bad input."""
     args = parse(sys.argv[1:] if argv is None else argv)
+    if args.list_presets:
+        return list_presets()
     stopping = _stop_on_signals()
     try:
         check_free(args.host, args.port)

@@ -31,10 +31,10 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
 import loaders  # noqa: E402
-from cbm.scenario import ScenarioParams  # noqa: E402
-from cbm.sweep import Sweep, run, summarise  # noqa: E402
 from evaluation.cli import parse_frames  # noqa: E402
 from evaluation.run import frame_inputs  # noqa: E402
+from evaluation.scenario import ScenarioParams  # noqa: E402
+from evaluation.sweep import Sweep, run, summarise  # noqa: E402
 
 CONDITIONS = {
     "SIND mild": ScenarioParams(protocol="sind", eta=0.5, sigma_p=0.3, sigma_theta=5.0, flip_prob=0.5),

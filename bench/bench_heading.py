@@ -1,7 +1,7 @@
 """Heading handling and consensus rule of CBM compared under the SIND protocol.
 
 Runs ``fold`` vs ``align``, the released vs the paper's consensus rule, and the released code's
-sigma3 = 1 m vs 3 m (= sigma2) (every combination, through ``cbm.sweep``) on synthetic intersections over the
+sigma3 = 1 m vs 3 m (= sigma2) (every combination, through ``evaluation.sweep``) on synthetic intersections over the
 SIND protocol's grid of co-visibility rate and detection noise, and prints micro-averaged
 precision, recall and the success rate (RTE < 1 m and RRE < 1 degree).
 
@@ -17,8 +17,8 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 import loaders  # noqa: E402
-from cbm.scenario import FrameInputs  # noqa: E402
-from cbm.sweep import Sweep, run, summarise  # noqa: E402
+from evaluation.scenario import FrameInputs  # noqa: E402
+from evaluation.sweep import Sweep, run, summarise  # noqa: E402
 
 VARIANTS = {"heading": ("align", "fold"), "consensus_rule": ("released", "paper"), "sigma3": (1.0, 3.0)}
 NOTES = {("align", "released", 1.0): " (default)", ("fold", "released", 1.0): " (released code)"}

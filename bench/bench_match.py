@@ -31,7 +31,7 @@ SCENARIO = dict(protocol="sind", eta=ETA, sigma_p=0.3, sigma_theta=3.0, flip_pro
 
 def trials_for(size: int, count: int, heading: str):
     import loaders
-    from cbm.scenario import ScenarioParams, make_trial
+    from evaluation.scenario import ScenarioParams, make_trial
 
     n_world = int(round(2 * size / (1 + ETA)))
     scene = loaders.synthetic.generate(n_objects=n_world, n_frames=1, seed=size)
@@ -42,7 +42,7 @@ def trials_for(size: int, count: int, heading: str):
 
 def measure(size: int, count: int, heading: str) -> dict:
     from cbm import CBMParams, match
-    from cbm.metrics import aggregate, evaluate
+    from evaluation.metrics import aggregate, evaluate
 
     params = CBMParams(heading=heading)
     trials = trials_for(size, count, heading)

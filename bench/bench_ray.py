@@ -13,8 +13,8 @@ from time import perf_counter
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from cbm.sweep import Sweep, run  # noqa: E402
 from evaluation.run import load_source  # noqa: E402
+from evaluation.sweep import Sweep, run  # noqa: E402
 
 TARGET_RATIO = 1.5
 

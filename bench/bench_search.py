@@ -15,9 +15,9 @@ from time import perf_counter
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
-from cbm.scenario import ScenarioParams  # noqa: E402
-from cbm.search import DEFAULT_SPACE, grid_size, optuna_candidates, scorer  # noqa: E402
 from evaluation.run import load_source  # noqa: E402
+from evaluation.scenario import ScenarioParams  # noqa: E402
+from evaluation.search import DEFAULT_SPACE, grid_size, optuna_candidates, scorer  # noqa: E402
 
 CHECKPOINTS = (5, 10, 20, 36)
 

@@ -3,8 +3,11 @@
     from cbm import CBMParams, match
     result = match(ego_boxes, cav_boxes, init=T_tilde, params=CBMParams())
 """
+from . import moved
 from .params import CBMParams
 from .pipeline import match
 from .result import MatchResult
 
 __all__ = ["CBMParams", "MatchResult", "match"]
+
+moved.install()

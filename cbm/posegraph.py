@@ -21,6 +21,7 @@ import itertools
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Protocol
 
 import numpy as np
 
@@ -29,7 +30,6 @@ from .estimate import residuals
 from .params import CBMParams
 from .pipeline import match
 from .result import MatchResult
-from .scenario import Trial
 
 ROTATION_WEIGHT = 100.0
 """m^2/rad^2: one radian of an edge's yaw residual costs as much as 10 m of its position residual."""
@@ -38,6 +38,14 @@ MIN_EDGE_PAIRS = 3
 ITERATIONS = 20
 STEP = 1e-6
 """Finite-difference step of the Jacobian (metres / radians)."""
+
+
+class Peer(Protocol):
+    """Another CAV of the frame as the pose graph reads it (an ``evaluation.scenario.Trial`` fits)."""
+
+    ego_boxes: np.ndarray
+    cav_boxes: np.ndarray
+    init: np.ndarray
 
 
 @dataclass(frozen=True)
@@ -76,7 +84,7 @@ def solve(start: Sequence[np.ndarray], edges: Sequence[Edge]) -> list[np.ndarray
 
 
 def match_graph(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: CBMParams | None = None,
-                *, peers: Sequence[Trial] = ()) -> MatchResult:
+                *, peers: Sequence[Peer] = ()) -> MatchResult:
     """CBM on this ego/CAV pair, then the pose graph over it and the ``peers`` (the frame's other
     CAV trials): the result's transform is this CAV's pose in the joint solution. Without peers it
     is CBM's result."""

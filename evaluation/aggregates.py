@@ -13,13 +13,13 @@ from typing import Any
 
 import polars as pl
 
-from cbm.ap import IOU_THRESHOLDS, pooled_ap
-from cbm.fusion import decoded
-from cbm.sweep import summarise
+from evaluation.ap import IOU_THRESHOLDS, pooled_ap
+from evaluation.fusion import decoded
+from evaluation.sweep import summarise
 
 SUCCESS_RTE_M = 1.0
 SUCCESS_RRE_DEG = 1.0
-"""The thresholds of ``success_rate`` (``cbm.metrics.is_success``): RTE < 1 m and RRE < 1 deg."""
+"""The thresholds of ``success_rate`` (``evaluation.metrics.is_success``): RTE < 1 m and RRE < 1 deg."""
 THRESHOLDS = tuple(0.5 * k for k in range(1, 11))
 """The success curve's thresholds t, 0.5 to 5 in 0.5 steps: RTE < t m and RRE < t deg."""
 METRIC_KEYS = (
@@ -32,7 +32,7 @@ METRIC_KEYS = (
     ("mean_rre", "rre_mean"),
     ("ad", "ad"),
 )
-"""``metrics.json`` key and the ``cbm.metrics.aggregate`` key it holds."""
+"""``metrics.json`` key and the ``evaluation.metrics.aggregate`` key it holds."""
 RUNTIME_KEY = ("median_runtime_s", "runtime_median_s")
 
 
@@ -55,7 +55,7 @@ def method_metrics(rows: Sequence[Mapping[str, Any]], variants: Sequence[str],
 
 
 def fused_ap(rows: Sequence[Mapping[str, Any]], variants: Sequence[str]) -> dict[str, dict[float, float]]:
-    """Late-fusion AP of each method variant at ``cbm.ap.IOU_THRESHOLDS``: its fused detections
+    """Late-fusion AP of each method variant at ``evaluation.ap.IOU_THRESHOLDS``: its fused detections
     of every trial pooled and sorted by score over the whole run (OpenCOOD's global sort), not a
     mean of per-trial APs; empty when the rows have no fusion columns."""
     groups: dict[str, list[tuple[list[tuple[float, bool, bool]], int]]] = {}

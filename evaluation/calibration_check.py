@@ -33,9 +33,10 @@ import numpy as np
 
 from cbm import CBMParams, match, se2
 from cbm.estimate import robust_fit
-from cbm.metrics import rre, rte
 from loaders import Frame, Sequence
-from loaders.agents import agent_ids, choose_ego
+
+from .agents import agent_ids, choose_ego
+from .metrics import rre, rte
 
 MIN_PAIRS = 3
 """Objects both agents must share before an estimate judges a frame."""

@@ -22,7 +22,7 @@ The same arguments give the same table byte for byte except the ``runtime_s`` co
 wall-clock time: with ``--no-timing`` the table (CSV and Parquet) and the summary leave it out and
 are byte-identical between runs.
 
-Trials come from the trial builder the app uses (``loaders.trials``): the dataset's ego and the
+Trials come from the trial builder the app uses (``evaluation.trials``): the dataset's ego and the
 sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a
 frame without it, the vehicle nearest that distance). ``sind`` deals the frame's objects out to the
 two agents; ``range`` and ``opv2v`` need an ego and a CAV per frame (frames without are skipped).
@@ -43,11 +43,11 @@ from typing import Any, NoReturn
 from tqdm import tqdm
 
 import loaders
-from cbm.executors import ExecutorError, TaskError
-from cbm.fusion import FUSIONS
 from cbm.methods import METHODS
-from cbm.sweep import grid_defaults
-from loaders.agents import TARGET_DISTANCE
+from evaluation.agents import TARGET_DISTANCE
+from evaluation.executors import ExecutorError, TaskError
+from evaluation.fusion import FUSIONS
+from evaluation.sweep import grid_defaults
 
 from . import calibration_check
 from .compare import CompareError, compare

@@ -10,7 +10,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-from cbm.sweep import Sweep, summarise  # noqa: E402
+from evaluation.sweep import Sweep, summarise  # noqa: E402
 
 from .report import fmt, levels  # noqa: E402
 

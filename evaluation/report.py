@@ -8,7 +8,7 @@ from typing import Any
 
 import polars as pl
 
-from cbm.sweep import SCENARIO_FIELDS, Sweep, summarise
+from evaluation.sweep import SCENARIO_FIELDS, Sweep, summarise
 
 from .aggregates import AP_ROWS, curve_markdown, fused_ap, success_curve
 from .run import Plan
@@ -23,11 +23,11 @@ TABLE_ROWS = (
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
 GNSS = "GNSS (init)"
-FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`cbm.fusion`): the CAV's boxes placed by the method's pose, merged "
-               "with the ego's, duplicates removed by NMS at rotated BEV IoU 0.15; fused boxes against the true "
+FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's boxes placed by the method's pose, "
+               "merged with the ego's, duplicates removed by NMS at rotated BEV IoU 0.15; fused boxes against the true "
                "boxes of every object either agent sees, matched greedily by score at BEV IoU 0.5 / 0.7, all "
                "detections of the run sorted by score, VOC 2010 all-point interpolation (OpenCOOD's `eval_utils`). "
-               "Scores of simulated detections: the seeded score model of `cbm.fusion`.")
+               "Scores of simulated detections: the seeded score model of `evaluation.fusion`.")
 
 
 def variant_names(rows: Sequence[dict[str, Any]], sweep: Sweep) -> list[str]:

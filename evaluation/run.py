@@ -1,5 +1,5 @@
-"""Running an evaluation: the datasets' frames (through the one trial builder, ``loaders.trials``)
-and a sweep of methods and parameters (``cbm.sweep``) into one per-trial table.
+"""Running an evaluation: the datasets' frames (through the one trial builder, ``evaluation.trials``)
+and a sweep of methods and parameters (``evaluation.sweep``) into one per-trial table.
 
     import evaluation
     table = evaluation.run(["argoverse2"], methods=("cbm", "icp"), grid={"eta": (0.3, 0.6)}, seed=0)
@@ -13,13 +13,13 @@ from typing import Any
 import polars as pl
 
 import loaders
-from cbm.executors import ray_session
 from cbm.methods import METHODS
-from cbm.scenario import FrameInputs, ScenarioParams
-from cbm.sweep import TIMING_COLUMNS, TRIAL_COLUMNS, Sweep
-from cbm.sweep import run as run_sweep
-from loaders import trials
-from loaders.agents import TARGET_DISTANCE
+from evaluation import trials
+from evaluation.agents import TARGET_DISTANCE
+from evaluation.executors import ray_session
+from evaluation.scenario import FrameInputs, ScenarioParams
+from evaluation.sweep import TIMING_COLUMNS, TRIAL_COLUMNS, Sweep
+from evaluation.sweep import run as run_sweep
 
 DEFAULT_METHODS = tuple(name for name, record in METHODS.items() if not record.takes_peers)
 """Every method, between the references ``none`` and ``oracle``, but ``cbm-graph`` (``--agents`` 3 or more)."""
@@ -51,7 +51,7 @@ class Plan:
 
 def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
                  cav_distance: float = TARGET_DISTANCE, agents: int = 2) -> tuple[list[FrameInputs], list[int]]:
-    """What the sweep needs of each frame (``loaders.trials.frame_inputs``, as the app builds its
+    """What the sweep needs of each frame (``evaluation.trials.frame_inputs``, as the app builds its
     trials), and the frames skipped for want of an ego or a CAV. ``ValueError`` for the OPV2V
     protocol on a dataset that does not say what each agent sees."""
     if protocol == "opv2v" and seq.visibility is None:
@@ -83,7 +83,7 @@ def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
          frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE,
          detections: str | None = None, fusion: str | None = None, agents: int = 2) -> Plan:
     """Check the run and load its datasets; ``ValueError`` naming what is wrong. ``agents``: the ego
-    and ``agents - 1`` CAVs, one trial row per CAV and frame (``loaders.trials.frame_cav_inputs``)."""
+    and ``agents - 1`` CAVs, one trial row per CAV and frame (``evaluation.trials.frame_cav_inputs``)."""
     if agents < 2:
         raise ValueError(f"--agents must be at least 2 (the ego and one CAV), got {agents}")
     sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol),
@@ -96,7 +96,7 @@ def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | 
              ray: str | None = None) -> pl.DataFrame:
     """The per-trial table of ``plan``: one row per dataset, frame, grid point and method, in that
     order, with every parameter and metric (``trial_table``). ``ray`` runs it on Ray
-    (``cbm.executors``: ``local``, ``auto`` or a cluster address), one session for every dataset."""
+    (``evaluation.executors``: ``local``, ``auto`` or a cluster address), one session for every dataset."""
     rows: list[dict[str, Any]] = []
     with ray_session(ray, workers):
         found_by_source = [run_sweep(plan.sweep, source.inputs, workers=workers, progress=progress, ray=ray)

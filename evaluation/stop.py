@@ -7,7 +7,7 @@
         if signals.pending: ...  # it came while held
 
 ``Stopped`` is a ``BaseException`` so no ``except Exception`` swallows it; the process pool
-(``cbm.executors.stop_pool``) and the staging folder (``evaluation.outputs``) clean up as it passes.
+(``evaluation.executors.stop_pool``) and the staging folder (``evaluation.outputs``) clean up as it passes.
 """
 from __future__ import annotations
 

@@ -24,7 +24,7 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   pose the CAV reports is the sensor moved by the body's error, ``predicted_ego_pos ∘
   true_ego_pos⁻¹ ∘ lidar_pose`` (SE(2)), kept as ``Sequence.predicted_poses``
   (``Frame.predicted_pose``) when a file has both body poses; the ``dataset`` localization option
-  of ``cbm.scenario`` uses it as the CAV's initial pose.
+  of ``evaluation.scenario`` uses it as the CAV's initial pose.
 - OPV2V / V2XSet (CARLA): poses and boxes are in CARLA's left-handed world; converted on read to
   ``x, -y, -yaw``; angles in degrees -> radians; ``extent`` half sizes -> full sizes; box centre =
   ``location + center`` (added in world axes). Each CAV's file lists the vehicles its LiDAR saw:

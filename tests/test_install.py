@@ -35,7 +35,7 @@ else:
     import tomli as tomllib
 
 REPO = Path(__file__).resolve().parents[1]
-PACKAGES = ("app", "cbm", "loaders", "evaluation")
+PACKAGES = ("app", "cbm", "loaders", "evaluation", "presets")
 BUILD_FILES = ("pyproject.toml", "README.md", "LICENSE")
 START_TIMEOUT = 180.0
 
@@ -94,13 +94,13 @@ def _run(installed: Installed, *command: str, timeout: float = 300) -> subproces
 @pytest.mark.wheel
 def test_wheel_holds_the_presets_the_default_scene_and_the_licences(installed: Installed) -> None:
     names = set(zipfile.ZipFile(installed.wheel).namelist())
-    presets = {f"app/presets/{p.name}" for p in (REPO / "app" / "presets").glob("*.toml")}
+    presets = {f"presets/{p.name}" for p in (REPO / "presets").glob("*.toml")}
     scene = {f"loaders/{p.relative_to(REPO / 'loaders').as_posix()}"
              for p in (REPO / "loaders" / "data").rglob("*") if p.is_file()}
-    assert "app/presets/default.toml" in presets and presets <= names
+    assert "presets/default.toml" in presets and presets <= names
     assert "loaders/data/argoverse2/NOTICE" in scene and scene <= names
-    assert {"cbm_explorer-0.1.0.dist-info/licenses/LICENSE",
-            "cbm_explorer-0.1.0.dist-info/licenses/loaders/data/argoverse2/NOTICE"} <= names
+    dist_info = next(name.split("/")[0] for name in names if name.endswith(".dist-info/METADATA"))
+    assert {f"{dist_info}/licenses/LICENSE", f"{dist_info}/licenses/loaders/data/argoverse2/NOTICE"} <= names
 
 
 @pytest.mark.wheel
@@ -114,6 +114,16 @@ def test_the_venv_imports_the_installed_packages_and_finds_their_data(installed:
     venv_root = str(installed.bin.parent)
     assert all(f.startswith(venv_root) and "site-packages" in f for f in files.split())
     assert data.startswith("156 ") and "'default'" in data and "'paper-sind'" in data
+
+
+@pytest.mark.wheel
+def test_cbm_explorer_lists_the_shipped_presets_from_any_folder(installed: Installed) -> None:
+    done = _run(installed, "cbm-explorer", "--list-presets")
+    assert done.returncode == 0, done.stderr
+    listed = {line.split()[0]: line.split()[1] for line in done.stdout.splitlines()}
+    shipped = {p.stem for p in (REPO / "presets").glob("*.toml")}
+    assert {"default", "teaching"} <= shipped
+    assert {name: "shipped" for name in shipped} == listed
 
 
 def _line_with(process: subprocess.Popen, words: str, timeout: float) -> str:

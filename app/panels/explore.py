@@ -16,7 +16,7 @@ import numpy as np
 import viser
 from PIL import Image
 
-from cbm.diagnosis import Finding
+from evaluation.diagnosis import Finding
 
 from ..scene import inspector, layouts
 from ..scene.drawing import Drawing

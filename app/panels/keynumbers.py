@@ -9,7 +9,7 @@ import html
 import numpy as np
 import viser
 
-from cbm.metrics import is_success
+from evaluation.metrics import is_success
 from loaders import is_vehicle
 
 from ..scene.text import number

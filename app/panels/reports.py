@@ -4,8 +4,8 @@ from __future__ import annotations
 from collections.abc import Sequence
 from typing import Any
 
-from cbm.diagnosis import Finding
 from cbm.methods import METHODS
+from evaluation.diagnosis import Finding
 
 from ..scene.text import number
 from ..session.search import OBJECTIVE_LABELS, SearchResult

@@ -5,7 +5,7 @@ from __future__ import annotations
 import numpy as np
 
 from cbm import se2
-from cbm.metrics import TrialMetrics, is_success
+from evaluation.metrics import TrialMetrics, is_success
 
 from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS

@@ -10,7 +10,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cbm import se2
-from cbm.fusion import fused_against_truth
 from loaders import Frame
 
 from ..session.explorer import Outcome, classified_pairs
@@ -83,11 +82,6 @@ class _Parts:
     fused_fp: list[np.ndarray] = field(default_factory=list)
 
 
-def placements(outcome: Outcome) -> dict[str, np.ndarray]:
-    """CAV->ego transforms: before (``init``), after (the estimate), truth."""
-    return {"before": outcome.result.init, "after": outcome.result.transform, "truth": outcome.trial.T_true}
-
-
 def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | None = None) -> Drawing:
     """The scene of ``outcome`` under its view options (``frame``: the dataset frame, for its LiDAR points)."""
     layout = LAYOUTS[outcome.settings.view.layout]
@@ -120,7 +114,7 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
     """One copy of the scene: boxes, vehicles, ghosts, match lines and where the map goes, shifted
     by its offset."""
     view, trial, offset = outcome.settings.view, outcome.trial, panel.offset
-    where = placements(outcome)
+    where = outcome.placements
     shift = se2.make(offset[0], offset[1], 0.0)
     cav = se2.apply_boxes(shift @ where[panel.placement], trial.cav_boxes)
     parts.ego.append(_shifted(trial.ego_boxes, offset))
@@ -139,15 +133,9 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
         parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
     if view.fused:
-        _add_fused(parts, outcome, where[panel.placement], offset)
-
-
-def _add_fused(parts: _Parts, outcome: Outcome, transform: np.ndarray, offset: np.ndarray) -> None:
-    """Late fusion of the panel's placement (``cbm.fusion``): fused boxes, true / false positive at BEV IoU 0.7."""
-    fused, hits = fused_against_truth(outcome.trial, transform, outcome.world_boxes, outcome.world_ids,
-                                      outcome.settings.scenario.seed, outcome.frame_index)
-    parts.fused_tp.append(_shifted(fused.boxes[hits], offset))
-    parts.fused_fp.append(_shifted(fused.boxes[~hits], offset))
+        fused = outcome.fused(panel.placement)
+        parts.fused_tp.append(_shifted(fused.boxes[fused.hits], offset))
+        parts.fused_fp.append(_shifted(fused.boxes[~fused.hits], offset))
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:

@@ -16,9 +16,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from cbm import CBMParams
-from cbm.diagnosis import pair_name, short_id
 from cbm.inspect import AnchorDetail, Inspection
-from cbm.methods import METHODS
+from evaluation.diagnosis import pair_name, short_id
 
 from ..session.explorer import Outcome
 from . import geometry
@@ -74,13 +73,6 @@ def counterpart(outcome: Outcome, group: str, index: int) -> tuple[int | None, i
     return (index, None) if group == "ego" else (None, index)
 
 
-def inspection_of(outcome: Outcome) -> Inspection:
-    """CBM's sets on the outcome's trial, with the thresholds the tab's CBM runs with."""
-    settings, trial = outcome.settings, outcome.trial
-    params = METHODS[settings.method].resolved(settings.cbm) if METHODS[settings.method].explains else settings.cbm
-    return Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-
-
 def band_segments(origin: np.ndarray, vectors: np.ndarray, sigma1_deg: float, reach: float) -> np.ndarray:
     """(n * (2 + ARC_SEGMENTS), 2, 3): for each vector, the two rays at +-sigma1 from ``origin`` out
     to its length plus ``reach``, and the arc joining their ends."""
@@ -114,7 +106,7 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
             inspection: Inspection | None = None) -> ContextPicture:
     """The inspector's picture and text for the object pair (``ego``, ``cav``); either may be None
     (an object seen by one agent only), then only its own context is shown."""
-    inspection = inspection or inspection_of(outcome)
+    inspection = inspection or outcome.inspection()
     params = inspection.sets.params
     trial = outcome.trial
     contexts = {}

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from cbm.diagnosis import short_id
+from evaluation.diagnosis import short_id
 
 from ..session.explorer import Outcome
 from .drawing import Drawing

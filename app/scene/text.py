@@ -7,8 +7,8 @@ import numpy as np
 
 from cbm import se2
 from cbm.methods import METHODS
-from cbm.metrics import is_success
 from cbm.result import MatchResult
+from evaluation.metrics import is_success
 
 from ..session.explorer import Outcome
 from .cavs import per_cav_rows
@@ -37,7 +37,7 @@ def thresholds(outcome: Outcome) -> list[str]:
 
 def findings_heading(outcome: Outcome) -> str:
     """``Why it failed`` above the diagnosis of a failed frame; ``Warnings`` when the frame succeeded
-    (``cbm.metrics.is_success``) and a rule still found something."""
+    (``evaluation.metrics.is_success``) and a rule still found something."""
     return "**Warnings** (the frame succeeded)" if is_success(outcome.metrics) else "**Why it failed**"
 
 

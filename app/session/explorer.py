@@ -2,27 +2,28 @@
 
 ``Explorer`` holds what all tabs share (the loaded sequence, its map); ``compute`` makes one
 outcome from one ``Settings`` value, reproducibly: the trial comes from the one trial builder
-(``loaders.trials``), as the evaluation's do.
+(``evaluation.trials``), as the evaluation's do.
 """
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from cbm import se2
 from cbm.baselines import match_oracle
-from cbm.diagnosis import Finding, diagnose
 from cbm.inspect import Inspection
 from cbm.methods import METHODS
-from cbm.metrics import TrialMetrics, evaluate
 from cbm.result import MatchResult
-from cbm.scenario import FrameInputs, Trial
-from cbm.sweep import run_method
+from evaluation.agents import agent_pose, choose_ego
+from evaluation.diagnosis import Finding, diagnose
+from evaluation.fusion import fused_against_truth
+from evaluation.metrics import TrialMetrics, evaluate
+from evaluation.scenario import FrameInputs, Trial
+from evaluation.sweep import run_method
+from evaluation.trials import frame_cav_inputs, frame_inputs
 from loaders import Sequence, is_vehicle
-from loaders.agents import agent_pose, choose_ego
-from loaders.trials import frame_cav_inputs, frame_inputs
 
 from .settings import MAX_CAVS, Settings
 
@@ -50,6 +51,16 @@ class CavOutcome:
 
 
 @dataclass(frozen=True)
+class Fused:
+    """Late fusion of one placement of the CAV's boxes with the ego's (``evaluation.fusion``)."""
+
+    boxes: np.ndarray
+    """(N, 7) fused boxes in the ego frame."""
+    hits: np.ndarray
+    """(N,) bool: a true positive at BEV IoU 0.7 against the objects either agent sees."""
+
+
+@dataclass(frozen=True)
 class Outcome:
     """Everything one recompute produced."""
 
@@ -73,6 +84,32 @@ class Outcome:
     """Server time of the whole recompute (trial, method, metrics, diagnosis)."""
     others: tuple[CavOutcome, ...] = ()
     """The CAVs beyond the first (``Settings.cavs`` > 1), each in its own colour."""
+    _kept: dict[str, object] = field(default_factory=dict, repr=False, compare=False)
+    """What the views computed from this outcome on their first ask (fusion, CBM's sets), kept."""
+
+    @property
+    def placements(self) -> dict[str, np.ndarray]:
+        """CAV->ego transforms: before (``init``), after (the estimate), truth."""
+        return {"before": self.result.init, "after": self.result.transform, "truth": self.trial.T_true}
+
+    def fused(self, placement: str) -> Fused:
+        """Late fusion with the CAV's boxes placed as ``placement`` says (a key of ``placements``),
+        the scores from the scenario's seed; computed the first time a view asks, then kept."""
+        key = f"fused_{placement}"
+        if key not in self._kept:
+            boxes, hits = fused_against_truth(self.trial, self.placements[placement], self.world_boxes, self.world_ids,
+                                              self.settings.scenario.seed, self.frame_index)
+            self._kept[key] = Fused(boxes.boxes, hits)
+        return self._kept[key]
+
+    def inspection(self) -> Inspection:
+        """CBM's sets on this trial with the thresholds the tab's CBM runs with: the method's own
+        when it builds them, else built on the first ask (the inspector, the walkthrough)."""
+        if "inspection" not in self._kept:
+            method, trial = METHODS[self.settings.method], self.trial
+            params = method.resolved(self.settings.cbm) if method.explains else self.settings.cbm
+            self._kept["inspection"] = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+        return self._kept["inspection"]
 
     @property
     def shown_pairs(self) -> np.ndarray:
@@ -118,7 +155,7 @@ class Explorer:
         return [CavChoice(str(ids[k]), float(distance[k])) for k in order]
 
     def trial_inputs(self, settings: Settings, index: int) -> FrameInputs:
-        """Frame ``index``'s trial inputs under ``settings`` (``loaders.trials.frame_inputs``), as
+        """Frame ``index``'s trial inputs under ``settings`` (``evaluation.trials.frame_inputs``), as
         ``compute`` and the sequence runs use them; ``ValueError`` when the frame makes no trial."""
         scenario = settings.scenario
         return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range)
@@ -130,7 +167,7 @@ class Explorer:
         inputs = self.trial_inputs(settings, index)
         trial = inputs.build(settings.scenario, settings.scenario.seed)
         others = self.other_cavs(settings, index) if settings.cavs > 1 else ()
-        result, findings = _run(settings, trial, inputs, [other.trial for other in others])
+        result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others])
         metrics = evaluate(result, trial)
         limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
@@ -138,10 +175,11 @@ class Explorer:
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
                        cav_note=inputs.note, trial=trial, world_boxes=se2.apply_boxes(world_to_ego, objects["boxes"]),
                        world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
-                       findings=findings, seconds=time.perf_counter() - started, others=others)
+                       findings=findings, seconds=time.perf_counter() - started, others=others,
+                       _kept={} if inspection is None else {"inspection": inspection})
 
     def other_cavs(self, settings: Settings, index: int) -> tuple[CavOutcome, ...]:
-        """The CAVs of frame ``index`` beyond the first (``loaders.trials.frame_cav_inputs``), at
+        """The CAVs of frame ``index`` beyond the first (``evaluation.trials.frame_cav_inputs``), at
         most ``settings.cavs - 1`` of them, each run through the selected method (``cbm-graph``
         with the others as its peers)."""
         scenario, agents = settings.scenario, min(settings.cavs, MAX_CAVS) + 1
@@ -157,15 +195,15 @@ class Explorer:
 
 
 def _run(settings: Settings, trial: Trial, frame: FrameInputs,
-         peers: list[Trial]) -> tuple[MatchResult, list[Finding]]:
+         peers: list[Trial]) -> tuple[MatchResult, list[Finding], Inspection | None]:
     """The selected method's result and, for the methods that build CBM's sets, why it failed: the
     sets are built once and serve both the match and the diagnosis. ``peers``: the other CAVs' trials."""
     method = METHODS[settings.method]
     if not method.explains:
-        return run_method(settings.method, trial, settings.params, frame, peers), []
+        return run_method(settings.method, trial, settings.params, frame, peers), [], None
     inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params))
     result = inspection.match()
-    return result, diagnose(result, trial, inspection)
+    return result, diagnose(result, trial, inspection), inspection
 
 
 def _map_segments(sequence: Sequence) -> dict[str, np.ndarray]:

@@ -1,6 +1,6 @@
 """The per-frame results a tab has computed under its current settings: the timeline's rows.
 
-A frame *fails* as the evaluation counts it (``cbm.metrics.is_success``): no pose estimate, or
+A frame *fails* as the evaluation counts it (``evaluation.metrics.is_success``): no pose estimate, or
 RTE >= 1 m, or RRE >= 1 deg. Rows come from the frames shown (``add``) and from sequence runs of
 the same settings (``merge``); they are forgotten only when a setting other than the frame, the
 CAV or the view changes.
@@ -12,7 +12,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any, NamedTuple
 
-from cbm.metrics import TrialMetrics, is_success
+from evaluation.metrics import TrialMetrics, is_success
 
 from .explorer import Outcome
 from .settings import AUTO_CAV, Settings, ViewOptions
@@ -38,7 +38,7 @@ def row_of(metrics: TrialMetrics) -> Row:
 
 
 def row_of_sweep(row: Mapping[str, Any]) -> Row:
-    """The timeline row of one ``cbm.sweep`` row (a sequence run's frame)."""
+    """The timeline row of one ``evaluation.sweep`` row (a sequence run's frame)."""
     def number(name: str) -> float:
         value = row.get(name)
         return math.nan if value is None else float(value)

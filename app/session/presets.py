@@ -1,4 +1,4 @@
-"""Named parameter sets as TOML: the shipped ones in ``app/presets/``, the user's in a folder of theirs.
+"""Named parameter sets as TOML: the shipped ones in ``presets/``, the user's in a folder of theirs.
 
 A preset file holds an optional ``description``, an optional ``name`` (the name it was saved under)
 and the tables of ``settings.to_preset`` (``method``, ``[scenario]``, ``[cbm]``, ``[view]``, ...
@@ -23,6 +23,8 @@ from typing import Any
 import numpy as np
 import tomli_w
 
+from presets import SHIPPED_DIR
+
 from .settings import Settings, from_preset, to_preset
 
 if sys.version_info >= (3, 11):
@@ -30,7 +32,6 @@ if sys.version_info >= (3, 11):
 else:
     import tomli as tomllib
 
-SHIPPED_DIR = Path(__file__).resolve().parents[1] / "presets"
 ENV_VAR = "CBM_EXPLORER_PRESETS"
 MAX_BYTES = 256 * 1024
 """Largest preset file read (a saved preset is about 1 kB)."""

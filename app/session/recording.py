@@ -17,7 +17,7 @@ from typing import Any
 import numpy as np
 
 from cbm import se2
-from cbm.metrics import is_success
+from evaluation.metrics import is_success
 
 from .explorer import Outcome, classified_pairs
 from .history import settings_key

@@ -1,4 +1,4 @@
-"""Parameter search from the app: ``cbm.search`` over the tab's sequence and scenario, with the
+"""Parameter search from the app: ``evaluation.search`` over the tab's sequence and scenario, with the
 tab's current thresholds scored the same way for comparison.
 
 Runs on one core (the other stays with the tabs) so that a cancel, checked as every frame's rows
@@ -9,7 +9,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 from cbm.methods import METHODS
-from cbm.search import SEARCHABLE, Candidate, grid_size, search
+from evaluation.search import SEARCHABLE, Candidate, grid_size, search
 
 from .background import Task
 from .explorer import Explorer

@@ -1,8 +1,8 @@
 """Sequence runs: a tab's settings over every frame of the sequence, through the evaluation's sweep.
 
-The frames' inputs come from the trial builder (``loaders.trials.sequence_inputs``) with the tab's
+The frames' inputs come from the trial builder (``evaluation.trials.sequence_inputs``) with the tab's
 protocol and CAV -- as ``Explorer.compute`` builds them -- and every trial is built by
-``FrameInputs.build`` inside ``cbm.sweep``, so each row is the number the tab shows on that frame.
+``FrameInputs.build`` inside ``evaluation.sweep``, so each row is the number the tab shows on that frame.
 Frames run in chunks; a cancel stops at the next chunk and keeps the rows done so far.
 """
 from __future__ import annotations
@@ -14,12 +14,12 @@ from typing import Any
 
 import numpy as np
 
-from cbm.ap import pooled_ap
-from cbm.fusion import decoded
 from cbm.methods import METHODS
-from cbm.scenario import FrameInputs
-from cbm.sweep import Sweep, run, summarise
-from loaders.trials import sequence_inputs
+from evaluation.ap import pooled_ap
+from evaluation.fusion import decoded
+from evaluation.scenario import FrameInputs
+from evaluation.sweep import Sweep, run, summarise
+from evaluation.trials import sequence_inputs
 
 from .background import Task
 from .explorer import Explorer
@@ -31,7 +31,7 @@ CHUNK = 8
 
 def sweep_for(settings: Settings) -> Sweep:
     """A one-point sweep that runs exactly the tab's method, parameters, scenario and seed, with
-    late fusion (``cbm.fusion``) for the run's AP."""
+    late fusion (``evaluation.fusion``) for the run's AP."""
     params = settings.params
     grid = {name: [getattr(params, name)] for name in METHODS[settings.method].tunable}
     return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario,
@@ -48,7 +48,7 @@ def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) 
 
 @dataclass(frozen=True)
 class SequenceRun:
-    """The rows of one sequence run (one per frame, ``cbm.sweep`` columns) and what it ran."""
+    """The rows of one sequence run (one per frame, ``evaluation.sweep`` columns) and what it ran."""
 
     settings: Settings
     rows: tuple[dict[str, Any], ...]
@@ -66,11 +66,11 @@ class SequenceRun:
         raise KeyError(f"frame {frame} was not run")
 
     def summary(self) -> dict[str, float]:
-        """Micro-averaged metrics over the rows (``cbm.metrics.aggregate``); empty without rows."""
+        """Micro-averaged metrics over the rows (``evaluation.metrics.aggregate``); empty without rows."""
         return summarise(self.rows, by=("method",))[0][1] if self.rows else {}
 
     def fused_ap(self) -> dict[float, float]:
-        """Late-fusion AP over the rows at each BEV IoU threshold (``cbm.ap.pooled_ap``: every
+        """Late-fusion AP over the rows at each BEV IoU threshold (``evaluation.ap.pooled_ap``: every
         frame's fused detections sorted by score together); empty without rows."""
         return pooled_ap(decoded(row) for row in self.rows) if self.rows else {}
 

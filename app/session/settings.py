@@ -1,7 +1,7 @@
 """Everything one browser tab has chosen, as one immutable value, and its preset form.
 
 A preset is the TOML form of ``Settings`` without the frame and the CAV: a table per part, keys
-named like the fields of ``cbm.scenario.ScenarioParams``, ``cbm.CBMParams`` and the method
+named like the fields of ``evaluation.scenario.ScenarioParams``, ``cbm.CBMParams`` and the method
 parameter classes (angles in degrees, as everywhere at the edges).
 """
 from __future__ import annotations
@@ -13,8 +13,8 @@ from typing import Any, Literal
 
 from cbm import CBMParams
 from cbm.methods import METHODS
-from cbm.scenario import ScenarioParams
-from loaders.trials import AUTO_CAV
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import AUTO_CAV
 
 Layout = Literal["overlay", "after", "before", "side by side"]
 LAYOUTS: tuple[str, ...] = ("overlay", "after", "before", "side by side")
@@ -53,7 +53,7 @@ class ViewOptions:
     points_every: int = 10
     """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
     fused: bool = False
-    """Late fusion (``cbm.fusion``): outlines of the fused boxes, green a true positive, red a false
+    """Late fusion (``evaluation.fusion``): outlines of the fused boxes, green a true positive, red a false
     one (BEV IoU 0.7 against what either agent sees), at each panel's CAV pose."""
 
     def __post_init__(self) -> None:
@@ -85,7 +85,7 @@ class Settings:
     """The vehicle acting as the CAV, or ``auto`` (the one nearest 25 m from the ego)."""
     cavs: int = 1
     """How many CAVs (1 to ``MAX_CAVS``): the first is ``cav``, the others the vehicles next nearest
-    25 m from the ego (``loaders.trials.frame_cav_inputs``), each calibrated to the ego."""
+    25 m from the ego (``evaluation.trials.frame_cav_inputs``), each calibrated to the ego."""
     method: str = "cbm"
     scenario: ScenarioParams = DEFAULT_SCENARIO
     method_params: Mapping[str, Any] = field(default_factory=default_method_params)

@@ -10,7 +10,7 @@ import math
 from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
-from cbm.diagnosis import Finding
+from evaluation.diagnosis import Finding
 
 from .explorer import Explorer
 from .sequence import SequenceRun

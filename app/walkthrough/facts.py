@@ -12,13 +12,12 @@ from cbm import se2
 from cbm.estimate import Fit
 from cbm.inspect import AnchorDetail, Inspection
 from cbm.methods import METHODS
-from cbm.metrics import TrialMetrics, evaluate
 from cbm.params import CBMParams
 from cbm.pipeline import estimate
 from cbm.result import MatchResult
-from cbm.scenario import Trial
+from evaluation.metrics import TrialMetrics, evaluate
+from evaluation.scenario import Trial
 
-from ..scene.inspector import inspection_of
 from ..session.explorer import Outcome
 
 
@@ -99,7 +98,7 @@ def followed_pair(result: MatchResult, gt_pairs: np.ndarray, n_ego: int, n_cav: 
 
 def gather(outcome: Outcome) -> Facts:
     """The facts of ``outcome``: CBM's sets with the tab's thresholds, reused, not recomputed otherwise."""
-    inspection = inspection_of(outcome)
+    inspection = outcome.inspection()
     own = METHODS[outcome.settings.method].explains
     result = outcome.result if own else inspection.match()
     metrics = outcome.metrics if own else evaluate(result, outcome.trial)

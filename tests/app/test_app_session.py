@@ -13,7 +13,7 @@ from app.session.coalesce import Coalescer
 from app.session.explorer import Explorer
 from app.session.settings import AUTO_CAV, Settings, ViewOptions
 from cbm import se2
-from loaders.trials import sequence_cav
+from evaluation.trials import sequence_cav
 
 
 def _view(settings: Settings, **changes) -> Settings:

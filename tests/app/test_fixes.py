@@ -15,8 +15,8 @@ from app.scene.text import metrics_markdown
 from app.session import export
 from app.session.explorer import Explorer
 from app.session.settings import Settings
-from cbm.diagnosis import Finding
-from loaders.trials import NoTrial
+from evaluation.diagnosis import Finding
+from evaluation.trials import NoTrial
 
 
 def test_a_finding_on_a_frame_that_succeeded_is_a_warning(small_explorer: Explorer) -> None:

@@ -1,5 +1,5 @@
 """The timeline in the metrics area: it fills as frames are computed (stepping, run all frames), marks
-the failed frames (``cbm.metrics.is_success``), and its controls step to and jump to them."""
+the failed frames (``evaluation.metrics.is_success``), and its controls step to and jump to them."""
 from __future__ import annotations
 
 import io

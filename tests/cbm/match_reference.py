@@ -34,8 +34,8 @@ HARD = dict(protocol="sind", eta=0.5, sigma_p=0.3, sigma_theta=3.0)
 def cases() -> Iterator[tuple[str, np.ndarray, np.ndarray, np.ndarray, str]]:
     """(name, ego boxes, CAV boxes, init, variant) of every stored case."""
     import loaders
-    from cbm.scenario import ScenarioParams, make_trial
-    from loaders.trials import build_trial
+    from evaluation.scenario import ScenarioParams, make_trial
+    from evaluation.trials import build_trial
 
     for size, frames in ((20, 3), (60, 3), (150, 2), (300, 1)):
         scene = loaders.synthetic.generate(n_objects=int(round(2 * size / 1.5)), n_frames=frames, seed=size)

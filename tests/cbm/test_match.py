@@ -3,8 +3,8 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match, se2
-from cbm.metrics import evaluate
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.metrics import evaluate
+from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 pytestmark = pytest.mark.filterwarnings("error")

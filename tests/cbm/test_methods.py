@@ -6,7 +6,7 @@ import pytest
 
 from cbm import CBMParams, match
 from cbm.methods import METHODS, method, run
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.scenario import ScenarioParams, make_trial
 from support.oracle import oracle
 from support.scenes import street_scene
 

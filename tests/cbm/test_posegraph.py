@@ -6,7 +6,7 @@ from cbm import se2
 from cbm.methods import METHODS
 from cbm.pipeline import match
 from cbm.posegraph import Edge, solve
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.scenario import ScenarioParams, make_trial
 
 TRUTH = [se2.make(20.0, 5.0, 0.3), se2.make(-15.0, 10.0, -1.0), se2.make(5.0, -25.0, 2.0)]
 

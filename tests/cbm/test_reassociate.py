@@ -8,9 +8,9 @@ import pytest
 from cbm import CBMParams, match, se2
 from cbm import reassociate as module
 from cbm.estimate import robust_fit
-from cbm.metrics import aggregate, evaluate, is_success
 from cbm.reassociate import MAX_ROUNDS, gated_assignment, reassociate
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.metrics import aggregate, evaluate, is_success
+from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 pytestmark = pytest.mark.filterwarnings("error")

@@ -5,8 +5,8 @@ import pytest
 
 from cbm.baselines import match_none, match_oracle
 from cbm.estimate import weighted_procrustes
-from cbm.metrics import evaluate, rre, rte
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.metrics import evaluate, rre, rte
+from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 

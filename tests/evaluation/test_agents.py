@@ -1,12 +1,12 @@
-"""The CAV choice rule of loaders.agents: deterministic, order-free, shared by the app and evaluate.py."""
+"""The CAV choice rule of evaluation.agents: deterministic, order-free, shared by the app and evaluate.py."""
 import numpy as np
 import polars as pl
 import pytest
 
 import loaders
 from cbm import se2
-from cbm.scenario import ScenarioParams, make_trial
-from loaders.agents import agent_pose, choose_cav, choose_ego, frame_trial_inputs
+from evaluation.agents import agent_pose, choose_cav, choose_ego, frame_trial_inputs
+from evaluation.scenario import ScenarioParams, make_trial
 from loaders.scene import Sequence
 
 OBJECT_SCHEMA = {"frame": pl.Int64, "track_id": pl.Utf8, "category": pl.Utf8,

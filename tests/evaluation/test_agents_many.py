@@ -8,9 +8,9 @@ import pytest
 
 import evaluation
 import loaders
-from cbm.scenario import ScenarioParams
 from evaluation.cli import main
-from loaders.trials import NoTrial, frame_cav_inputs, frame_inputs, sequence_inputs, short_frames
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import NoTrial, frame_cav_inputs, frame_inputs, sequence_inputs, short_frames
 
 FIELDS = ("ego_boxes", "cav_boxes", "ego_ids", "cav_ids", "T_true", "init", "gt_pairs")
 SCENARIO = ScenarioParams(protocol="range", sigma_p=0.3, sigma_theta=2.0)

@@ -18,7 +18,7 @@ TINY = ["--dataset", "synthetic:30", "--frames", "0:3", "--methods", "cbm,icp,or
 
 
 def trial(rte: float, rre: float, estimated: bool = True, **counts) -> dict:
-    """A per-trial row as in trials.csv (the metrics ``cbm.sweep.summarise`` reads)."""
+    """A per-trial row as in trials.csv (the metrics ``evaluation.sweep.summarise`` reads)."""
     n = {"n_ego": 5, "n_cav": 5, "n_true": 4, "n_matched": 4, "n_correct": 4, **counts}
     return {**n, "precision": n["n_correct"] / n["n_matched"] if n["n_matched"] else math.nan,
             "recall": n["n_correct"] / n["n_true"], "ad": 0.0, "rre": rre if estimated else math.nan,

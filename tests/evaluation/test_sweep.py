@@ -1,13 +1,13 @@
-"""cbm.sweep: trials over frames and a grid, every method, rows reproducible from (frame, params, seed)."""
+"""evaluation.sweep: trials over frames and a grid, every method, rows reproducible from (frame, params, seed)."""
 import dataclasses
 
 import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from cbm.metrics import TrialMetrics, aggregate, evaluate
-from cbm.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
-from cbm.sweep import TIMING_COLUMNS, Sweep, run, run_task, summarise
+from evaluation.metrics import TrialMetrics, aggregate, evaluate
+from evaluation.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
+from evaluation.sweep import TIMING_COLUMNS, Sweep, run, run_task, summarise
 from support.scenes import street_scene
 
 METHODS = ("cbm", "cbm-no-consensus", "icp", "ricp", "vips")

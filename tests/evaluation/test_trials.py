@@ -8,9 +8,9 @@ import pytest
 import loaders
 from app.session.explorer import Explorer
 from app.session.settings import Settings
-from cbm.scenario import ScenarioParams
 from evaluation.run import frame_inputs as evaluation_inputs
-from loaders.trials import AUTO_CAV, NoTrial, build_trial, frame_inputs, sequence_cav
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import AUTO_CAV, NoTrial, build_trial, frame_inputs, sequence_cav
 
 REPO = Path(__file__).resolve().parents[2]
 FIELDS = ("ego_boxes", "cav_boxes", "ego_ids", "cav_ids", "T_true", "init", "gt_pairs", "ego_true_xy",

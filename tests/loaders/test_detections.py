@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import loaders
-from cbm.detected import match_to_truth
-from cbm.scenario import ScenarioParams
+from evaluation.detected import match_to_truth
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import build_trial
 from loaders.detections import fit_boxes
-from loaders.trials import build_trial
 
 SCENARIO = "opv2v/scenario"
 STAGE1 = "stage1/stage1_boxes.json"

@@ -15,8 +15,8 @@ from app.scene import drawing
 from app.session.explorer import Explorer
 from app.session.settings import Settings
 from cbm import se2
-from cbm.scenario import ScenarioParams
-from loaders.trials import build_trial
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import build_trial
 from support import releases
 
 WRITERS = {

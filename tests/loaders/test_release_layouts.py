@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 
 import loaders
-from cbm.scenario import ScenarioParams
-from loaders.trials import build_trial
+from evaluation.scenario import ScenarioParams
+from evaluation.trials import build_trial
 
 DAIR = "dair_v2x/cooperative-vehicle-infrastructure"
 PAIR = {

@@ -36,8 +36,8 @@ def test_scene_samples_agents_and_boxes(fixtures):
 
 
 def test_table_folder_opens_too_and_trial_uses_sensor_range(fixtures):
-    from cbm.scenario import ScenarioParams
-    from loaders.trials import frame_inputs
+    from evaluation.scenario import ScenarioParams
+    from evaluation.trials import frame_inputs
 
     seq = loaders.open(fixtures / ROOT / "v2.0-mini")
     inputs = frame_inputs(seq[0], "opv2v", cav="2")

@@ -1,4 +1,4 @@
-"""Late fusion and AP (cbm.fusion, cbm.ap): rotated BEV IoU against shapely, NMS, AP on hand-made
+"""Late fusion and AP (evaluation.fusion, evaluation.ap): rotated BEV IoU against shapely, NMS, AP on hand-made
 cases, the seeded score model, and the ordering none < cbm <= oracle on a small run."""
 from __future__ import annotations
 
@@ -10,11 +10,11 @@ from shapely.geometry import Polygon
 
 import evaluation
 from cbm import se2
-from cbm.ap import average_precision, corners, iou_matrix, match_detections, pooled_ap, voc_ap
-from cbm.fusion import detection_scores, fuse, ground_truth, nms
-from cbm.scenario import ScenarioParams, make_trial
-from cbm.sweep import Sweep
 from evaluation.aggregates import fused_ap
+from evaluation.ap import average_precision, corners, iou_matrix, match_detections, pooled_ap, voc_ap
+from evaluation.fusion import detection_scores, fuse, ground_truth, nms
+from evaluation.scenario import ScenarioParams, make_trial
+from evaluation.sweep import Sweep
 
 
 def box(x: float, y: float, yaw: float = 0.0, length: float = 4.0, width: float = 2.0) -> list[float]:

@@ -6,9 +6,19 @@ import numpy as np
 import pytest
 
 from cbm import se2
-from cbm.metrics import TrialMetrics, aggregate, average_distance, count_correct, evaluate, precision, recall, rre, rte
 from cbm.result import MatchResult
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.metrics import (
+    TrialMetrics,
+    aggregate,
+    average_distance,
+    count_correct,
+    evaluate,
+    precision,
+    recall,
+    rre,
+    rte,
+)
+from evaluation.scenario import ScenarioParams, make_trial
 
 GT = np.array([[0, 0], [1, 2], [2, 1], [4, 3]])
 OUT = np.array([[0, 0], [1, 1], [2, 1], [3, 3]])

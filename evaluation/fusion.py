@@ -1,14 +1,14 @@
 """Late fusion after calibration, as OpenCOOD's late fusion does it: the CAV's boxes are moved
 into the ego frame with a method's CAV->ego transform, merged with the ego's, and duplicates
 suppressed by non-maximum suppression on rotated BEV IoU (``NMS_IOU``, OpenCOOD's ``nms_thresh``).
-The fused boxes are then scored against the ground truth either agent sees (``cbm.ap``).
+The fused boxes are then scored against the ground truth either agent sees (``evaluation.ap``).
 
 Scores. A detector's boxes carry their own; the simulated detections (noisy ground truth, sec.
 IV-A) get them from a seeded score model (``detection_scores``): each detection's score is
 ``sigmoid(SCORE_BIAS - SCORE_SLOPE * e + SCORE_SPREAD * z)`` with ``e`` its centre error in metres
 against its object (in its own agent's frame, so the score does not depend on the calibration)
 and ``z`` a standard normal drawn from ``numpy.random.default_rng([seed, frame, SCORE_STREAM])``,
-ego detections first, then the CAV's -- the trial's own draws (``cbm.scenario``) are untouched.
+ego detections first, then the CAV's -- the trial's own draws (``evaluation.scenario``) are untouched.
 Noisy ground truth has no false positives of its own: the fused false positives are misplaced or
 duplicated boxes.
 """
@@ -21,7 +21,8 @@ from typing import Any
 
 import numpy as np
 
-from . import se2
+from cbm import se2
+
 from .ap import IOU_THRESHOLDS, iou_matrix, match_detections
 from .scenario import FrameInputs, Trial
 
@@ -92,7 +93,7 @@ def ground_truth(trial: Trial, boxes: np.ndarray, ids: np.ndarray) -> np.ndarray
 
 
 def true_positives(fused: Fused, truth: np.ndarray) -> dict[float, np.ndarray]:
-    """Each fused box's true-positive flag at every IoU threshold of ``cbm.ap``."""
+    """Each fused box's true-positive flag at every IoU threshold of ``evaluation.ap``."""
     return {t: match_detections(fused.boxes, fused.scores, truth, t) for t in IOU_THRESHOLDS}
 
 
@@ -116,7 +117,7 @@ def fusion_columns(trial: Trial, transform: np.ndarray, frame: FrameInputs, seed
 
 
 def decoded(row: Mapping[str, Any]) -> tuple[list[tuple[float, bool, bool]], int]:
-    """A row's fused detections and ground-truth count, as ``cbm.ap.pooled_ap`` takes them."""
+    """A row's fused detections and ground-truth count, as ``evaluation.ap.pooled_ap`` takes them."""
     return [tuple(d) for d in json.loads(row["fused"])], int(row["n_gt"])
 
 

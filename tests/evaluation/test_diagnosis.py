@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from cbm.diagnosis import diagnose, pair_name, rank_against_runner_up, short_id
 from cbm.inspect import Inspection
-from cbm.scenario import ScenarioParams, make_trial
+from evaluation.diagnosis import diagnose, pair_name, rank_against_runner_up, short_id
+from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 

@@ -7,7 +7,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
-from cbm.scenario import ScenarioParams, Trial, make_trial, trial_rng
+from evaluation.scenario import ScenarioParams, Trial, make_trial, trial_rng
 
 ARRAY_FIELDS = ("ego_boxes", "cav_boxes", "ego_ids", "cav_ids", "T_true", "init", "gt_pairs",
                 "ego_true_xy", "cav_true_xy", "ego_pose", "cav_pose")

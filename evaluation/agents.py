@@ -1,6 +1,6 @@
 """Which agents make a trial in a frame: the ego, the CAV, their poses and what each sees.
 
-One deterministic rule, used by the trial builder (``loaders.trials``) for the app and the
+One deterministic rule, used by the trial builder (``evaluation.trials``) for the app and the
 evaluation alike:
 
 - **ego**: the dataset's own ego (``Sequence.ego``) when it is present in the frame; otherwise (e.g.
@@ -24,9 +24,7 @@ from typing import Any
 import numpy as np
 
 from cbm import se2
-
-from .categories import is_vehicle
-from .scene import Frame
+from loaders import Frame, is_vehicle
 
 TARGET_DISTANCE = 25.0
 """Metres. Default distance from the ego of the CAV ``choose_cav`` prefers."""
@@ -86,7 +84,7 @@ def agent_pose(frame: Frame, agent_id: str) -> np.ndarray:
 
 
 def frame_trial_inputs(frame: Frame, ego_id: str, cav_id: str) -> dict[str, Any]:
-    """The keyword arguments of ``cbm.scenario.make_trial`` for this frame and agent pair (all but
+    """The keyword arguments of ``evaluation.scenario.make_trial`` for this frame and agent pair (all but
     ``params`` and ``rng``): ``boxes, ids, ego_pose, cav_pose, cav_id, ego_id, visibility``; objects
     of the sequence's ``left_out_of_trials`` categories are not among them.
 

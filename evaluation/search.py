@@ -3,7 +3,7 @@
 Two searchers rank settings by an objective of the micro-averaged metrics over the frames:
 
 - ``grid`` (default): every point of a grid over sigma1, sigma2, sigma3 (and the distance limit),
-  run through ``cbm.sweep`` -- each frame's trial made once and every grid point matched on it. Its
+  run through ``evaluation.sweep`` -- each frame's trial made once and every grid point matched on it. Its
   points are independent (they run on the sweep's process pool or on Ray), its result does not
   depend on a sampler's history, and every point it tried is in the table for the user to read.
 - ``optuna``: Optuna's TPE sampler (seeded) draws ``n_trials`` settings from the box the grid spans

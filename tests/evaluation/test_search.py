@@ -3,9 +3,9 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from cbm.metrics import aggregate, evaluate
-from cbm.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
-from cbm.search import f1, grid_size, search
+from evaluation.metrics import aggregate, evaluate
+from evaluation.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
+from evaluation.search import f1, grid_size, search
 from support.scenes import street_scene
 
 SCENARIO = ScenarioParams(eta=0.5, sigma_p=0.4, sigma_theta=4.0)

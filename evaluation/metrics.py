@@ -12,7 +12,8 @@ from typing import Any
 
 import numpy as np
 
-from . import se2
+from cbm import se2
+
 from .scenario import Trial
 
 

@@ -1,6 +1,6 @@
 """Where a sweep's tasks run: in this process, in a local process pool, or on Ray.
 
-    from cbm.executors import run_tasks
+    from evaluation.executors import run_tasks
     results = run_tasks(work, [(1,), (2,)], workers=2, ray="local")
 
 ``run_tasks`` returns the results in task order whatever ran them, so a sweep's rows (and its

@@ -16,10 +16,10 @@ from typing import TypeVar
 import numpy as np
 from scipy.optimize import linear_sum_assignment
 
-from . import se2
+from cbm import se2
 
 Trial = TypeVar("Trial")
-"""A ``cbm.scenario.Trial`` (not imported: ``cbm.scenario`` builds its trials with this module)."""
+"""A ``evaluation.scenario.Trial`` (not imported: ``evaluation.scenario`` builds its trials with this module)."""
 
 MATCH_RADIUS = 2.0
 """Metres: the farthest a detection may lie from the ground-truth centre it is matched to."""

@@ -23,7 +23,8 @@ from typing import Any, Literal
 
 import numpy as np
 
-from . import se2
+from cbm import se2
+
 from .detected import with_detections
 
 Protocol = Literal["sind", "opv2v", "range"]
@@ -126,7 +127,7 @@ class Trial:
 
 def trial_rng(seed: int, frame_index: int, stream: int = 0) -> np.random.Generator:
     """The generator of frame ``frame_index`` under ``seed``: the app and the evaluation share it.
-    ``stream`` is the CAV's rank in a frame with several (``loaders.trials``): rank 0 (the one CAV
+    ``stream`` is the CAV's rank in a frame with several (``evaluation.trials``): rank 0 (the one CAV
     of a two-agent run) draws from ``[seed, frame]`` as it always has, rank ``r`` from
     ``[seed, frame, r]``, an independent stream."""
     return np.random.default_rng([seed, frame_index] if stream == 0 else [seed, frame_index, stream])
@@ -135,7 +136,7 @@ def trial_rng(seed: int, frame_index: int, stream: int = 0) -> np.random.Generat
 @dataclass(frozen=True)
 class FrameInputs:
     """What one frame gives every trial made from it: its objects and agents as ``make_trial`` takes
-    them (``loaders.trials.frame_inputs`` makes them from a dataset frame)."""
+    them (``evaluation.trials.frame_inputs`` makes them from a dataset frame)."""
 
     index: int
     """Frame index: the trials of this frame draw from ``trial_rng(seed, index)``."""
@@ -148,7 +149,7 @@ class FrameInputs:
     """How the agents were chosen (e.g. ``auto``), for the people reading the result."""
     detections: Mapping[str, np.ndarray] | None = None
     """A real detector's boxes of ``"ego"`` and / or ``"cav"`` (``(N, 7)``, each in its agent's
-    frame): they replace that agent's simulated detections (``cbm.detected.with_detections``)."""
+    frame): they replace that agent's simulated detections (``evaluation.detected.with_detections``)."""
     stream: int = 0
     """The CAV's rank among the frame's CAVs: its trial draws from ``trial_rng(seed, index, stream)``."""
     peers: tuple[FrameInputs, ...] = ()

@@ -6,9 +6,9 @@ import time
 import numpy as np
 import pytest
 
-from cbm.executors import ExecutorError, TaskError, check_reachable, ray_session, run_tasks
-from cbm.scenario import FrameInputs
-from cbm.sweep import Sweep, run
+from evaluation.executors import ExecutorError, TaskError, check_reachable, ray_session, run_tasks
+from evaluation.scenario import FrameInputs
+from evaluation.sweep import Sweep, run
 from support.scenes import street_scene
 
 SWEEP = Sweep(methods=("cbm", "icp"), grid={"eta": (0.4, 0.8), "sigma2": (2.0, 3.0)}, seed=5)

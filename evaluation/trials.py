@@ -1,19 +1,19 @@
 """The one trial builder: from a dataset frame, a protocol and a CAV choice to the inputs of every
-trial made from that frame (``cbm.scenario.FrameInputs``), and from (frame, scenario, seed) to the
+trial made from that frame (``evaluation.scenario.FrameInputs``), and from (frame, scenario, seed) to the
 trial itself. The app, ``evaluate.py``, sequence runs and the parameter search all build their
 trials here, so what a user tunes in the app is what the evaluation measures.
 
-    from loaders.trials import build_trial
+    from evaluation.trials import build_trial
     trial = build_trial(sequence[12], ScenarioParams(protocol="range", sigma_p=0.3), seed=0)
 
-Agents (``loaders.agents``): the dataset's ego, and the CAV asked for or else the sequence's steady
+Agents (``evaluation.agents``): the dataset's ego, and the CAV asked for or else the sequence's steady
 CAV (else the vehicle nearest the target distance). Under the SIND protocol the two agents are
 abstract (the protocol deals the objects out); the chosen ones set the frame of reference and do
 not detect themselves, and a frame without two vehicles uses the objects' centroid. The range and
 OPV2V protocols need an ego and a CAV; a dataset that does not say what each agent sees gets the
 objects within the sensor range under OPV2V (and a note saying so). When the dataset carries a
 detector's boxes (``loaders.open(path, detections=...)``), those of the ego and the CAV replace
-their simulated detections (``FrameInputs.detections``; ``cbm.detected`` for the true pairs).
+their simulated detections (``FrameInputs.detections``; ``evaluation.detected`` for the true pairs).
 
 More than two agents (``frame_cav_inputs``, ``evaluate.py --agents N``): the CAV above, then the
 other candidates nearest the target distance, one trial each, CAV ``r`` drawing from
@@ -29,7 +29,8 @@ from collections.abc import Iterable
 import numpy as np
 
 from cbm import se2
-from cbm.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
+from evaluation.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
+from loaders import Frame, Sequence
 
 from .agents import (
     TARGET_DISTANCE,
@@ -42,7 +43,6 @@ from .agents import (
     in_trials,
     steady_cav,
 )
-from .scene import Frame, Sequence
 
 AUTO_CAV = "auto"
 """The CAV choice that lets the builder pick (the steady CAV, else the nearest the target distance)."""
@@ -56,7 +56,7 @@ class NoTrial(ValueError):
 
 
 def sequence_cav(sequence: Sequence, target_distance: float = TARGET_DISTANCE) -> str | None:
-    """The sequence's steady CAV (``loaders.agents.steady_cav``), computed once per sequence."""
+    """The sequence's steady CAV (``evaluation.agents.steady_cav``), computed once per sequence."""
     known = _STEADY.setdefault(sequence, {})
     if target_distance not in known:
         known[target_distance] = steady_cav(sequence, target_distance)

@@ -10,8 +10,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .inspect import Inspection
-from .result import MatchResult
+from cbm.inspect import Inspection
+from cbm.result import MatchResult
+
 from .scenario import Trial
 
 

@@ -2,8 +2,8 @@
 import numpy as np
 import pytest
 
-from cbm.scenario import FrameInputs, ScenarioParams
-from cbm.search import search
+from evaluation.scenario import FrameInputs, ScenarioParams
+from evaluation.search import search
 from support.scenes import street_scene
 
 pytest.importorskip("optuna")

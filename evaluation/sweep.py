@@ -1,12 +1,12 @@
 """Parameter sweeps: trials over frames and a grid of parameters, every method on every trial, one
 row of metrics per (frame, grid point, method).
 
-    from cbm.scenario import FrameInputs
-    from cbm.sweep import Sweep, run
+    from evaluation.scenario import FrameInputs
+    from evaluation.sweep import Sweep, run
     sweep = Sweep(methods=("cbm", "icp"), grid={"eta": [0.2, 0.6], "sigma2": [2.0, 3.0]}, seed=0)
     rows = run(sweep, [FrameInputs(0, {"boxes": boxes, "ids": ids})], workers=2)
 
-A grid name is a field of :class:`~cbm.scenario.ScenarioParams` (it changes the trial) or a tunable
+A grid name is a field of :class:`~evaluation.scenario.ScenarioParams` (it changes the trial) or a tunable
 parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
 Every trial is built by ``FrameInputs.build`` (frame ``k`` draws from ``trial_rng(seed, k)``), as
 the app builds its trials, so any row can be reproduced there from its frame, parameters and seed.
@@ -23,10 +23,11 @@ from typing import Any
 
 import numpy as np
 
+from cbm.methods import METHODS
+
 from .detected import FALSE_POSITIVE_CLASS
 from .executors import run_tasks
 from .fusion import FUSION_COLUMNS, FUSIONS, fusion_columns, fusion_pose
-from .methods import METHODS
 from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
 from .scenario import FrameInputs, ScenarioParams, Trial
 
@@ -35,7 +36,7 @@ SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
 TRIAL_COLUMNS = ("ego_id", "cav_id")
 METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad",
                   "rre", "rte", "margin", "estimated", "success", "init_rre", "init_rte")
-"""Per-trial metrics (``cbm.metrics.TrialMetrics`` without the runtime, ``is_success``, and the
+"""Per-trial metrics (``evaluation.metrics.TrialMetrics`` without the runtime, ``is_success``, and the
 RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
 TIMING_COLUMNS = ("runtime_s",)
 """Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
@@ -51,7 +52,7 @@ class Sweep:
     scenario: ScenarioParams = ScenarioParams()
     """Scenario settings the grid does not vary (its ``seed`` is replaced by the sweep's)."""
     fusion: str | None = None
-    """``nms``: each row also holds its late-fusion detections (``cbm.fusion.FUSION_COLUMNS``)."""
+    """``nms``: each row also holds its late-fusion detections (``evaluation.fusion.FUSION_COLUMNS``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "methods", tuple(self.methods))
@@ -124,8 +125,8 @@ def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
         progress: Callable[[int], None] | None = None, ray: str | None = None) -> list[dict[str, Any]]:
     """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
     (frame, scenario point) tasks in a process pool, ``ray`` (``local``, ``auto`` or an address) on
-    Ray (``cbm.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
-    stops the run with a ``cbm.executors.TaskError`` naming its frame and scenario point."""
+    Ray (``evaluation.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
+    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point."""
     tasks = [(sweep, frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
     done = progress or (lambda n: None)
     results = run_tasks(run_task, tasks, workers=workers, ray=ray, done=lambda rows: done(len(rows)),
@@ -184,7 +185,7 @@ def _text(value: Any) -> str | None:
 
 
 def summarise(rows: Sequence[Mapping[str, Any]], by: Sequence[str]) -> list[tuple[tuple, dict[str, float]]]:
-    """Micro-averaged aggregates (``cbm.metrics.aggregate``) of the rows grouped by the columns
+    """Micro-averaged aggregates (``evaluation.metrics.aggregate``) of the rows grouped by the columns
     ``by``: ``(key, aggregate)`` per group, groups in order of first appearance."""
     groups: dict[tuple, list[TrialMetrics]] = {}
     names = [f.name for f in dataclasses.fields(TrialMetrics)]
