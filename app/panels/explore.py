@@ -24,11 +24,11 @@ from ..scene.recording_html import recording_html
 from ..scene.view import SceneView
 from ..session import export, worst
 from ..session.background import Runner, Task
+from ..session.calibration import CalibrationCheck
 from ..session.explorer import Outcome
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
 from ..session.sequence import SequenceRun, run_sequence
 from .actions import TabActions
-from .calibration import CalibrationFolder
 from .plot import add_frame_plot
 from .reports import search_markdown, sequence_markdown, worst_markdown
 
@@ -77,7 +77,13 @@ class ExplorePanel:
                 self.search_table = gui.add_markdown("")
                 self.best = gui.add_dropdown("setting", (NO_SEARCH,))
                 self.apply = gui.add_button("apply to the sliders")
-            self.calibration = CalibrationFolder(gui, tab)
+            self.calibration = CalibrationCheck(tab.explorer.sequence)
+            with gui.add_folder("Dataset calibration", expand_by_default=False):
+                self.check = gui.add_button("check the dataset's calibration", disabled=not self.calibration.usable,
+                                            hint="the shipped transform against the dataset's own labels")
+                self.check_text = gui.add_markdown(self.calibration.text)
+                self.flagged = gui.add_dropdown("flagged frame", ("(check first)",))
+                self.go = gui.add_button("go to frame", hint="that frame and CAV, under the current settings")
             with gui.add_folder("Export"):
                 self.csv = gui.add_button("per-frame metrics (CSV)")
                 self.parquet = gui.add_button("per-frame metrics (Parquet)")
@@ -91,6 +97,8 @@ class ExplorePanel:
 
     def _bind(self) -> None:
         self.cancel.on_click(lambda e: self.runner.cancel())
+        self.check.on_click(lambda e: self.calibration.start(self._checked) and self._checked())
+        self.go.on_click(lambda e: self.go_to_flagged(self.flagged.value))
         self.run_button.on_click(lambda e: self.start_run())
         self.metric.on_update(lambda e: self._show_worst())
         self.jump.on_click(lambda e: self.jump_to(worst.frame_of(self.worst.value))
@@ -142,6 +150,19 @@ class ExplorePanel:
             return
         settings = dataclasses.replace(self.run.settings, frame=frame, view=self.tab.settings.view)
         self.tab.apply(lambda s: settings, move_controls=True)
+
+    # dataset calibration
+
+    def _checked(self) -> None:
+        self.check_text.content = self.calibration.text
+        self.flagged.options = self.calibration.options()
+        self.flagged.value = self.flagged.options[0]
+
+    def go_to_flagged(self, chosen: str) -> None:
+        """Show a flagged frame of the calibration check with its CAV, under the current settings."""
+        row = self.calibration.row_of(chosen)
+        if row is not None:
+            self.tab.apply(lambda s: dataclasses.replace(s, frame=row.frame, cav=row.cav), move_controls=True)
 
     # parameter search
 
