@@ -17,6 +17,7 @@ from app.session.settings import Settings
 from cbm import se2
 from evaluation.scenario import ScenarioParams
 from evaluation.trials import build_trial
+from loaders.opv2v import category
 from support import releases
 
 WRITERS = {
@@ -31,12 +32,14 @@ WRITERS = {
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
     "interaction": lambda root: shutil.copy(releases.FIXTURES / "interaction" / "vehicle_tracks_000.csv", root),
+    "table": lambda root: releases.generic_table(root / "boxes.csv"),
 }
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
     "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
+    "table": (2, ["700", "702"]),
 }
 
 
@@ -202,3 +205,9 @@ def test_adver_city_documented_sample_reports_the_gnss_error_to_the_millimetre(t
     np.testing.assert_allclose(gap, [0.03, -0.04], atol=1e-6)           # y mirrored: CARLA is left-handed
     old_reading = np.hypot(body[0] + 0.03 - lidar[0], body[1] + 0.04 - lidar[1])
     assert old_reading > 0.45
+
+
+def test_unknown_actor_classes_keep_their_name():
+    assert category({"class": "Scooter "}, "vehicles") == "Scooter"
+    assert category({"obj_type": "Pedestrian"}, "vehicles") == "pedestrian"
+    assert category({}, "walkers") == "pedestrian" and category({}, "cyclists") == "cyclists"

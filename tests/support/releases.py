@@ -273,3 +273,18 @@ def v2x_sim_root(root: Path) -> Path:
         points = np.hstack([xyz, np.ones((len(xyz), 1), np.float32)])
         points.astype(np.float32).tofile(folder / f"scene_1_000000_LIDAR_TOP_id_{agent}.pcd.bin")
     return root
+
+
+def generic_table(path: Path) -> Path:
+    """The generic table (``loaders/README.md``): one row per box and frame, ``agent`` rows for what
+    each agent sees, written by polars."""
+    import polars as pl
+
+    rows = [{"frame": k, "track_id": str(i), "category": c, "x": x, "y": y, "length": length, "width": width,
+             "height": height, "yaw": yaw, "agent": None}
+            for k in range(2) for i, c, x, y, yaw, length, width, height in moved(k)]
+    rows += [{**row, "agent": agent} for row in list(rows) for agent in ("700", "702")
+             if row["track_id"] != agent and math.hypot(row["x"], row["y"]) < 28]
+    path.parent.mkdir(parents=True, exist_ok=True)
+    pl.DataFrame(rows).write_csv(path)
+    return path
