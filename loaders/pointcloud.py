@@ -42,20 +42,21 @@ def _parsed(path: Path):
     """The file parsed by pypcd4 (a ``pypcd4.PointCloud``), its failures turned into a
     :class:`LoaderError`. pypcd4 (with pydantic) is imported on the first sweep read: it adds about
     half a second to ``import loaders``, which most sessions never need."""
-    import pydantic
     import pypcd4
 
     try:
         return pypcd4.PointCloud.from_path(path)
-    except pydantic.ValidationError as exc:
-        raise LoaderError(f"{path}: PCD header: {_header_problem(exc)}") from exc
     except PCD_ERRORS as exc:
+        if callable(getattr(exc, "errors", None)):
+            raise LoaderError(f"{path}: PCD header: {_header_problem(exc)}") from exc
         raise LoaderError(f"{path}: {_body_problem(path, exc)}") from exc
 
 
 def _header_problem(exc) -> str:
-    """What is wrong with a header, in its own keys (``missing SIZE, TYPE``)."""
-    missing = [str(error["loc"][0]).upper() for error in exc.errors() if error["type"] == "missing"]
+    """What is wrong with a header (pypcd4's pydantic ``ValidationError``, a ``ValueError``), in its
+    own keys (``missing SIZE, TYPE``)."""
+    missing = [str(error["loc"][0]).upper() for error in exc.errors()
+               if error["type"] in ("missing", "value_error.missing")]
     if missing:
         return f"missing {', '.join(missing)} (expected {', '.join(HEADER_KEYS)})"
     error = exc.errors()[0]
