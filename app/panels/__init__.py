@@ -40,9 +40,11 @@ class Controls:
 
 
 def build(gui: viser.GuiApi, settings: Settings, n_frames: int, preset_names: list[str]) -> Controls:
-    """The panels of a new tab, in screen order (the Explore tab is added to ``Controls.tabs`` after)."""
-    shown = metrics.build(gui, n_frames)
-    frames = frame.build(gui, settings, n_frames)
+    """The panels of a new tab, in screen order: the frame slider and play first, then the metrics
+    and the timeline, the CAVs, and the tabs (Explore and Steps are added to ``Controls.tabs`` after)."""
+    navigation = frame.build_navigation(gui, settings, n_frames)
+    shown = metrics.build(gui, navigation.frame)
+    frames = frame.build(gui, settings, navigation)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Scenario"):
         scenario_controls = scenario.build(gui, settings)

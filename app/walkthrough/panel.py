@@ -22,6 +22,8 @@ PANEL_SHIFT = 0.15
 """Sideways shift of the look-at point per metre of height, so the object clears the control panel."""
 LOOK_HEIGHT = 45.0
 """Metres above the followed object of the camera that looks at it."""
+TAB = "Steps"
+"""The tab's name: short, so that the panel's six tabs fit on one row at its width (384 px)."""
 IDLE = "Walk through CBM's steps on the frame on screen: **start** (or next step ▶) shows step 1 in the scene."
 
 
@@ -38,7 +40,7 @@ class WalkthroughPanel:
         self._lock = threading.RLock()
         self._generation = 0
         """Bumped by every redraw: an animation of an older step stops."""
-        with tabs.add_tab("Walkthrough"):
+        with tabs.add_tab(TAB):
             self.title = gui.add_markdown(f"**{steps.title(0)}**")
             self.text = gui.add_markdown(IDLE)
             self.start = gui.add_button("start walkthrough", hint="show CBM's steps on this frame in the scene")

@@ -37,7 +37,7 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
     page = ui.open_page(browser, small_server)
     tab = ui.session(small_server, 1)
     walk = tab.walkthrough
-    page.get_by_role("tab", name="Walkthrough").click()
+    page.get_by_role("tab", name="Steps").click()
     page.get_by_role("button", name="start walkthrough").click()
     _title(page, 0)
     ui.wait_until(lambda: f"{ROOT}/ego_boxes" in walk.nodes.visible_names)
