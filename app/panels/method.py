@@ -13,17 +13,17 @@ import viser
 
 from cbm.methods import METHODS
 
+from ..scene.words import WORDS, label_of
 from ..session.settings import Settings
 from .actions import TabActions, on_user
 
 SLIDERS = {
-    # (parameter set, field): (label, min, max, step, hint)
-    ("cbm", "sigma1"): ("σ1 angle (°)", 1.0, 45.0, 0.5, "largest angle between matching context vectors (eq. 7)"),
-    ("cbm", "sigma2"): ("σ2 L1 (m)", 0.25, 10.0, 0.25, "largest L1 distance between matching context vectors (eq. 7)"),
-    ("cbm", "sigma3"): ("σ3 voting (m)", 0.25, 10.0, 0.25, "L1 tolerance of the voting sets of the consensus"),
-    ("cbm", "distance_limit"): ("distance limit (m)", 1.0, 60.0, 1.0,
-                                "reject anchors whose pairs are farther apart on average"),
-    ("cbm", "refine_gate"): ("refine gate (σ)", 1.0, 8.0, 0.25, "re-association gate, in std-devs of the pairs' noise"),
+    # (parameter set, field): (min, max, step)
+    ("cbm", "sigma1"): (1.0, 45.0, 0.5),
+    ("cbm", "sigma2"): (0.25, 10.0, 0.25),
+    ("cbm", "sigma3"): (0.25, 10.0, 0.25),
+    ("cbm", "distance_limit"): (1.0, 60.0, 1.0),
+    ("cbm", "refine_gate"): (1.0, 8.0, 0.25),
 }
 LABELS = {m.label: m.name for m in METHODS.values()}
 
@@ -69,11 +69,15 @@ def inactive_reason(settings: Settings, key: str, name: str) -> str | None:
     if key != chosen.params_key:
         return f"{chosen.label} selected: {METHODS[key].label}'s parameters do not apply"
     if name in chosen.forced:
-        return f"{chosen.label} forces {name} = {chosen.forced[name]}"
+        return f"{chosen.label} forces {label_of(key, name)} {_worded(chosen.forced[name])}"
     needed = chosen.requires.get(name)
     if needed is not None and name not in chosen.controls(settings.params):
-        return f"{needed[0]} is off"
+        return f"{label_of(key, needed[0])} is off"
     return None
+
+
+def _worded(value: Any) -> str:
+    return {True: "on", False: "off"}.get(value, f"= {value}") if isinstance(value, bool) else f"= {value}"
 
 
 def build(gui: viser.GuiApi, settings: Settings) -> MethodControls:
@@ -92,15 +96,16 @@ def build(gui: viser.GuiApi, settings: Settings) -> MethodControls:
 
 def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
     """A slider for the listed thresholds, a checkbox for a switch, a list for a choice, else a number."""
+    label, hint = WORDS[(key, name)]
     if (key, name) in SLIDERS:
-        label, low, high, step, hint = SLIDERS[(key, name)]
+        low, high, step = SLIDERS[(key, name)]
         return gui.add_slider(label, low, high, step, value, hint=hint)
     if isinstance(value, bool):
-        return gui.add_checkbox(name, value)
+        return gui.add_checkbox(label, value, hint=hint)
     options = typing.get_args(typing.get_type_hints(METHODS[key].params)[name])
     if isinstance(value, str) and options:
-        return gui.add_dropdown(name, options, initial_value=value)
-    return gui.add_number(name, value, step=1 if isinstance(value, int) else 0.01)
+        return gui.add_dropdown(label, options, initial_value=value, hint=hint)
+    return gui.add_number(label, value, step=1 if isinstance(value, int) else 0.01, hint=hint)
 
 
 def bind(c: MethodControls, tab: TabActions) -> None:

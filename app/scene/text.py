@@ -11,6 +11,7 @@ from cbm.result import MatchResult
 from evaluation.metrics import is_success
 
 from ..session.explorer import Outcome
+from ..session.names import agent_name
 from .cavs import per_cav_rows
 
 
@@ -47,7 +48,8 @@ def metrics_markdown(outcome: Outcome) -> str:
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHODS[outcome.settings.method].label
-    agents = f"ego `{str(outcome.ego_id)[:8]}` · CAV `{str(outcome.cav_id)[:8]}` ({outcome.cav_note})"
+    ego, cav = agent_name("ego", outcome.ego_id, code=True), agent_name("CAV", outcome.cav_id, code=True)
+    agents = f"{ego} · {cav} ({outcome.cav_note})"
     lines = [
         f"**Frame {outcome.frame_index}** · {agents}",
         "",

@@ -21,6 +21,7 @@ from evaluation.metrics import is_success
 
 from .explorer import Outcome, classified_pairs
 from .history import settings_key
+from .names import agent_name
 from .settings import Settings
 
 LIMIT = 500
@@ -88,7 +89,7 @@ def record_of(outcome: Outcome) -> FrameRecord:
     after = result.transform if result.estimated else trial.init
     right, wrong, missed = classified_pairs(outcome.shown_pairs, trial.gt_pairs)
     return FrameRecord(
-        frame=outcome.frame_index, agents=f"ego {str(outcome.ego_id)[:8]} · CAV {str(outcome.cav_id)[:8]}",
+        frame=outcome.frame_index, agents=f"{agent_name('ego', outcome.ego_id)} · {agent_name('CAV', outcome.cav_id)}",
         ego=top_down(trial.ego_boxes), cav_before=top_down(se2.apply_boxes(trial.init, trial.cav_boxes)),
         cav_after=top_down(se2.apply_boxes(after, trial.cav_boxes)),
         cav_pose_before=_pose(trial.init), cav_pose_after=_pose(after),
