@@ -67,3 +67,8 @@ WORDS = {
 def label_of(key: str, name: str) -> str:
     """The label of parameter ``name`` of the parameter set ``key`` (``Method.params_key``)."""
     return WORDS[(key, name)][0]
+
+
+def plural(count: int, noun: str, nouns: str | None = None) -> str:
+    """``count`` and the noun in the number it takes: "1 pair", "3 pairs" (``nouns``: an irregular plural)."""
+    return f"{count} {noun if count == 1 else nouns or noun + 's'}"
