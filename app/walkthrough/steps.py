@@ -164,14 +164,11 @@ def local_matching(facts: Facts) -> Step:
     if len(others):
         shown_pair = others[_showcase(others, cav_members, cav_vectors, params.sigma2)]
         cav_row = int(np.flatnonzero(cav_members == shown_pair[1])[0])
-        ego_row = int(np.flatnonzero(ego_members == shown_pair[0])[0])
         wedge, diamond = shapes.tolerance_region(cav_vectors[cav_row], params.sigma1, params.sigma2)
         lines["wedge"], lines["diamond"] = Lines(placed(wedge), BAND, 1.5), Lines(placed(diamond), REGION, 2.5)
         tip = placed(shapes.local_vectors(cav_vectors[cav_row:cav_row + 1]))[0, 1]
-        ego_tip = placed(shapes.local_vectors(ego_vectors[ego_row:ego_row + 1]))[0, 1]
-        labels["region"] = (f"{facts.cav_name(int(shown_pair[1]))}: σ1 {params.sigma1:g}° · σ2 {params.sigma2:g} m",
-                            _at(tip, 3.4))
-        labels["partner"] = (facts.ego_name(int(shown_pair[0])), _at(ego_tip, 2.6))
+        labels["region"] = (f"{facts.cav_name(int(shown_pair[1]))} ⇄ {facts.ego_name(int(shown_pair[0]))}: "
+                            f"σ1 {params.sigma1:g}° · σ2 {params.sigma2:g} m", _at(tip, 3.4))
         span = 2.0 * (float(np.linalg.norm(cav_vectors[cav_row])) + params.sigma2) + 8.0
         shown = (f" The grey wedge (σ1 = {params.sigma1:g}°) and the purple diamond (σ2 = {params.sigma2:g} m, "
                  f"L1) surround the vector to {facts.cav_name(int(shown_pair[1]))}; the vector to "

@@ -116,7 +116,7 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
     ego_id = str(tab.last.trial.ego_ids[int(tab.last.result.anchor[0])])[:8]
     labels = tab.explore.inspector_view.labels
     assert labels["inspector_ego"].text == f"EGO {ego_id}: context in its own frame"
-    assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: grey = σ1")
+    assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: blue = ")
     assert any(name.startswith("inspector_ego_tip") and label.visible for name, label in labels.items())
     page.screenshot(path=str(ui.ARTIFACTS / "inspector-1280x720.png"))
     page.close()
