@@ -13,6 +13,7 @@ from evaluation.metrics import is_success
 from ..session.explorer import Outcome
 from ..session.names import agent_name
 from .cavs import per_cav_rows
+from .words import margin_words
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -66,7 +67,8 @@ def metrics_markdown(outcome: Outcome) -> str:
         f"| limit (oracle: true pairs) | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
     ]
     if result.anchor is not None:
-        lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")
+        margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
+        lines.append(f"| consensus margin | {margin} |")
     lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:

@@ -72,3 +72,8 @@ def label_of(key: str, name: str) -> str:
 def plural(count: int, noun: str, nouns: str | None = None) -> str:
     """``count`` and the noun in the number it takes: "1 pair", "3 pairs" (``nouns``: an irregular plural)."""
     return f"{count} {noun if count == 1 else nouns or noun + 's'}"
+
+
+def margin_words(margin: int, count: int, runner_up: int) -> str:
+    """The consensus margin as the app prints it: the margin, then the winner's and the runner-up's counts."""
+    return f"{margin} ({count} vs {runner_up})"

@@ -80,7 +80,11 @@ def metrics_of(outcome: Outcome) -> dict[str, Any]:
                "rte": m.rte, "rre": m.rre, "rte_before": init_rte, "rre_before": init_rre,
                "margin": m.margin, "runtime_s": m.runtime_s, "estimated": m.estimated,
                "success": is_success(m)}
-    return {name: _plain(value) for name, value in numbers.items()}
+    plain = {name: _plain(value) for name, value in numbers.items()}
+    result = outcome.result
+    anchored = result.anchor is not None
+    return {**plain, "consensus_count": int(result.consensus_count) if anchored else None,
+            "runner_up_count": int(result.runner_up_count) if anchored else None}
 
 
 def record_of(outcome: Outcome) -> FrameRecord:
