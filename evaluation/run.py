@@ -70,12 +70,15 @@ def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]]
     except ValueError as error:
         raise ValueError(str(error).splitlines()[0]) from None
     picked = range(len(seq)) if frames is None else frames(len(seq))
+    nothing = ValueError(f"no chosen frame of {name} has an object to match: there is nothing to calibrate "
+                         "(try other --frames, or synthetic:N with N > 0)")
+    if not any(len(seq[index].track_ids) for index in picked):
+        raise nothing
     inputs, skipped = frame_inputs(seq, picked, protocol, cav_distance, agents)
     if not inputs:
         raise ValueError(f"no frame of {name} has an ego and a CAV for the {protocol} protocol")
     if not any(len(frame.trial["ids"]) for frame in inputs):
-        raise ValueError(f"no chosen frame of {name} has an object to match: there is nothing to calibrate "
-                         "(try other --frames, or synthetic:N with N > 0)")
+        raise nothing
     return Source(name, inputs, skipped, trials.short_frames(inputs, agents))
 
 

@@ -160,6 +160,9 @@ def test_the_screenshot_can_include_the_control_panel(browser, server: ExplorerS
     assert image.shape[1] == camera.image_width + PANEL_WIDTH
     panel = image[:, camera.image_width + 4:]
     assert (panel.sum(axis=-1) < 200).sum() > 500, "the panel's text is drawn"
+    scene = image[:, : camera.image_width].astype(int)
+    assert np.median(scene) > 200, "the light theme's scene is light, not black (the render's transparent background)"
+    assert (np.abs(scene - (52, 120, 246)).sum(axis=-1) < 90).sum() > 50, "the ego's blue boxes are in it"
     page.close()
 
 

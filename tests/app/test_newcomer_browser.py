@@ -7,14 +7,12 @@ import re
 
 import pytest
 
-from app.server import ExplorerServer
 from app.session.explorer import Explorer
 from cbm.methods import METHODS
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
 
-SCREEN = {"width": 1280, "height": 720}
 GRAPH = METHODS["cbm-graph"].label
 
 
@@ -22,19 +20,6 @@ GRAPH = METHODS["cbm-graph"].label
 def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
     with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
         yield running
-
-
-def open_small(browser, server: ExplorerServer):
-    page = browser.new_page(viewport=SCREEN)
-    page.goto(server.url)
-    page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
-    return page
-
-
-def within_first_screen(locator) -> bool:
-    box = locator.bounding_box()
-    return box is not None and box["y"] >= 0 and box["y"] + box["height"] <= SCREEN["height"] \
-        and box["x"] >= 0 and box["x"] + box["width"] <= SCREEN["width"]
 
 
 def slider_labels(page) -> list[str]:
@@ -63,11 +48,11 @@ def disabled(page, text: str) -> bool:
 
 
 def test_the_frame_slider_and_play_are_in_the_first_screen_and_the_tabs_on_one_row(browser, server) -> None:
-    page = open_small(browser, server)
+    page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
-    assert within_first_screen(ui.slider(page, "frame"))
+    assert ui.in_first_screen(ui.slider(page, "frame"))
     play = page.get_by_role("button", name="▶ play")
-    assert within_first_screen(play) and within_first_screen(page.get_by_role("button", name="next ▶"))
+    assert ui.in_first_screen(play) and ui.in_first_screen(page.get_by_role("button", name="next ▶"))
     tabs = page.get_by_role("tab").all()
     assert len(tabs) == 6 and len({round(t.bounding_box()["y"]) for t in tabs}) == 1
     assert [name for name in slider_labels(page) if re.search(r"\bframe\b", name)] == ["frame"]
@@ -84,7 +69,7 @@ def test_the_frame_slider_and_play_are_in_the_first_screen_and_the_tabs_on_one_r
 
 
 def test_every_control_is_labelled_in_words_and_the_page_is_named(browser, server) -> None:
-    page = open_small(browser, server)
+    page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     ui.wait_until(lambda: page.title() == "CBM Explorer")
     assert not re.search(r"\bego\s+ego\b", ui.header(page)), ui.header(page)
@@ -108,7 +93,7 @@ def test_every_control_is_labelled_in_words_and_the_page_is_named(browser, serve
 
 
 def test_a_preset_says_what_it_is_before_loading_and_default_resets_the_view(browser, server) -> None:
-    page = open_small(browser, server)
+    page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="Presets").click()
     ui.pick_option(page, "preset", "teaching")
@@ -126,7 +111,7 @@ def test_a_preset_says_what_it_is_before_loading_and_default_resets_the_view(bro
 
 
 def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server) -> None:
-    page = open_small(browser, server)
+    page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="View").click()
     assert disabled(page, "LiDAR points")

@@ -80,7 +80,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     assert caption.inner_text().splitlines() == [f"Frame {FRAME} · {'success' if is_success(m) else 'failed'}",
                                                  f"precision {m.precision:.2f} · recall {m.recall:.2f}",
                                                  f"RTE {m.rte:.2f} m · RRE {m.rre:.1f}°"]
-    assert within_page(caption)
+    assert ui.in_first_screen(caption)
     assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in tab.view.labels.values() if label.visible)
     agents = np.array(tab.last_drawing.agents)
     middle = (agents.min(axis=0) + agents.max(axis=0)) / 2
@@ -104,7 +104,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     page.get_by_text("Okabe-Ito").first.wait_for(timeout=20_000)
     panel = ui.label(page, "presentation mode").locator("xpath=ancestor::*[contains(@class, 'mantine-Paper-root')][1]")
     ui.wait_until(lambda: panel.bounding_box() is not None and panel.bounding_box()["height"] > 300)
-    assert within_page(caption) and not overlaps(caption.bounding_box(), panel.bounding_box())
+    assert ui.in_first_screen(caption) and not overlaps(caption.bounding_box(), panel.bounding_box())
     assert caption.inner_text().startswith(f"Frame {FRAME}")
     tab.client.camera.look_at = (50.0, 50.0, 0.0)
     page.get_by_role("button", name="reset camera").click()
@@ -116,12 +116,6 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     caption.wait_for(state="hidden", timeout=20_000)
     page.close()
     other.close()
-
-
-def within_page(locator) -> bool:
-    box = locator.bounding_box()
-    return box is not None and box["x"] >= 0 and box["y"] >= 0 and box["x"] + box["width"] <= 1280 \
-        and box["y"] + box["height"] <= 720
 
 
 def overlaps(a: dict, b: dict) -> bool:

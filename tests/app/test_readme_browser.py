@@ -26,9 +26,7 @@ def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 
 def test_the_readme_picture_shows_both_halves_of_side_by_side(browser, server: ExplorerServer) -> None:
-    page = browser.new_page(viewport={"width": 1280, "height": 720})
-    page.goto(server.url)
-    page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
+    page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     row = ui.label(page, "frame").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
     box = row.locator("input.mantine-NumberInput-input")

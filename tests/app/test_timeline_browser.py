@@ -90,5 +90,6 @@ def click_timeline_at(page, frame: int, n_frames: int) -> None:
     control = ui.label(page, "frame").get_attribute("for")
     root = page.locator(f'[id="{control}"]')
     ui.wait_until(lambda: root.locator(".mantine-Slider-mark").count() == len(FAILED) + 2, 30)
+    root.scroll_into_view_if_needed()
     track = root.locator(".mantine-Slider-track").bounding_box()
     page.mouse.click(track["x"] + track["width"] * frame / (n_frames - 1), track["y"] + track["height"] / 2)
