@@ -16,6 +16,7 @@ import loaders
 from .server import AddressError, ExplorerServer, check_free, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
+from .session.offers import offers_of
 from .session.presets import PresetError, discover
 from .session.settings import Settings
 
@@ -123,6 +124,9 @@ def main(argv: list[str] | None = None) -> int:
         settings = presets[args.preset].apply(Settings())
     except (KeyError, TypeError, ValueError) as error:
         return _fail(str(PresetError(f"{args.preset}: {error}")))
+    refused = offers_of(sequence).refusal(settings)
+    if refused:
+        return _fail(f"--preset {args.preset}: {refused}")
     explorer = Explorer(sequence)
     if usable_frame(explorer, settings) is None:
         _warn(f"no frame has a usable pair of agents (ego and CAV) under the {settings.scenario.protocol} protocol "

@@ -18,6 +18,10 @@ RESOLVE_SECONDS = 5.0
 """How long a host name may take to resolve before the server gives up on it."""
 CLOSE_SECONDS = 1.0
 """How long ``stop`` waits for the tabs' workers to finish what they compute."""
+TITLE = "CBM Explorer"
+TITLE_HTML = f'<img alt="" src="data:," style="display:none" onerror="document.title = {TITLE!r}">'
+"""Names the browser tab: viser serves its page titled "Viser" and offers no way to change it, but
+runs the handlers of the HTML it is given (an image that cannot load reports an error at once)."""
 
 
 class AddressError(OSError):
@@ -73,7 +77,7 @@ class ExplorerServer:
         self._gone: set[int] = set()
         """Tabs that closed while their session was still being built."""
         self._lock = threading.Lock()
-        self.server = viser.ViserServer(host=host, port=port, label="CBM Explorer", verbose=verbose)
+        self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
         if port and self.server.get_port() != port:
             self.server.stop()
             raise AddressError(f"port {port} was taken while the server started; choose another --port")
@@ -91,6 +95,7 @@ class ExplorerServer:
         return f"http://{self.server.get_host()}:{self.server.get_port()}"
 
     def _connected(self, client: viser.ClientHandle) -> None:
+        client.gui.add_html(TITLE_HTML, order=-1.0)
         session = ClientSession(client, self.explorer, self.settings, self.kernels)
         with self._lock:
             gone = client.client_id in self._gone

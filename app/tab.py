@@ -23,6 +23,7 @@ from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
 from .session.history import FrameHistory, settings_key, sweep_rows
 from .session.kernels import Kernels
+from .session.offers import offers_of
 from .session.presets import PresetError, discover, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
@@ -32,6 +33,11 @@ from .walkthrough.panel import WalkthroughPanel
 TIMELINE_DELAY = 0.2
 """Seconds after the latest result before the timeline is redrawn: the chart costs the browser more
 than the rest of a result, and while a slider moves only the last result's timeline is worth drawing."""
+
+
+def descriptions(presets: dict) -> dict[str, str]:
+    """Each preset's description by its name."""
+    return {name: preset.description for name, preset in presets.items()}
 
 
 class ClientSession:
@@ -56,8 +62,10 @@ class ClientSession:
         self.presets, problems = discover()
         self.view = SceneView(client)
         self.view.reset_camera()
+        self.caption = presentation.Caption(client)
         self.key_numbers = KeyNumbers(client.gui)
-        self.controls = panels.build(client.gui, settings, len(explorer), list(self.presets))
+        self.offers = offers_of(explorer.sequence)
+        self.controls = panels.build(client.gui, settings, len(explorer), descriptions(self.presets), self.offers)
         self.explore = ExplorePanel(client.gui, self.controls.tabs, self)
         self.walkthrough = WalkthroughPanel(client.gui, self.controls.tabs, self)
         panels.bind(self.controls, self)
@@ -91,10 +99,14 @@ class ClientSession:
                 new = edit(self._settings)
                 if new == self._settings:
                     return
+                refused = self.offers.refusal(new)
+                if refused:
+                    raise ValueError(refused)
                 self._settings = new
                 self.worker.submit(new)
         except (ValueError, TypeError) as error:
             self.notify("Setting refused", str(error), "red")
+            self.controls.show(self._settings)
             return
         if move_controls:
             self.controls.show(new)
@@ -117,10 +129,13 @@ class ClientSession:
             return
         try:
             loaded = preset.apply(self._settings)
+            refused = self.offers.refusal(dataclasses.replace(loaded, cavs=self._settings.cavs))
+            if refused:
+                raise ValueError(refused)
         except (KeyError, TypeError, ValueError) as error:
             self.notify("Preset not loaded", f"{name}: {error}", "red")
             return
-        self.apply(lambda s: dataclasses.replace(loaded, frame=s.frame, cav=s.cav), move_controls=True)
+        self.apply(lambda s: dataclasses.replace(loaded, frame=s.frame, cav=s.cav, cavs=s.cavs), move_controls=True)
         self.notify("Preset loaded", preset.description or name, "green")
 
     def save_preset(self, name: str) -> None:
@@ -130,7 +145,7 @@ class ClientSession:
             self.notify("Preset not saved", str(error), "red")
             return
         self.presets, problems = discover()
-        self.controls.presets.preset.options = tuple(self.presets)
+        self.controls.presets.offer(descriptions(self.presets))
         self.controls.presets.skipped.content = skipped_markdown(problems)
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
@@ -201,6 +216,7 @@ class ClientSession:
             self.controls.metrics.show(picture.metrics_markdown, self._note)
             self._show_timeline_soon(outcome.frame_index)
             self.key_numbers.show(outcome)
+            self.caption.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)
             self.walkthrough.refresh(outcome)

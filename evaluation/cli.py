@@ -22,6 +22,11 @@ The same arguments give the same table byte for byte except the ``runtime_s`` co
 wall-clock time: with ``--no-timing`` the table (CSV and Parquet) and the summary leave it out and
 are byte-identical between runs.
 
+Defaults are the app's: the shipped ``default`` preset's scenario (the range protocol, 0.2 m and
+2 degree detection noise, the CAV off by 3 m, 3 m and 5 degrees) and method parameters.
+``--preset`` starts from another preset instead, a shipped one by name or a file the app saved or
+exported (``evaluation.presets``); ``--protocol``, ``--seed`` and ``--grid`` change it further.
+
 Trials come from the trial builder the app uses (``evaluation.trials``): the dataset's ego and the
 sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a
 frame without it, the vehicle nearest that distance). ``sind`` deals the frame's objects out to the
@@ -47,6 +52,7 @@ from cbm.methods import METHODS
 from evaluation.agents import TARGET_DISTANCE
 from evaluation.executors import ExecutorError, TaskError
 from evaluation.fusion import FUSIONS
+from evaluation.presets import PresetFileError, PresetParams, default_preset, find_preset, shipped_names
 from evaluation.sweep import grid_defaults
 
 from . import calibration_check
@@ -75,12 +81,16 @@ def build_parser() -> Parser:
                              "(default: argoverse2)")
     parser.add_argument("--frames", default="all",
                         help="frame indices: all, or a comma list of N and A:B[:STEP] ranges (end excluded)")
-    parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default="sind")
+    parser.add_argument("--preset", default=None, metavar="NAME_OR_FILE",
+                        help="start from a preset: a shipped one by name (" + ", ".join(shipped_names()) + ") or a "
+                             "TOML file the app saved or exported (default: default, the app's defaults)")
+    parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default=None,
+                        help="scenario protocol (default: the preset's; range for the default preset)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS),
                         help=f"comma list of {', '.join(METHODS)} (default: all)")
     parser.add_argument("--grid", nargs="+", default=[], metavar="NAME=V1,V2",
                         help="scenario or method parameters and their values, e.g. eta=0.2,0.6 sigma2=2,3")
-    parser.add_argument("--seed", type=int, default=0)
+    parser.add_argument("--seed", type=int, default=None, help="seed of every random draw (default: the preset's, 0)")
     parser.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
     parser.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
     parser.add_argument("--ray", default=None, metavar="{local,auto,ADDRESS}",
@@ -189,12 +199,22 @@ def parse_value(name: str, text: str, default: Any) -> Any:
         raise CliError(f"--grid: {name} takes {type(default).__name__} values, got {text!r}") from None
 
 
+def read_preset(name_or_file: str | None) -> PresetParams:
+    """The preset ``--preset`` names (None: the default one)."""
+    try:
+        return default_preset() if name_or_file is None else find_preset(name_or_file)
+    except PresetFileError as error:
+        raise CliError(f"--preset: {error}") from None
+
+
 def prepare(args: argparse.Namespace) -> Plan:
     """Check the arguments and load the frames of every dataset; ``CliError`` names what is wrong."""
     if args.workers < 1:
         raise CliError(f"--workers must be at least 1, got {args.workers}")
-    if args.seed < 0:
-        raise CliError(f"--seed must be a non-negative integer, got {args.seed}")
+    preset = read_preset(args.preset)
+    seed = preset.scenario.seed if args.seed is None else args.seed
+    if seed < 0:
+        raise CliError(f"--seed must be a non-negative integer, got {seed}")
     if not (args.cav_distance >= 0 and math.isfinite(args.cav_distance)):
         raise CliError(f"--cav-distance must be a finite number >= 0, got {args.cav_distance}")
     try:
@@ -208,9 +228,10 @@ def prepare(args: argparse.Namespace) -> Plan:
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
     try:
-        return plan(args.dataset, methods=methods, grid=grid, seed=args.seed, protocol=args.protocol,
+        return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
-                    detections=args.detections, fusion=args.fusion, agents=args.agents)
+                    detections=args.detections, fusion=args.fusion, agents=args.agents,
+                    scenario=preset.scenario, params=preset.params)
     except ValueError as error:
         raise CliError(str(error)) from None
 

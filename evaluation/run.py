@@ -6,6 +6,7 @@ and a sweep of methods and parameters (``evaluation.sweep``) into one per-trial 
 """
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -69,25 +70,34 @@ def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]]
     except ValueError as error:
         raise ValueError(str(error).splitlines()[0]) from None
     picked = range(len(seq)) if frames is None else frames(len(seq))
+    nothing = ValueError(f"no chosen frame of {name} has an object to match: there is nothing to calibrate "
+                         "(try other --frames, or synthetic:N with N > 0)")
+    if not any(len(seq[index].track_ids) for index in picked):
+        raise nothing
     inputs, skipped = frame_inputs(seq, picked, protocol, cav_distance, agents)
     if not inputs:
         raise ValueError(f"no frame of {name} has an ego and a CAV for the {protocol} protocol")
     if not any(len(frame.trial["ids"]) for frame in inputs):
-        raise ValueError(f"no chosen frame of {name} has an object to match: there is nothing to calibrate "
-                         "(try other --frames, or synthetic:N with N > 0)")
+        raise nothing
     return Source(name, inputs, skipped, trials.short_frames(inputs, agents))
 
 
 def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
-         grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str = "sind",
+         grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str | None = None,
          frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE,
-         detections: str | None = None, fusion: str | None = None, agents: int = 2) -> Plan:
+         detections: str | None = None, fusion: str | None = None, agents: int = 2,
+         scenario: ScenarioParams | None = None, params: Mapping[str, Any] | None = None) -> Plan:
     """Check the run and load its datasets; ``ValueError`` naming what is wrong. ``agents``: the ego
-    and ``agents - 1`` CAVs, one trial row per CAV and frame (``evaluation.trials.frame_cav_inputs``)."""
+    and ``agents - 1`` CAVs, one trial row per CAV and frame (``evaluation.trials.frame_cav_inputs``).
+    ``scenario`` and ``params`` (by ``Method.params_key``) are what the grid does not vary (default:
+    ``ScenarioParams()`` and each method's defaults; ``evaluation.presets`` reads them from a preset);
+    ``protocol``, when given, replaces the scenario's."""
     if agents < 2:
         raise ValueError(f"--agents must be at least 2 (the ego and one CAV), got {agents}")
-    sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, scenario=ScenarioParams(protocol=protocol),
-                  fusion=fusion)
+    scenario = scenario or ScenarioParams()
+    protocol = protocol or scenario.protocol
+    sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, fusion=fusion, params=dict(params or {}),
+                  scenario=dataclasses.replace(scenario, protocol=protocol))
     return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections, agents)
                              for name in datasets))
 

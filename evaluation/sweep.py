@@ -51,6 +51,9 @@ class Sweep:
     seed: int = 0
     scenario: ScenarioParams = ScenarioParams()
     """Scenario settings the grid does not vary (its ``seed`` is replaced by the sweep's)."""
+    params: Mapping[str, Any] = field(default_factory=dict)
+    """Method parameters the grid does not vary, by ``Method.params_key`` (a preset's); a method
+    missing here starts from its defaults."""
     fusion: str | None = None
     """``nms``: each row also holds its late-fusion detections (``evaluation.fusion.FUSION_COLUMNS``)."""
 
@@ -93,8 +96,10 @@ class Sweep:
     def method_points(self, method: str) -> list[Any]:
         """``method``'s parameters at every point of its part of the grid, in grid order, as it runs
         them (forced parameters applied, so the table records what ran)."""
-        names = [n for n in self.grid if n in METHODS[method].tunable]
-        return [METHODS[method].resolved(METHODS[method].params(**dict(zip(names, values))))
+        record = METHODS[method]
+        names = [n for n in self.grid if n in record.tunable]
+        base = self.params.get(record.params_key) or record.params()
+        return [record.resolved(dataclasses.replace(base, **dict(zip(names, values))))
                 for values in itertools.product(*(self.grid[n] for n in names))]
 
     def trial_count(self, n_frames: int) -> int:

@@ -5,10 +5,12 @@ settings through ``TabActions.apply`` and never touch another panel; ``show`` mo
 given settings (the app's own updates do not re-fire callbacks, ``actions.on_user``)."""
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 
 import viser
 
+from ..session.offers import Offers
 from ..session.settings import Settings
 from . import frame, method, metrics, presets, scenario, view
 from .actions import TabActions
@@ -39,19 +41,23 @@ class Controls:
         self.view.reflect(settings)
 
 
-def build(gui: viser.GuiApi, settings: Settings, n_frames: int, preset_names: list[str]) -> Controls:
-    """The panels of a new tab, in screen order (the Explore tab is added to ``Controls.tabs`` after)."""
-    shown = metrics.build(gui, n_frames)
-    frames = frame.build(gui, settings, n_frames)
+def build(gui: viser.GuiApi, settings: Settings, n_frames: int, descriptions: Mapping[str, str],
+          offers: Offers) -> Controls:
+    """The panels of a new tab, in screen order: the frame slider and play first, then the metrics
+    and the timeline, the CAVs, and the tabs (Explore and Steps are added to ``Controls.tabs`` after).
+    ``descriptions``: the presets by name; ``offers``: what the dataset cannot offer, and why."""
+    navigation = frame.build_navigation(gui, settings, n_frames)
+    shown = metrics.build(gui, navigation.frame)
+    frames = frame.build(gui, settings, navigation)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Scenario"):
-        scenario_controls = scenario.build(gui, settings)
+        scenario_controls = scenario.build(gui, settings, offers)
     with tabs.add_tab("Method"):
-        method_controls = method.build(gui, settings)
+        method_controls = method.build(gui, settings, offers)
     with tabs.add_tab("View"):
-        view_controls = view.build(gui, settings)
+        view_controls = view.build(gui, settings, offers)
     with tabs.add_tab("Presets"):
-        preset_controls = presets.build(gui, preset_names)
+        preset_controls = presets.build(gui, descriptions)
     controls = Controls(shown, frames, tabs, scenario_controls, method_controls, view_controls, preset_controls)
     controls.reflect(settings)
     return controls

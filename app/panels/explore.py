@@ -50,6 +50,8 @@ class ExplorePanel:
         self.inspected: tuple[int, int | None, int | None] | None = None
         """(frame, ego index, CAV index) of the pair the inspector shows."""
         self.shown: inspector.ContextPicture | None = None
+        self.camera_before: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+        """Where the camera stood before it was moved to the inspector's panels (``clear`` goes back)."""
         self.inspector_view = SceneView(tab.client)
         with tabs.add_tab("Explore"):
             self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
@@ -202,6 +204,7 @@ class ExplorePanel:
             self.tab.notify("Nothing to inspect", "this frame has no winning anchor", "yellow")
             return
         self._inspect(outcome, picture, *map(int, outcome.result.anchor))
+        self.look_at_inspector()
 
     def refresh(self, outcome: Outcome, picture: Drawing) -> None:
         """Follow a recompute: the same pair on the same frame is redrawn under the new thresholds;
@@ -223,6 +226,8 @@ class ExplorePanel:
             return
         x, y = self.shown.centre
         client = self.tab.client
+        if self.camera_before is None:
+            self.camera_before = (tuple(client.camera.position), tuple(client.camera.look_at))
         screen = layouts.screen_of(client.camera)
         z = layouts.fitting_height(self.shown.span, screen)
         position, look_at = layouts.slid_clear_of_panel((x - 0.15 * z, y, z), (x, y, 0.0), screen)
@@ -232,6 +237,11 @@ class ExplorePanel:
         client.flush()
 
     def clear_inspector(self) -> None:
+        """Hide the inspector's panels and put back the camera they moved."""
+        if self.camera_before is not None:
+            camera = self.tab.client.camera
+            camera.position, camera.look_at = self.camera_before
+            self.camera_before = None
         self.inspected = self.shown = None
         self.inspector_view.show(inspector.empty())
         self.inspector_text.content = "Click a box in the scene to see its context."
@@ -264,9 +274,10 @@ class ExplorePanel:
     def screenshot_png(self) -> bytes:
         """The view as PNG bytes, with the metrics panel beside it when "include the control panel" is on."""
         _, picture = self.tab.current()
+        dark = self.tab.settings.view.dark
         if not self.with_panel.value or picture is None:
-            return png(render(self.tab.client))
-        return png(export.with_panel(render(self.tab.client), picture.metrics_markdown))
+            return png(export.opaque(render(self.tab.client), dark))
+        return png(export.with_panel(render(self.tab.client), picture.metrics_markdown, dark=dark))
 
     def _download(self, filename: str, content: bytes) -> None:
         self.tab.client.send_file_download(filename, content, save_immediately=True)

@@ -1,4 +1,6 @@
-"""The Frame folder: frame slider, step buttons, play loop and speed, which vehicle is the CAV, and
+"""The frame controls: at the top of the panel, the one frame slider (the timeline marks every
+failed frame known on it, ``metrics.MetricsControls.show_timeline``) and ◀ prev / ▶ play / next ▶;
+lower down, the "CAVs and playback" folder: play speed, which vehicle is the CAV, how many CAVs, and
 (for a dataset of several scenarios, e.g. an OPV2V release root) a jump to a scenario's first frame."""
 from __future__ import annotations
 
@@ -7,15 +9,27 @@ from dataclasses import dataclass, field
 
 import viser
 
+from ..session.history import FAILED_MEANING
 from ..session.settings import AUTO_CAV, MAX_CAVS, Settings
 from .actions import TabActions, on_user
+
+PREV, PLAY, PAUSE, NEXT = "◀ prev", "▶ play", "❚❚ pause", "next ▶"
+FRAME_HINT = f"the frame shown; a dot under the track marks each failed frame known ({FAILED_MEANING})"
+
+
+@dataclass
+class Navigation:
+    """The controls at the top of the panel."""
+
+    frame: viser.GuiSliderHandle
+    step: viser.GuiButtonGroupHandle
+    """◀ prev, ▶ play (❚❚ pause while playing), next ▶."""
 
 
 @dataclass
 class FrameControls:
     frame: viser.GuiSliderHandle
     step: viser.GuiButtonGroupHandle
-    play: viser.GuiCheckboxHandle
     speed: viser.GuiSliderHandle
     cav: viser.GuiDropdownHandle
     cavs: viser.GuiNumberHandle
@@ -29,6 +43,10 @@ class FrameControls:
         if self.starts:
             self.scenario.value = scenario_of(self.starts, settings.frame)
 
+    def show_playing(self, playing: bool) -> None:
+        """The middle button offers to pause while playing, to play otherwise."""
+        self.step.options = (PREV, PAUSE if playing else PLAY, NEXT)
+
 
 def scenario_of(starts: dict[str, int], frame: int) -> str:
     """The scenario whose frames include ``frame`` (the last one starting at or before it)."""
@@ -36,13 +54,19 @@ def scenario_of(starts: dict[str, int], frame: int) -> str:
     return begun[-1] if begun else next(iter(starts))
 
 
-def build(gui: viser.GuiApi, settings: Settings, n_frames: int) -> FrameControls:
-    with gui.add_folder("Frame", expand_by_default=True):
+def build_navigation(gui: viser.GuiApi, settings: Settings, n_frames: int) -> Navigation:
+    """The frame slider and the step / play buttons, where the panel starts."""
+    last = max(n_frames - 1, 0)
+    return Navigation(frame=gui.add_slider("frame", 0, last, 1, settings.frame, hint=FRAME_HINT),
+                      step=gui.add_button_group("step", (PREV, PLAY, NEXT)))
+
+
+def build(gui: viser.GuiApi, settings: Settings, navigation: Navigation) -> FrameControls:
+    """The "CAVs and playback" folder, completing the frame controls of ``navigation``."""
+    with gui.add_folder("CAVs and playback", expand_by_default=True):
         return FrameControls(
-            frame=gui.add_slider("frame", 0, max(n_frames - 1, 0), 1, settings.frame),
-            step=gui.add_button_group("step", ("◀ prev", "next ▶")),
-            play=gui.add_checkbox("play", False),
-            speed=gui.add_slider("speed (frames/s)", 1, 10, 1, 4),
+            frame=navigation.frame, step=navigation.step,
+            speed=gui.add_slider("play speed (frames/s)", 1, 10, 1, 4, hint="frames shown per second by ▶ play"),
             cav=gui.add_dropdown("CAV", (AUTO_CAV,), initial_value=AUTO_CAV, hint="vehicle acting as the CAV"),
             cavs=gui.add_number("CAVs", settings.cavs, min=1, max=MAX_CAVS, step=1,
                                 hint="how many CAVs, each calibrated to the ego and drawn in its own colour "
@@ -53,8 +77,7 @@ def build(gui: viser.GuiApi, settings: Settings, n_frames: int) -> FrameControls
 
 def bind(c: FrameControls, tab: TabActions) -> None:
     on_user(c.frame, lambda: _slid(c, tab))
-    c.step.on_click(lambda e: tab.step(-1 if e.target.value.startswith("◀") else 1))
-    on_user(c.play, lambda: tab.set_playing(c.play.value))
+    c.step.on_click(lambda e: _stepped(c, tab, e.target.value))
     on_user(c.cav, lambda: tab.apply(lambda s: dataclasses.replace(s, cav=tab.cav_id(c.cav.value))))
     on_user(c.cavs, lambda: tab.apply(lambda s: dataclasses.replace(s, cavs=_cav_count(c.cavs.value))))
     scenarios = tab.explorer.sequence.scenarios or {}
@@ -65,6 +88,16 @@ def bind(c: FrameControls, tab: TabActions) -> None:
         c.scenario.visible = True
         on_user(c.scenario, lambda: tab.apply(
             lambda s: dataclasses.replace(s, frame=c.starts[c.scenario.value]), move_controls=True))
+
+
+def _stepped(c: FrameControls, tab: TabActions, button: str) -> None:
+    """◀ prev and next ▶ step one frame; ▶ play and ❚❚ pause start and stop the play loop."""
+    if button in (PREV, NEXT):
+        tab.step(-1 if button == PREV else 1)
+        return
+    playing = button == PLAY
+    tab.set_playing(playing)
+    c.show_playing(playing)
 
 
 def _slid(c: FrameControls, tab: TabActions) -> None:

@@ -1,31 +1,37 @@
 """The Method tab: the method list and a folder per parameter set, showing the set of the selected
 method and CBM's (CBM's thresholds are the ones the app is about); a control that has no effect under
 the current settings is disabled, and its folder's note says why (``cbm.methods``: what a method
-tunes, what it forces, what needs what)."""
+tunes, what it forces, what needs what); a method that cannot run here (the joint pose graph with
+one CAV) is not offered, and a note under the list says why."""
 from __future__ import annotations
 
 import dataclasses
 import typing
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import viser
 
 from cbm.methods import METHODS
 
+from ..scene.words import WORDS, label_of
+from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, on_user
 
 SLIDERS = {
-    # (parameter set, field): (label, min, max, step, hint)
-    ("cbm", "sigma1"): ("σ1 angle (°)", 1.0, 45.0, 0.5, "largest angle between matching context vectors (eq. 7)"),
-    ("cbm", "sigma2"): ("σ2 L1 (m)", 0.25, 10.0, 0.25, "largest L1 distance between matching context vectors (eq. 7)"),
-    ("cbm", "sigma3"): ("σ3 voting (m)", 0.25, 10.0, 0.25, "L1 tolerance of the voting sets of the consensus"),
-    ("cbm", "distance_limit"): ("distance limit (m)", 1.0, 60.0, 1.0,
-                                "reject anchors whose pairs are farther apart on average"),
-    ("cbm", "refine_gate"): ("refine gate (σ)", 1.0, 8.0, 0.25, "re-association gate, in std-devs of the pairs' noise"),
+    # (parameter set, field): (min, max, step)
+    ("cbm", "sigma1"): (1.0, 45.0, 0.5),
+    ("cbm", "sigma2"): (0.25, 10.0, 0.25),
+    ("cbm", "sigma3"): (0.25, 10.0, 0.25),
+    ("cbm", "distance_limit"): (1.0, 60.0, 1.0),
+    ("cbm", "refine_gate"): (1.0, 8.0, 0.25),
 }
 LABELS = {m.label: m.name for m in METHODS.values()}
+ABOUT = {"cbm": "*σ1 and σ2: how alike two objects' neighbourhoods must be to match (angle, distance). σ3: how "
+                "closely matched pairs must agree to back each other in the consensus vote. Hover a control for "
+                "more.*"}
+"""A folder's words above its controls, in plain language."""
 
 
 @dataclass
@@ -39,6 +45,9 @@ class MethodControls:
     """A folder's note: which of its controls are disabled, and why."""
     hints: dict[tuple[str, str], str]
     """Each control's own hint (a disabled one's hint starts with why it is disabled)."""
+    unoffered: viser.GuiMarkdownHandle
+    """Under the method list: the methods not offered here, and why."""
+    offers: Offers = field(default_factory=Offers)
 
     def show(self, settings: Settings) -> None:
         self.method.value = METHODS[settings.method].label
@@ -46,7 +55,9 @@ class MethodControls:
             control.value = getattr(settings.method_params[key], name)
 
     def reflect(self, settings: Settings) -> None:
-        """Show the chosen method's folder and CBM's; disable, with a note, what does not act."""
+        """Offer the methods that can run; show the chosen method's folder and CBM's; disable, with a
+        note, what does not act."""
+        self._offer(settings)
         chosen = METHODS[settings.method]
         for key, folder in self.folders.items():
             folder.visible = key in (chosen.params_key, "cbm")
@@ -62,6 +73,15 @@ class MethodControls:
                                        for why, names in inactive[key].items())
             note.visible = bool(inactive[key])
 
+    def _offer(self, settings: Settings) -> None:
+        why = self.offers.pose_graph(settings.cavs)
+        offered = tuple(label for label, name in LABELS.items() if why is None or not METHODS[name].takes_peers)
+        if tuple(self.method.options) != offered:
+            self.method.options = offered
+        graphs = [m.label for m in METHODS.values() if m.takes_peers]
+        self.unoffered.content = f"*Not offered: {', '.join(graphs)} ({why}).*" if why and graphs else ""
+        self.unoffered.visible = bool(why and graphs)
+
 
 def inactive_reason(settings: Settings, key: str, name: str) -> str | None:
     """Why parameter ``name`` of set ``key`` has no effect under ``settings``; None when it acts."""
@@ -69,38 +89,47 @@ def inactive_reason(settings: Settings, key: str, name: str) -> str | None:
     if key != chosen.params_key:
         return f"{chosen.label} selected: {METHODS[key].label}'s parameters do not apply"
     if name in chosen.forced:
-        return f"{chosen.label} forces {name} = {chosen.forced[name]}"
+        return f"{chosen.label} forces {label_of(key, name)} {_worded(chosen.forced[name])}"
     needed = chosen.requires.get(name)
     if needed is not None and name not in chosen.controls(settings.params):
-        return f"{needed[0]} is off"
+        return f"{label_of(key, needed[0])} is off"
     return None
 
 
-def build(gui: viser.GuiApi, settings: Settings) -> MethodControls:
+def _worded(value: Any) -> str:
+    return {True: "on", False: "off"}.get(value, f"= {value}") if isinstance(value, bool) else f"= {value}"
+
+
+def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> MethodControls:
     method = gui.add_dropdown("method", tuple(LABELS), initial_value=METHODS[settings.method].label)
+    unoffered = gui.add_markdown("", visible=False)
     folders, params, notes = {}, {}, {}
     for key, values in settings.method_params.items():
         if not dataclasses.fields(values):
             continue
         with gui.add_folder(f"{METHODS[key].label} parameters") as folder:
             folders[key] = folder
+            if key in ABOUT:
+                gui.add_markdown(ABOUT[key])
             notes[key] = gui.add_markdown("", visible=False)
             for f in dataclasses.fields(values):
                 params[(key, f.name)] = _control(gui, key, f.name, getattr(values, f.name))
-    return MethodControls(method, folders, params, notes, {k: c.hint or "" for k, c in params.items()})
+    return MethodControls(method, folders, params, notes, {k: c.hint or "" for k, c in params.items()}, unoffered,
+                          offers)
 
 
 def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
     """A slider for the listed thresholds, a checkbox for a switch, a list for a choice, else a number."""
+    label, hint = WORDS[(key, name)]
     if (key, name) in SLIDERS:
-        label, low, high, step, hint = SLIDERS[(key, name)]
+        low, high, step = SLIDERS[(key, name)]
         return gui.add_slider(label, low, high, step, value, hint=hint)
     if isinstance(value, bool):
-        return gui.add_checkbox(name, value)
+        return gui.add_checkbox(label, value, hint=hint)
     options = typing.get_args(typing.get_type_hints(METHODS[key].params)[name])
     if isinstance(value, str) and options:
-        return gui.add_dropdown(name, options, initial_value=value)
-    return gui.add_number(name, value, step=1 if isinstance(value, int) else 0.01)
+        return gui.add_dropdown(label, options, initial_value=value, hint=hint)
+    return gui.add_number(label, value, step=1 if isinstance(value, int) else 0.01, hint=hint)
 
 
 def bind(c: MethodControls, tab: TabActions) -> None:

@@ -1,9 +1,9 @@
 """The outputs above the controls: a status line (what the tab is waiting for), the frame's
-metrics, the timeline of the frames computed so far, and its controls: a frame slider under the
-chart with a mark on every failed frame (a click on it jumps there), step to the previous or next
-failed frame, jump to a failed frame, pin the current settings as a baseline.
+metrics, the timeline of the frames computed so far, and its controls: step to the previous or next
+failed frame, jump to a failed frame, pin the current settings as a baseline. The timeline marks
+every failed frame on the one frame slider at the top of the panel (``frame``).
 
-viser 1.1.1 sends no clicks on a chart; the slider under it spans the same frames."""
+viser 1.1.1 sends no clicks on a chart; the frame slider spans the same frames."""
 from __future__ import annotations
 
 import dataclasses
@@ -41,7 +41,7 @@ class MetricsControls:
     text: viser.GuiMarkdownHandle
     plot: viser.GuiUplotHandle
     scrubber: viser.GuiSliderHandle
-    """The timeline's frame: a click jumps there; a mark on each failed frame known."""
+    """The frame slider (``frame.Navigation``): a mark on each failed frame known."""
     failures: viser.GuiButtonGroupHandle
     failed: viser.GuiDropdownHandle
     pin: viser.GuiButtonHandle
@@ -61,7 +61,8 @@ class MetricsControls:
         frames and the pin button's label."""
         self.plot.data = timeline
         self.scrubber.value = frame
-        marks = tuple(GuiSliderMark(value=float(f), label=None) for f in failures)
+        ends = tuple(GuiSliderMark(value=float(v), label=str(int(v))) for v in (self.scrubber.min, self.scrubber.max))
+        marks = ends + tuple(GuiSliderMark(value=float(f), label=None) for f in failures)
         if self.scrubber._marks != marks:
             self.scrubber._marks = marks
         options = (f"{FAILED_HEADER} ({len(failures)} known)", *(f"frame {f}" for f in failures))
@@ -71,11 +72,11 @@ class MetricsControls:
         self.pin.label = UNPIN if pinned else PIN
 
 
-def build(gui: viser.GuiApi, n_frames: int) -> MetricsControls:
+def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle) -> MetricsControls:
+    """The metrics and the timeline's controls; ``frame_slider`` (built above them) carries the marks."""
     status, text = gui.add_markdown("", visible=False), gui.add_markdown("Computing the first frame…")
     plot = add_timeline(gui)
-    scrubber = gui.add_slider("go to frame", 0, max(n_frames - 1, 1), 1, 0,
-                              hint=f"click a frame to show it; dots: failed frames ({FAILED_MEANING})")
+    scrubber = frame_slider
     failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
     failed = gui.add_dropdown("jump to", (f"{FAILED_HEADER} (0 known)",),
                               hint="a failed frame known so far ")
@@ -85,7 +86,6 @@ def build(gui: viser.GuiApi, n_frames: int) -> MetricsControls:
 
 
 def bind(c: MetricsControls, tab: TimelineTab) -> None:
-    on_user(c.scrubber, lambda: go_to(tab, int(c.scrubber.value)))
     c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
     on_user(c.failed, lambda: jump(tab, c.failed.value))
     c.pin.on_click(lambda e: toggle_pin(tab))

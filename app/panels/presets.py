@@ -1,30 +1,53 @@
-"""The Presets tab: load a shipped or saved preset, save the current settings under a name; below,
-the preset files that were skipped and why."""
+"""The Presets tab: pick a shipped or saved preset and read what it sets before loading it, load it,
+save the current settings under a name; below, the preset files that were skipped and why."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from collections.abc import Mapping
+from dataclasses import dataclass, field
 
 import viser
 
-from .actions import TabActions
+from .actions import TabActions, on_user
+
+NONE = "(none)"
 
 
 @dataclass
 class PresetControls:
     preset: viser.GuiDropdownHandle
+    about: viser.GuiMarkdownHandle
+    """The picked preset's description, shown before it is loaded."""
     load: viser.GuiButtonHandle
     name: viser.GuiTextHandle
     save: viser.GuiButtonHandle
     skipped: viser.GuiMarkdownHandle
     """Which preset files were skipped and why (empty when none was)."""
+    descriptions: dict[str, str] = field(default_factory=dict)
+
+    def offer(self, descriptions: Mapping[str, str]) -> None:
+        """List the presets (name -> description), keeping the one picked when it is still there."""
+        self.descriptions = dict(descriptions)
+        picked = self.preset.value
+        self.preset.options = tuple(self.descriptions) or (NONE,)
+        self.preset.value = picked if picked in self.descriptions else self.preset.options[0]
+        self.describe()
+
+    def describe(self) -> None:
+        """Show what the picked preset is for."""
+        text = self.descriptions.get(self.preset.value, "")
+        self.about.content = f"*{text}*" if text else ""
 
 
-def build(gui: viser.GuiApi, preset_names: list[str]) -> PresetControls:
-    return PresetControls(preset=gui.add_dropdown("preset", tuple(preset_names) or ("(none)",)),
-                          load=gui.add_button("load"), name=gui.add_text("save as", "my-preset"),
-                          save=gui.add_button("save current settings"), skipped=gui.add_markdown(""))
+def build(gui: viser.GuiApi, descriptions: Mapping[str, str]) -> PresetControls:
+    controls = PresetControls(preset=gui.add_dropdown("preset", tuple(descriptions) or (NONE,)),
+                              about=gui.add_markdown(""), load=gui.add_button("load"),
+                              name=gui.add_text("save as", "my-preset"), save=gui.add_button("save current settings"),
+                              skipped=gui.add_markdown(""))
+    controls.offer(descriptions)
+    return controls
 
 
 def bind(c: PresetControls, tab: TabActions) -> None:
+    on_user(c.preset, c.describe)
     c.load.on_click(lambda e: tab.load_preset(c.preset.value))
     c.save.on_click(lambda e: tab.save_preset(c.name.value))

@@ -1,11 +1,13 @@
 """The Scenario tab: protocol, localization error, detection noise, co-visibility, seed. A slider
-the protocol does not read is disabled, and the tab's note says why."""
+the protocol does not read is disabled, a localization the dataset cannot give is not offered, and
+the tab's note says why."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import viser
 
+from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, on_user
 
@@ -36,6 +38,7 @@ class ScenarioControls:
     sliders: dict[str, viser.GuiSliderHandle]
     seed: viser.GuiNumberHandle
     note: viser.GuiMarkdownHandle
+    offers: Offers = field(default_factory=Offers)
 
     def show(self, settings: Settings) -> None:
         scenario = settings.scenario
@@ -53,8 +56,11 @@ class ScenarioControls:
             slider.hint = SLIDERS[name][4] if why is None else f"Disabled: {why}. {SLIDERS[name][4]}"
             if why is not None:
                 reasons.setdefault(why, []).append(SLIDERS[name][0])
-        self.note.content = "  \n".join(f"*Disabled ({why}): {', '.join(names)}.*" for why, names in reasons.items())
-        self.note.visible = bool(reasons)
+        lines = [f"*Disabled ({why}): {', '.join(names)}.*" for why, names in reasons.items()]
+        if self.offers.reported_poses:
+            lines.append(f"*Not offered: localization error `dataset` ({self.offers.reported_poses}).*")
+        self.note.content = "  \n".join(lines)
+        self.note.visible = bool(lines)
 
 
 def unread_reason(settings: Settings, name: str) -> str | None:
@@ -67,17 +73,18 @@ def unread_reason(settings: Settings, name: str) -> str | None:
     return None
 
 
-def build(gui: viser.GuiApi, settings: Settings) -> ScenarioControls:
+def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ScenarioControls:
     scenario = settings.scenario
+    localizations = tuple(name for name in LOCALIZATIONS if name != "dataset" or not offers.reported_poses)
     return ScenarioControls(
         protocol=gui.add_dropdown("protocol", ("range", "sind", "opv2v"), initial_value=scenario.protocol),
-        localization=gui.add_dropdown("localization error", LOCALIZATIONS, initial_value=scenario.localization,
+        localization=gui.add_dropdown("localization error", localizations, initial_value=scenario.localization,
                                       hint="fixed offset, gaussian draw, or the dataset's own (OPV2V's "
                                            "predicted_ego_pos)"),
         sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
                  for name, (label, low, high, step, hint) in SLIDERS.items()},
         seed=gui.add_number("seed", scenario.seed, min=0, step=1),
-        note=gui.add_markdown("", visible=False))
+        note=gui.add_markdown("", visible=False), offers=offers)
 
 
 def bind(c: ScenarioControls, tab: TabActions) -> None:

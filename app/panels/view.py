@@ -1,20 +1,23 @@
 """The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, camera,
-presentation mode and the dark theme, and the legend of the palette in use."""
+presentation mode and the dark theme, and the legend of the palette in use. LiDAR points are
+disabled, with the reason, on a dataset without point clouds."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import viser
 
 from cbm.methods import METHODS
 
 from ..scene.colours import palette
+from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, on_user
 
 TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused")
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
+POINTS_HINT = "The ego's and the CAV's LiDAR points (datasets with .pcd files), the CAV's placed like its boxes"
 
 
 @dataclass
@@ -32,6 +35,9 @@ class ViewControls:
     points_every: viser.GuiSliderHandle
     legend: viser.GuiMarkdownHandle
     fused: viser.GuiCheckboxHandle
+    note: viser.GuiMarkdownHandle
+    """Why the LiDAR points are disabled (hidden when they are not)."""
+    offers: Offers = field(default_factory=Offers)
 
     def show(self, settings: Settings) -> None:
         view = settings.view
@@ -42,11 +48,14 @@ class ViewControls:
 
     def reflect(self, settings: Settings) -> None:
         self.line_pairs.visible = METHODS[settings.method].explains
-        self.points_every.disabled = not settings.view.points
+        why = self.offers.points
+        self.points.disabled = why is not None
+        self.points.hint = POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}"
+        self.points_every.disabled = not settings.view.points or why is not None
         self.legend.content = palette(settings.view).legend
 
 
-def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
+def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls:
     view = settings.view
     controls = ViewControls(
         layout=gui.add_dropdown("CAV boxes", LAYOUTS, initial_value=view.layout),
@@ -63,15 +72,15 @@ def build(gui: viser.GuiApi, settings: Settings) -> ViewControls:
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),
         dark=gui.add_checkbox("dark theme", view.dark, hint="A dark page and scene, in this browser tab only"),
-        points=gui.add_checkbox("LiDAR points", view.points,
-                                hint="The ego's and the CAV's LiDAR points (datasets with .pcd files), the "
-                                     "CAV's placed like its boxes"),
+        points=gui.add_checkbox("LiDAR points", view.points, hint=POINTS_HINT),
         points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
                                     hint="Draw every Nth LiDAR point (1: all of them)"),
+        note=gui.add_markdown(f"*Disabled ({offers.points}): LiDAR points.*", visible=offers.points is not None),
         legend=gui.add_markdown(palette(view).legend),
         fused=gui.add_checkbox("fused boxes (late fusion)", view.fused,
                                hint="The ego's and the CAV's boxes merged by NMS at this pose: outlines green for "
-                                    "a true positive, red for a false one (BEV IoU 0.7 against the ground truth)"))
+                                    "a true positive, red for a false one (BEV IoU 0.7 against the ground truth)"),
+        offers=offers)
     return controls
 
 

@@ -1,11 +1,12 @@
-"""What presentation mode writes into the scene: the labels' text size, and the line of key numbers
-and where it goes (``drawing`` and ``view`` read it; ``presentation`` does the rest of the mode)."""
+"""What presentation mode writes for the room: the labels' text size (``drawing`` and ``view`` read
+it) and the caption of the frame's key numbers (``presentation.Caption`` shows it in a small panel
+of its own at the page's bottom left, where it covers no box and stays whole when the control panel
+opens; ``presentation`` does the rest of the mode)."""
 from __future__ import annotations
 
-from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
-import numpy as np
+from evaluation.metrics import is_success
 
 from ..session.settings import ViewOptions
 from .text import number
@@ -17,21 +18,24 @@ LABEL_PX = 14.0
 """Height of the labels' text in CSS pixels (viser's own default is 12)."""
 PRESENTATION_LABEL_PX = 20.0
 """In presentation mode: readable from the back of a room."""
+CAPTION_PX = 24
+"""Height of the caption's text in CSS pixels."""
+
 
 def label_px(view: ViewOptions) -> float:
     """Height of the labels' text for ``view``."""
     return PRESENTATION_LABEL_PX if view.presentation else LABEL_PX
 
 
-def key_numbers(outcome: Outcome) -> str:
-    """The one line of numbers presentation mode shows in the 3D view."""
+def caption_lines(outcome: Outcome) -> list[str]:
+    """The frame and its verdict, precision and recall, the pose errors: one line each."""
     m = outcome.metrics
-    return (f"precision {number(m.precision)} · recall {number(m.recall)} · "
-            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}")
+    return [f"Frame {outcome.frame_index} · {'success' if is_success(m) else 'failed'}",
+            f"precision {number(m.precision)} · recall {number(m.recall)}",
+            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}"]
 
 
-def numbers_position(agents: Sequence[tuple[float, float]]) -> tuple[float, float, float]:
-    """Where the key numbers go: just below the agents on screen (x points up), starting at their
-    left (the label's top-left corner is its anchor; y points left)."""
-    points = np.asarray(agents, float).reshape(-1, 2)
-    return float(points[:, 0].min() - 5.0), float(points[:, 1].max() + 4.0), 2.5
+def caption_html(outcome: Outcome) -> str:
+    """The caption as HTML, in the theme's text colour."""
+    style = f"font:600 {CAPTION_PX}px/1.35 system-ui,sans-serif;padding:2px 12px 10px;color:inherit"
+    return f'<div id="cbm-caption" style="{style}">' + "<br>".join(caption_lines(outcome)) + "</div>"

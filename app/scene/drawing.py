@@ -98,8 +98,6 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
     lines = {**_lines(parts, palette), **_map_lines(map_segments, parts.map_poses, palette)}
     agents = tuple(tuple(map(float, se2.translation_of(pose))) for pose in (*parts.ego_poses, *parts.cav_poses))
     labels = _labels(parts, panels)
-    if view.presentation:
-        labels["numbers"] = (captions.key_numbers(outcome), captions.numbers_position(agents))
     meshes = {**_meshes(parts, ego, cav, palette),
               **{name: Mesh(*mesh) for name, mesh in cavs.other_cav_boxes(outcome, panels).items()}}
     points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),

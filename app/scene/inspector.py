@@ -3,14 +3,16 @@
 pair they form, the sigma1 angular band and the sigma2 region (an L1 ball: a diamond) around each
 context vector (eq. 7), the candidate set ``L_ij`` (eq. 8), what consensus removed and the votes
 each pair got (eq. 9-11), from ``cbm.inspect``. The panels go left of the scene (+y), away from the
-control panel on the page's right; each neighbour is labelled with its object id, and a legend
-names the colours.
+control panel on the page's right, each on a plate that hides the map beneath; neighbours are
+labelled with their object ids where a label does not cover another (as the camera that looks at
+the panels shows them), and a legend names every colour.
 
 The panels are drawn in the ego frame's orientation: the object's own forward axis points like the
 ego's (x), so a context vector sits where CBM compares it.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 import numpy as np
@@ -20,26 +22,35 @@ from cbm.inspect import AnchorDetail, Inspection
 from evaluation.diagnosis import pair_name, short_id
 
 from ..session.explorer import Outcome
-from . import geometry
+from . import geometry, layouts
+from .captions import LABEL_PX
 from .colours import CAV_BOXES, EGO_BOXES, RIGHT, WRONG
-from .drawing import Drawing, Lines, no_lines
+from .drawing import Drawing, Lines, Mesh, no_lines
+from .linecolours import as_shown
+from .words import plural
 
 ARC_SEGMENTS = 6
 """Segments of the arc closing each sigma1 band."""
 PANEL_GAP = 15.0
 """Metres between the scene and the first panel, and between the panels."""
-HEIGHT = 0.1
+HEIGHT = 0.7
+"""Metres above the ground of the panels' lines: clear of their plates in the depth buffer of a
+camera 200 m up."""
+PLATE_HEIGHT = 0.3
+PLATES = {False: (250, 250, 250), True: (34, 35, 40)}
+"""The panels' plates, by the dark theme: the page's background, so that the map does not show through."""
 BAND = (120, 120, 120)
 REGION = (150, 60, 200)
 MAX_ROWS = 30
 """Rows of the candidate table shown (the rest is counted)."""
 MAX_TIP_LABELS = 12
 """Neighbours labelled with their ids per panel, nearest first."""
-TIP_SPACING = 4.0
-"""Metres between labelled tips (a tip closer to one already labelled is left unlabelled)."""
+CHAR_PX, LINE_PX = 0.62 * LABEL_PX + 0.5, 1.45 * LABEL_PX
+"""About how wide a label's character and how tall its line are on screen, in CSS pixels."""
 THICKNESS = {"vectors": 3.0, "bands": 1.5, "regions": 2.5, "kept": 6.0, "removed": 6.0}
 """Line widths in screen pixels."""
-LEGEND = "legend: grey = σ1 band · purple = σ2 region · green = kept · red = removed by consensus"
+LEGEND = ("legend: blue = the ego object's context vectors · orange = the CAV object's\n"
+          "grey = σ1 band · purple = σ2 region · green = kept · red = removed by consensus")
 
 
 @dataclass(frozen=True)
@@ -56,9 +67,26 @@ class ContextPicture:
     span: float = 1.0
     """Metres from the first panel's far edge to the last's."""
 
+    plate: Mesh | None = None
+    """The plates under the panels."""
+
     def drawing(self) -> Drawing:
-        """As a ``Drawing`` for a ``SceneView``."""
-        return Drawing(meshes={}, lines=self.lines, labels=self.labels, metrics_markdown=self.markdown)
+        """As a ``Drawing`` for a ``SceneView``: the lines in the colours that show as named."""
+        lines = {name: dataclasses.replace(line, color=as_shown(line.color)) for name, line in self.lines.items()}
+        return Drawing(meshes={"inspector_plates": self.plate or no_plates()}, lines=lines, labels=self.labels,
+                       metrics_markdown=self.markdown)
+
+
+def no_plates() -> Mesh:
+    return Mesh(np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32), PLATES[False])
+
+
+def plates(centres: list[np.ndarray], half: float, dark: bool) -> Mesh:
+    """A square plate of side ``2 half`` under each panel centre, at ``PLATE_HEIGHT``."""
+    corners = np.array([[1.0, 1.0], [-1.0, 1.0], [-1.0, -1.0], [1.0, -1.0]]) * half
+    vertices = np.concatenate([np.column_stack([c + corners, np.full(4, PLATE_HEIGHT)]) for c in centres])
+    faces = np.concatenate([np.array([[0, 1, 2], [0, 2, 3]]) + 4 * k for k in range(len(centres))])
+    return Mesh(vertices.astype(np.float32), faces.astype(np.uint32), PLATES[dark])
 
 
 def counterpart(outcome: Outcome, group: str, index: int) -> tuple[int | None, int | None]:
@@ -120,6 +148,8 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
     edge = float(max(np.concatenate(drawn).max(), 0.0)) if drawn else 0.0
     origins = {"ego": np.array([0.0, edge + PANEL_GAP + reach]),
                "cav": np.array([0.0, edge + 2 * PANEL_GAP + 3 * reach])}
+    span = 2 * reach * len(contexts) + PANEL_GAP * (len(contexts) - 1)
+    metres_per_px = looked_at_scale(span)
     detail = inspection.anchor(ego, cav) if ego is not None and cav is not None else None
     lines: dict[str, Lines] = dict(empty().lines)
     labels = {}
@@ -130,7 +160,7 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
         lines[f"inspector_{agent}_vectors"] = Lines(vector_segments(origin, vectors), color, THICKNESS["vectors"])
         labels[f"inspector_{agent}"] = (f"{agent.upper()} {short_id(ids[index])}: context in its own frame",
                                         (float(origin[0] + reach + 3.0), float(origin[1]), 1.0))
-        labels.update(tip_labels(agent, origin, members, vectors, ids))
+        labels.update(tip_labels(agent, origin, members, vectors, ids, metres_per_px))
         if detail is not None:
             bands = band_segments(origin, vectors, params.sigma1, params.sigma2)
             lines[f"inspector_{agent}_bands"] = Lines(bands, BAND, THICKNESS["bands"])
@@ -148,23 +178,43 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
     labels["inspector_legend"] = (LEGEND, (float(-reach - 4.0), left, 1.0))
     return ContextPicture(ego=ego, cav=cav, lines=lines, labels=labels,
                           markdown=_markdown(outcome, ego, cav, detail, params),
-                          centre=(float(centre[0]), float(centre[1])),
-                          span=2 * reach * len(shown) + PANEL_GAP * (len(shown) - 1))
+                          centre=(float(centre[0]), float(centre[1])), span=span,
+                          plate=plates(shown, reach + 2.0, outcome.settings.view.dark))
 
 
-def tip_labels(agent: str, origin: np.ndarray, members: np.ndarray, vectors: np.ndarray,
-               ids: np.ndarray) -> dict[str, tuple[str, tuple[float, float, float]]]:
+def looked_at_scale(span: float, screen: tuple[float, int, int] = layouts.SCREEN) -> float:
+    """Metres per CSS pixel of the camera that looks at panels ``span`` metres across (``look at
+    the context panels``: they fill the page left of the control panel)."""
+    fov, _, height = screen
+    return 2.0 * layouts.fitting_height(span, screen) * float(np.tan(fov / 2.0)) / height
+
+
+def tip_labels(agent: str, origin: np.ndarray, members: np.ndarray, vectors: np.ndarray, ids: np.ndarray,
+               metres_per_px: float) -> dict[str, tuple[str, tuple[float, float, float]]]:
     """A label with the object id at the tip of up to ``MAX_TIP_LABELS`` context vectors, nearest
-    first, each at least ``TIP_SPACING`` from the others."""
+    first, each where it covers no label chosen before (its box on screen, ``metres_per_px``)."""
+    texts = [short_id(ids[int(m)]) for m in members]
     chosen: list[int] = []
     for n in np.argsort(np.linalg.norm(vectors, axis=1), kind="stable"):
         if len(chosen) == MAX_TIP_LABELS:
             break
-        if all(np.linalg.norm(vectors[n] - vectors[k]) >= TIP_SPACING for k in chosen):
+        box = label_box(vectors[n], texts[n], metres_per_px)
+        if not any(_overlap(box, label_box(vectors[k], texts[k], metres_per_px)) for k in chosen):
             chosen.append(int(n))
-    return {f"inspector_{agent}_tip{k}": (short_id(ids[int(members[n])]),
+    return {f"inspector_{agent}_tip{k}": (texts[n],
                                           (float(origin[0] + vectors[n, 0]), float(origin[1] + vectors[n, 1]), 0.5))
             for k, n in enumerate(chosen)}
+
+
+def label_box(at: np.ndarray, text: str, metres_per_px: float) -> tuple[float, float, float, float]:
+    """(x low, x high, y low, y high) in metres that a label anchored by its top-left corner at
+    ``at`` covers: x points up the screen and y left, so it reaches down (-x) and right (-y)."""
+    width, height = len(text) * CHAR_PX * metres_per_px, LINE_PX * metres_per_px
+    return float(at[0]) - height, float(at[0]), float(at[1]) - width, float(at[1])
+
+
+def _overlap(a: tuple[float, ...], b: tuple[float, ...]) -> bool:
+    return a[0] < b[1] and b[0] < a[1] and a[2] < b[3] and b[2] < a[3]
 
 
 def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: AnchorDetail | None,
@@ -179,17 +229,20 @@ def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: Anchor
     kind = "a true pair" if (ego, cav) in truth else "not a true pair"
     lines = [f"**Anchor {pair_name(trial, (ego, cav))}**: {kind}.",
              "",
-             (f"Grey wedges: σ1 = {params.sigma1:g}° around each context vector; purple diamonds: "
+             (f"Blue: the ego object's context vectors, orange: the CAV object's, each in its own frame. "
+              f"Grey wedges: σ1 = {params.sigma1:g}° around each context vector; purple diamonds: "
               f"σ2 = {params.sigma2:g} m (L1). Thick green: in L_ij and kept by consensus; thick red: removed by "
               f"consensus."),
              "",
-             f"L_ij holds {len(detail.candidates)} pairs; consensus kept {int(detail.kept_by_consensus.sum())}; "
-             f"{len(detail.final)} are left after the one-to-one rule"
+             f"L_ij holds {plural(len(detail.candidates), 'pair')}; consensus kept "
+             f"{int(detail.kept_by_consensus.sum())}; {len(detail.final)} "
+             f"{'is' if len(detail.final) == 1 else 'are'} left after the one-to-one rule"
              + (f" ({detail.mean_distance:.1f} m apart on average, limit {params.distance_limit:g} m"
                 f"{': rejected' if detail.rejected else ''})" if len(detail.final) else "") + "."]
     if outcome.result.anchor is not None:
         result = outcome.result
-        lines.append(f"The winning anchor is {pair_name(trial, result.anchor)} with {result.consensus_count} pairs.")
+        lines.append(f"The winning anchor is {pair_name(trial, result.anchor)} with "
+                     f"{plural(result.consensus_count, 'pair')}.")
     if len(detail.candidates):
         lines += ["", "| ego | CAV | votes | consensus | final | true |", "|---|---|---|---|---|---|"]
         for (i, j), votes, kept in list(zip(detail.candidates.tolist(), detail.votes.tolist(),
@@ -198,7 +251,7 @@ def _markdown(outcome: Outcome, ego: int | None, cav: int | None, detail: Anchor
                          f"{'kept' if kept else 'removed'} | "
                          f"{'yes' if (i, j) in final else 'no'} | {'yes' if (i, j) in truth else 'no'} |")
         if len(detail.candidates) > MAX_ROWS:
-            lines.append(f"\n… and {len(detail.candidates) - MAX_ROWS} more pairs.")
+            lines.append(f"\n… and {plural(len(detail.candidates) - MAX_ROWS, 'more pair')}.")
     return "\n".join(lines)
 
 
@@ -207,6 +260,6 @@ def empty() -> Drawing:
     labels it is not given)."""
     names = [f"inspector_{agent}_{part}" for agent in ("ego", "cav")
              for part in ("vectors", "bands", "regions", "kept", "removed")]
-    return Drawing(meshes={}, lines={name: Lines(no_lines(), BAND) for name in names},
+    return Drawing(meshes={"inspector_plates": no_plates()}, lines={name: Lines(no_lines(), BAND) for name in names},
                    labels={}, metrics_markdown="")
 

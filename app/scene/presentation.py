@@ -1,6 +1,6 @@
-"""Presentation mode and the dark theme, as far as they go beyond the drawing (and its text,
-``captions``): the camera over the two agents, the control panel and the page's colour scheme, all
-for one browser tab."""
+"""Presentation mode and the dark theme, as far as they go beyond the drawing: the camera over the
+two agents, the control panel, the caption of key numbers and the page's colour scheme, all for one
+browser tab."""
 from __future__ import annotations
 
 import math
@@ -11,8 +11,10 @@ import numpy as np
 import viser
 
 from ..session.settings import ViewOptions
+from .captions import caption_html
 
 if TYPE_CHECKING:
+    from ..session.explorer import Outcome
     from .drawing import Drawing
     from .view import SceneView
 
@@ -20,7 +22,10 @@ THEME = {"show_share_button": False, "control_width": "large", "show_logo": Fals
 """The theme of every tab (``app.server``); a tab's own ``configure_theme`` replaces the whole theme,
 so it passes these with its colour scheme."""
 MARGIN = 14.0
-"""Metres of scene kept around the agents by the presentation camera (room for the numbers below them)."""
+"""Metres of scene kept around the agents by the presentation camera."""
+CAPTION_TAB = "Key numbers"
+CAPTION_GAP, CAPTION_WIDTH = 16.0, 400.0
+"""CSS pixels from the page's bottom left corner to the caption, and its width."""
 LOWEST = 30.0
 """The presentation camera's lowest height (m): agents close together still show their surroundings."""
 TILT = 0.05
@@ -65,3 +70,28 @@ def restage(client: viser.ClientHandle, before: ViewOptions | None, after: ViewO
     panel = client.gui.main_panel
     (panel.minimize if after.presentation else panel.expand)()
     return True
+
+
+class Caption:
+    """Presentation mode's caption of one tab: the frame's number, verdict, precision, recall and pose
+    errors in large type, in a panel of its own floating at the page's bottom left (viser's
+    ``add_panel``), outside the minimised control panel and over no part of the scene that matters."""
+
+    def __init__(self, client: viser.ClientHandle) -> None:
+        self.client = client
+        self.panel: viser.PanelHandle | None = None
+        self.html: viser.GuiHtmlHandle | None = None
+
+    def show(self, outcome: Outcome) -> None:
+        """The caption of ``outcome`` in presentation mode; hidden otherwise."""
+        shown = outcome.settings.view.presentation
+        if self.panel is None and not shown:
+            return
+        if self.panel is None:
+            self.panel = self.client.gui.add_panel()
+            with self.panel.add_tab(CAPTION_TAB):
+                self.html = self.client.gui.add_html(caption_html(outcome))
+            self.panel.float(x=CAPTION_GAP, y=-CAPTION_GAP, width=CAPTION_WIDTH)
+        elif shown:
+            self.html.content = caption_html(outcome)
+        self.panel.visible = shown

@@ -3,8 +3,10 @@ network) that replays the frames a tab has shown, seen from above in the ego fra
 
 Each frame draws the ego's boxes, the CAV's boxes where the wrong pose put them (outlines) and
 where the estimate puts them, and the match lines right, wrong and missed in the app's palette
-(Okabe-Ito when the tab is in presentation mode), beside the frame's metrics; a slider, previous,
-next and play move through the frames; the wheel zooms and a drag pans (double click: fit again).
+(Okabe-Ito when the tab is in presentation mode), beside the frame's metrics, worded and numbered as
+the app's metrics panel; a slider, previous, next and play above the view move through the frames;
+the wheel zooms and a drag pans (double click: fit again). The view takes the height the window
+leaves, so the controls and the metrics are in the first screen of a 1280x720 window.
 """
 from __future__ import annotations
 
@@ -24,6 +26,7 @@ from ..session.recording import FrameRecord, Recording
 from ..session.settings import Settings
 from . import colours
 from .text import number
+from .words import label_of, margin_words
 
 APP_NAME = "CBM Explorer"
 DATA_ID = "recording-data"
@@ -58,8 +61,8 @@ def metrics_rows(metrics: dict[str, Any]) -> list[list[str]]:
             ["AD", _with_unit(m["ad"], " m")],
             ["RTE before → after", f"{_with_unit(m['rte_before'], ' m')} → {_with_unit(m['rte'], ' m')}"],
             ["RRE before → after", f"{_with_unit(m['rre_before'], '°')} → {_with_unit(m['rre'], '°')}"]]
-    if m["margin"] is not None:
-        rows.append(["consensus margin", _ratio(m["margin"])])
+    if m.get("consensus_count") is not None:
+        rows.append(["consensus margin", margin_words(int(m["margin"]), m["consensus_count"], m["runner_up_count"])])
     rows.append(["result", "success (RTE < 1 m, RRE < 1°)" if m["success"] else "failed"])
     return rows
 
@@ -81,8 +84,8 @@ def settings_lines(settings: Settings) -> list[str]:
     scenario = (f"protocol {s.protocol} · η {s.eta:g} · σp {s.sigma_p:g} m · σθ {s.sigma_theta:g}° · "
                 f"flip {s.flip_prob:g} · localization {s.localization} ({s.loc_x:g} m, {s.loc_y:g} m, "
                 f"{s.loc_yaw:g}°) · range {s.sensor_range:g} m · seed {s.seed}")
-    return [f"Method: {method.label}", "Parameters: " + (" · ".join(f"{k} {v}" for k, v in params.items()) or "none"),
-            f"Scenario: {scenario}"]
+    worded = " · ".join(f"{label_of(method.params_key, k)} {v}" for k, v in params.items())
+    return [f"Method: {method.label}", f"Parameters: {worded or 'none'}", f"Scenario: {scenario}"]
 
 
 def palette_data(palette: colours.Palette) -> dict[str, Any]:
@@ -116,27 +119,33 @@ def recording_html(recording: Recording, dataset: str, presentation: bool = Fals
 
 
 PAGE = """<!DOCTYPE html>
-<html lang="en"><head><meta charset="utf-8"><title>%TITLE%</title><style>%STYLE%</style></head>
-<body><header><h1 id="title"></h1><div id="settings"></div></header>
-<main><div id="stage"><canvas id="view" width="900" height="640"></canvas>
+<html lang="en"><head><meta charset="utf-8"><meta name="viewport" content="width=device-width">
+<title>%TITLE%</title><style>%STYLE%</style></head>
+<body><header><h1 id="title"></h1><div id="settings"></div>
 <div id="controls"><button id="prev" title="previous frame (←)">◀ prev</button>
 <button id="play">▶ play</button><button id="next" title="next frame (→)">next ▶</button>
-<input id="frame-slider" type="range" min="0" max="0" value="0"><span id="frame-label"></span></div>
-<p id="legend"></p></div>
+<input id="frame-slider" type="range" min="0" max="0" value="0"><span id="frame-label"></span></div></header>
+<main><div id="stage"><canvas id="view" width="900" height="560"></canvas><p id="legend"></p></div>
 <aside><h2 id="frame-title"></h2><p id="agents"></p><table id="metrics"></table>
 <p class="hint">Wheel: zoom · drag: pan · double click: fit · ← →: frames</p></aside></main>
 <script type="application/json" id="recording-data">%DATA%</script><script>%SCRIPT%</script></body></html>
 """
 
 STYLE = """
-body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:0;color:#222;background:#fafafa}
-header{padding:10px 16px;background:#fff;border-bottom:1px solid #ddd}h1{font-size:18px;margin:0 0 4px}
-#settings div{font-size:12px;color:#555}main{display:flex;gap:16px;padding:12px 16px;flex-wrap:wrap}
-canvas{background:#fff;border:1px solid #ccc;cursor:grab;max-width:100%}
-#controls{display:flex;gap:8px;align-items:center;margin-top:6px}#frame-slider{flex:1}
-button{padding:4px 10px}aside{min-width:300px}h2{font-size:16px;margin:4px 0}
+html,body{height:100%}
+body{font-family:system-ui,-apple-system,'Segoe UI',sans-serif;margin:0;color:#222;background:#fafafa;
+display:flex;flex-direction:column}
+header{padding:8px 16px 6px;background:#fff;border-bottom:1px solid #ddd}h1{font-size:17px;margin:0 0 2px}
+#settings div{font-size:12px;color:#555;white-space:nowrap;overflow:hidden;text-overflow:ellipsis}
+#controls{display:flex;gap:8px;align-items:center;margin-top:6px}#frame-slider{flex:1;max-width:640px}
+main{display:flex;gap:16px;padding:10px 16px;flex:1;min-height:0}
+#stage{flex:1;min-width:0;display:flex;flex-direction:column}
+canvas{background:#fff;border:1px solid #ccc;cursor:grab;width:100%;flex:1;min-height:200px}
+button{padding:4px 10px}aside{width:320px;flex:none;overflow:auto}h2{font-size:16px;margin:2px 0}
+#agents{margin:2px 0 6px}
 table{border-collapse:collapse;font-size:13px}td{padding:3px 8px;border-bottom:1px solid #eee}
-td:first-child{color:#555}.failed{color:#c0392b}.success{color:#1e8c3c}.hint,#legend{font-size:12px;color:#666}
+td:first-child{color:#555}.failed{color:#c0392b}.success{color:#1e8c3c}
+.hint,#legend{font-size:12px;color:#666;margin:4px 0 0}
 """
 
 SCRIPT = r"""
@@ -175,6 +184,10 @@ function pairLines(f, pairs, stroke) {
     ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
   }
   ctx.setLineDash([]);
+}
+function sized() {
+  const r = canvas.getBoundingClientRect();
+  canvas.width = Math.max(200, Math.round(r.width)); canvas.height = Math.max(200, Math.round(r.height));
 }
 function fit() {
   let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
@@ -219,7 +232,7 @@ document.getElementById('title').textContent =
   `${data.app} ${data.version} — recording of ${frames.length} frames · dataset ${data.dataset}` +
   ` · exported ${data.exported}`;
 for (const line of data.settings) {
-  const div = document.createElement('div'); div.textContent = line;
+  const div = document.createElement('div'); div.textContent = line; div.title = line;
   document.getElementById('settings').appendChild(div);
 }
 document.getElementById('legend').textContent = data.legend;
@@ -246,5 +259,6 @@ window.addEventListener('mousemove', e => {
   view.ox += (e.clientX - drag[0]) * k; view.oy += (e.clientY - drag[1]) * k; drag = [e.clientX, e.clientY]; draw();
 });
 canvas.addEventListener('dblclick', () => { fit(); draw(); });
-fit(); show(0);
+window.addEventListener('resize', () => { sized(); fit(); draw(); });
+sized(); fit(); show(0);
 """

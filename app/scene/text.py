@@ -11,7 +11,9 @@ from cbm.result import MatchResult
 from evaluation.metrics import is_success
 
 from ..session.explorer import Outcome
+from ..session.names import agent_name
 from .cavs import per_cav_rows
+from .words import margin_words
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -47,7 +49,8 @@ def metrics_markdown(outcome: Outcome) -> str:
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHODS[outcome.settings.method].label
-    agents = f"ego `{str(outcome.ego_id)[:8]}` · CAV `{str(outcome.cav_id)[:8]}` ({outcome.cav_note})"
+    ego, cav = agent_name("ego", outcome.ego_id, code=True), agent_name("CAV", outcome.cav_id, code=True)
+    agents = f"{ego} · {cav} ({outcome.cav_note})"
     lines = [
         f"**Frame {outcome.frame_index}** · {agents}",
         "",
@@ -64,7 +67,8 @@ def metrics_markdown(outcome: Outcome) -> str:
         f"| limit (oracle: true pairs) | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
     ]
     if result.anchor is not None:
-        lines.append(f"| consensus margin | {result.margin} ({result.consensus_count} vs {result.runner_up_count}) |")
+        margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
+        lines.append(f"| consensus margin | {margin} |")
     lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:

@@ -24,8 +24,6 @@ TOP_DOWN = {"position": (-10.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
 """Default camera: high above the ego, looking down and a little forward (x points up the screen)."""
 VISER_LABEL_PX = 12.0
 """Height in CSS pixels of viser's screen-space label text at ``font_screen_scale`` 1."""
-LARGER = {"numbers": 1.25}
-"""Labels drawn larger than the others, by how much (presentation mode's key numbers)."""
 
 
 def fingerprint(arrays: tuple[np.ndarray, ...], *style: Hashable) -> Hashable:
@@ -139,8 +137,8 @@ class SceneView:
         self.shown.pop(name, None)
 
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
-        """Show (or move) the label ``name``, its text ``label_px`` high (more for ``LARGER`` ones)."""
-        scale = self.label_px * LARGER.get(name, 1.0) / VISER_LABEL_PX
+        """Show (or move) the label ``name``, its text ``label_px`` high."""
+        scale = self.label_px / VISER_LABEL_PX
         handle = self.labels.get(name)
         if handle is None:
             self.labels[name] = self.client.scene.add_label(f"{self.labels_root}/{name}", text, position=position,

@@ -1,7 +1,8 @@
 """What a tab can download, as bytes: the per-frame metrics of its last sequence run (CSV,
 Parquet), its current settings as a preset file, and a screenshot composed with the control panel's
 key content (the render itself is taken by ``panels.explore``: the server cannot capture the page, so
-the panel's metrics text is drawn beside the render with Pillow)."""
+the panel's metrics text is drawn beside the render with Pillow). The render comes with a
+transparent background; the screenshot lays it on the page's background of the tab's theme."""
 from __future__ import annotations
 
 import io
@@ -47,6 +48,11 @@ PANEL_WIDTH = 420
 WRAP = 50
 """Characters per line of the panel's text."""
 PANEL_TITLE = "CBM Explorer — control panel"
+BACKGROUND = {False: (255, 255, 255), True: (20, 20, 20)}
+"""The scene's background in the light and the dark theme."""
+PANEL_COLOURS = {False: ((255, 255, 255), (30, 30, 30), (200, 200, 200)),
+                 True: ((37, 38, 43), (230, 230, 230), (70, 70, 70))}
+"""The drawn panel's background, text and border in each theme."""
 
 
 def panel_lines(markdown: str) -> list[str]:
@@ -69,18 +75,31 @@ def _font(size: int) -> ImageFont.FreeTypeFont | ImageFont.ImageFont:
     return ImageFont.load_default(size=size)
 
 
-def with_panel(render: np.ndarray, markdown: str, size: int = 15) -> np.ndarray:
-    """The (H, W, 3|4) ``render`` with a white panel on its right holding the title and
-    ``panel_lines(markdown)``, as the page shows them side by side; (H', W + PANEL_WIDTH, 3) uint8."""
+def opaque(render: np.ndarray, dark: bool = False) -> np.ndarray:
+    """The (H, W, 3|4) ``render`` laid on the scene's background of the theme: (H, W, 3) uint8 (an
+    RGBA render's transparent background would otherwise read black)."""
+    if render.shape[-1] == 3:
+        return np.ascontiguousarray(render)
+    alpha = render[..., 3:4].astype(np.float32) / 255.0
+    background = np.array(BACKGROUND[dark], np.float32)
+    return np.round(render[..., :3] * alpha + background * (1.0 - alpha)).astype(np.uint8)
+
+
+def with_panel(render: np.ndarray, markdown: str, size: int = 15, dark: bool = False) -> np.ndarray:
+    """The (H, W, 3|4) ``render`` on the theme's background with a panel on its right holding the
+    title and ``panel_lines(markdown)``, as the page shows them side by side, in the colours of the
+    theme; (H', W + PANEL_WIDTH, 3) uint8."""
     lines, font, title = panel_lines(markdown), _font(size), _font(size + 3)
+    fill, ink, border = PANEL_COLOURS[dark]
     step = size + 6
     height = max(render.shape[0], 2 * step + step * len(lines) + 16)
-    canvas = Image.new("RGB", (render.shape[1] + PANEL_WIDTH, height), "white")
-    canvas.paste(Image.fromarray(np.ascontiguousarray(render[..., :3])), (0, 0))
+    canvas = Image.new("RGB", (render.shape[1] + PANEL_WIDTH, height), BACKGROUND[dark])
+    canvas.paste(Image.fromarray(opaque(render, dark)), (0, 0))
     draw = ImageDraw.Draw(canvas)
     left = render.shape[1]
-    draw.line([(left, 0), (left, height)], fill=(200, 200, 200), width=2)
-    draw.text((left + 14, 12), PANEL_TITLE, fill=(20, 20, 20), font=title)
+    draw.rectangle([(left, 0), (left + PANEL_WIDTH, height)], fill=fill)
+    draw.line([(left, 0), (left, height)], fill=border, width=2)
+    draw.text((left + 14, 12), PANEL_TITLE, fill=ink, font=title)
     for k, line in enumerate(lines):
-        draw.text((left + 14, 12 + 2 * step + k * step), line, fill=(30, 30, 30), font=font)
+        draw.text((left + 14, 12 + 2 * step + k * step), line, fill=ink, font=font)
     return np.asarray(canvas)

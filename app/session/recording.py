@@ -21,6 +21,7 @@ from evaluation.metrics import is_success
 
 from .explorer import Outcome, classified_pairs
 from .history import settings_key
+from .names import agent_name
 from .settings import Settings
 
 LIMIT = 500
@@ -79,7 +80,11 @@ def metrics_of(outcome: Outcome) -> dict[str, Any]:
                "rte": m.rte, "rre": m.rre, "rte_before": init_rte, "rre_before": init_rre,
                "margin": m.margin, "runtime_s": m.runtime_s, "estimated": m.estimated,
                "success": is_success(m)}
-    return {name: _plain(value) for name, value in numbers.items()}
+    plain = {name: _plain(value) for name, value in numbers.items()}
+    result = outcome.result
+    anchored = result.anchor is not None
+    return {**plain, "consensus_count": int(result.consensus_count) if anchored else None,
+            "runner_up_count": int(result.runner_up_count) if anchored else None}
 
 
 def record_of(outcome: Outcome) -> FrameRecord:
@@ -88,7 +93,7 @@ def record_of(outcome: Outcome) -> FrameRecord:
     after = result.transform if result.estimated else trial.init
     right, wrong, missed = classified_pairs(outcome.shown_pairs, trial.gt_pairs)
     return FrameRecord(
-        frame=outcome.frame_index, agents=f"ego {str(outcome.ego_id)[:8]} · CAV {str(outcome.cav_id)[:8]}",
+        frame=outcome.frame_index, agents=f"{agent_name('ego', outcome.ego_id)} · {agent_name('CAV', outcome.cav_id)}",
         ego=top_down(trial.ego_boxes), cav_before=top_down(se2.apply_boxes(trial.init, trial.cav_boxes)),
         cav_after=top_down(se2.apply_boxes(after, trial.cav_boxes)),
         cav_pose_before=_pose(trial.init), cav_pose_after=_pose(after),

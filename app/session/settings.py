@@ -2,7 +2,9 @@
 
 A preset is the TOML form of ``Settings`` without the frame and the CAV: a table per part, keys
 named like the fields of ``evaluation.scenario.ScenarioParams``, ``cbm.CBMParams`` and the method
-parameter classes (angles in degrees, as everywhere at the edges).
+parameter classes (angles in degrees, as everywhere at the edges). ``evaluation.presets`` reads the
+method and scenario tables, for the app and ``evaluate.py --preset`` alike; the app adds ``[view]``.
+The defaults are the shipped ``default`` preset's (``evaluation.presets.default_preset``).
 """
 from __future__ import annotations
 
@@ -13,6 +15,7 @@ from typing import Any, Literal
 
 from cbm import CBMParams
 from cbm.methods import METHODS
+from evaluation.presets import PresetParams, default_preset, preset_params, replaced
 from evaluation.scenario import ScenarioParams
 from evaluation.trials import AUTO_CAV
 
@@ -65,15 +68,16 @@ class ViewOptions:
             raise ValueError(f"ViewOptions.points_every must be an integer >= 1, got {self.points_every!r}")
 
 
-DEFAULT_SCENARIO = ScenarioParams(protocol="range", sigma_p=0.2, sigma_theta=2.0, flip_prob=0.5,
-                                  localization="fixed", loc_x=3.0, loc_y=3.0, loc_yaw=5.0)
-"""The range protocol (the recording car is the ego, another vehicle the CAV) with the paper's
-SIND localization offset and mild detection noise: a wrong pose anyone can see, repaired by CBM."""
+DEFAULT_SCENARIO = default_preset().scenario
+"""The shipped default preset's: the range protocol (the recording car is the ego, another vehicle
+the CAV) with the paper's SIND localization offset and mild detection noise: a wrong pose anyone can
+see, repaired by CBM."""
 
 
 def default_method_params() -> dict[str, Any]:
-    """Default parameters of every method by its parameter set (methods that share one appear once)."""
-    return {m.params_key: m.params() for m in METHODS.values()}
+    """The shipped default preset's parameters of every method by its parameter set (methods that
+    share one appear once)."""
+    return dict(default_preset().params)
 
 
 @dataclass(frozen=True)
@@ -128,36 +132,6 @@ def from_preset(data: Mapping[str, Any], base: Settings | None = None) -> Settin
     """Settings from a preset's tables; missing keys keep ``base``'s values. Raises ``KeyError``
     naming an unknown table or key, ``TypeError``/``ValueError`` naming a field of the wrong type."""
     base = base or Settings()
-    method_params = dict(base.method_params)
-    known = {"method", "scenario", "view", *base.method_params}
-    for table in data:
-        if table not in known:
-            raise KeyError(f"unknown table [{table}]; expected one of {sorted(known)}")
-    method = data.get("method", base.method)
-    if method not in METHODS:
-        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
-    for name in base.method_params:
-        if name in data:
-            method_params[name] = _replaced(name, method_params[name], data[name])
-    return Settings(frame=base.frame, cav=base.cav, cavs=base.cavs, method=method,
-                    scenario=_replaced("scenario", base.scenario, data.get("scenario", {})),
-                    method_params=method_params, view=_replaced("view", base.view, data.get("view", {})))
-
-
-def _replaced(table: str, value: Any, changes: Any) -> Any:
-    if not isinstance(changes, Mapping):
-        raise TypeError(f"[{table}] must be a table of keys, got {type(changes).__name__}")
-    fields = {f.name: f for f in dataclasses.fields(value)}
-    for key, new in changes.items():
-        if key not in fields:
-            raise KeyError(f"[{table}] unknown key {key!r}; expected one of {sorted(fields)}")
-        old = getattr(value, key)
-        expected = float if isinstance(old, float) and not isinstance(old, bool) else type(old)
-        allowed = (int, float) if expected is float else expected
-        if isinstance(new, bool) != isinstance(old, bool) or not isinstance(new, allowed):
-            raise TypeError(f"[{table}] {key} must be {expected.__name__}, got {new!r}")
-    try:
-        return dataclasses.replace(value, **{k: float(v) if isinstance(getattr(value, k), float) else v
-                                             for k, v in changes.items()})
-    except ValueError as error:
-        raise ValueError(f"[{table}] {error}") from None
+    read = preset_params(data, PresetParams(base.method, base.scenario, base.method_params))
+    return Settings(frame=base.frame, cav=base.cav, cavs=base.cavs, method=read.method, scenario=read.scenario,
+                    method_params=read.params, view=replaced("view", base.view, data.get("view", {})))

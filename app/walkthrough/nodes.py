@@ -1,13 +1,17 @@
 """The walkthrough's scene nodes (under ``/walkthrough``): a step's meshes, line sets and labels
 copied into viser nodes, the normal scene (``/scene``, ``/labels``) hidden meanwhile, and the
-CAV's boxes placed by a pose so that an animation moves one node and sends nothing else."""
+CAV's boxes placed by a pose so that an animation moves one node and sends nothing else. Lines show
+the colours the steps' words name (``scene.linecolours``)."""
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 import viser
 
 from cbm import se2
 
+from ..scene.linecolours import as_shown
 from ..scene.view import SceneView
 from .steps import Step
 
@@ -49,7 +53,8 @@ class WalkthroughNodes:
         """The scene of ``step``, the normal scene hidden; the CAV's boxes at ``step.cav_pose``."""
         with self.client.atomic():
             self._hide_normal(True)
-            self.view.show_only(step.meshes, step.lines, step.labels)
+            lines = {name: dataclasses.replace(line, color=as_shown(line.color)) for name, line in step.lines.items()}
+            self.view.show_only(step.meshes, lines, step.labels)
             self.place(step.cav_pose)
 
     def place(self, pose: np.ndarray) -> None:

@@ -1,6 +1,9 @@
-"""The Walkthrough tab of the control panel: CBM's nine steps on the frame on screen, one at a time,
-with prev / next, an animation where motion explains, and a way back to the normal scene. It
-follows the tab's recomputes: a new outcome redraws the current step."""
+"""The walkthrough (the Steps tab of the control panel): CBM's nine steps on the frame on screen, one
+at a time, with prev / next, an animation where motion explains (its length can be set), and a way
+back to the normal scene. Stepping to a step about the followed pair puts the camera over it, close
+enough to read what the step draws; the other steps show the whole scene; leaving puts back the
+camera the walkthrough started from. It follows the tab's recomputes: a new outcome redraws the
+current step (the camera stays)."""
 from __future__ import annotations
 
 import threading
@@ -9,19 +12,21 @@ import time
 import viser
 
 from ..panels.actions import TabActions
+from ..scene import layouts
 from ..session.explorer import Outcome
 from . import steps
 from .facts import Facts, gather
 from .nodes import WalkthroughNodes, glide
 
-FRAMES = 20
-"""Poses of one animation."""
+FRAMES_PER_SECOND = 15
+"""Poses an animation sends per second."""
 SECONDS = 1.5
-"""Length of one animation."""
-PANEL_SHIFT = 0.15
-"""Sideways shift of the look-at point per metre of height, so the object clears the control panel."""
-LOOK_HEIGHT = 45.0
-"""Metres above the followed object of the camera that looks at it."""
+"""Length of an animation unless set otherwise."""
+TILT = 0.05
+"""How far behind the object the camera that looks at it stands, per metre of height (x stays up)."""
+TAB = "Steps"
+"""The tab's name: short, so that the panel's six tabs fit on one row at its width (384 px)."""
+IDLE_TITLE = "**CBM in nine steps**"
 IDLE = "Walk through CBM's steps on the frame on screen: **start** (or next step ▶) shows step 1 in the scene."
 
 
@@ -38,14 +43,18 @@ class WalkthroughPanel:
         self._lock = threading.RLock()
         self._generation = 0
         """Bumped by every redraw: an animation of an older step stops."""
-        with tabs.add_tab("Walkthrough"):
-            self.title = gui.add_markdown(f"**{steps.title(0)}**")
+        self._camera: tuple[tuple[float, ...], tuple[float, ...]] | None = None
+        """Where the camera stood when the walkthrough started."""
+        with tabs.add_tab(TAB):
+            self.title = gui.add_markdown(IDLE_TITLE)
             self.text = gui.add_markdown(IDLE)
             self.start = gui.add_button("start walkthrough", hint="show CBM's steps on this frame in the scene")
             self.prev = gui.add_button("◀ prev step")
             self.next = gui.add_button("next step ▶")
             self.play = gui.add_button("play animation", visible=False,
                                        hint="the CAV's boxes glide from the wrong pose to the estimate")
+            self.seconds = gui.add_slider("animation (s)", 0.5, 8.0, 0.5, SECONDS, visible=False,
+                                          hint="how long the animation takes: slower for a lecture hall")
             self.look = gui.add_button("look at the object", visible=False, hint="the camera over the followed object")
             self.leave = gui.add_button("leave walkthrough", color="red", visible=False)
         self.start.on_click(lambda e: self.go(self.index))
@@ -56,15 +65,23 @@ class WalkthroughPanel:
         self.look.on_click(lambda e: self.look_at_object())
 
     def go(self, index: int) -> None:
-        """Show step ``index`` (clamped to the nine) of the outcome on screen."""
+        """Show step ``index`` (clamped to the nine) of the outcome on screen, the camera over the
+        followed object in the steps about it and over the scene in the others."""
         outcome, _ = self.tab.current()
         if outcome is None:
             self.tab.notify("Nothing to walk through", "wait for the first frame to be computed", "yellow")
             return
         with self._lock:
+            if not self.active:
+                camera = self.tab.client.camera
+                self._camera = (tuple(camera.position), tuple(camera.look_at))
             self.index = min(max(index, 0), len(steps.BUILDERS) - 1)
             self.active = True
             self._draw(outcome)
+            if self.step.focus is not None:
+                self.look_at_object()
+            else:
+                self.tab.reset_camera()
 
     def refresh(self, outcome: Outcome) -> None:
         """Follow a recompute: the current step is redrawn for the new outcome."""
@@ -73,37 +90,43 @@ class WalkthroughPanel:
                 self._draw(outcome)
 
     def exit(self) -> None:
-        """Leave the walkthrough: its nodes hidden, the normal scene shown again."""
+        """Leave the walkthrough: its nodes hidden, the normal scene, the tab's title and the camera
+        the walkthrough started from shown again."""
         with self._lock:
             self._generation += 1
             self.active, self.step, self._facts = False, None, None
             self.nodes.hide()
-            self.text.content = IDLE
+            self.title.content, self.text.content = IDLE_TITLE, IDLE
             self._buttons()
+            if self._camera is not None:
+                camera = self.tab.client.camera
+                camera.position, camera.look_at = self._camera
+                self._camera = None
 
     def look_at_object(self) -> None:
-        """Point the camera down on the followed object, left of the control panel (reset camera goes back)."""
+        """Point the camera down on the followed object, left of the control panel, high enough to
+        show what the step draws about it (``Step.span``; reset camera goes back)."""
         if self.step is None or self.step.focus is None:
             return
-        x, y = self.step.focus
         camera = self.tab.client.camera
-        y -= PANEL_SHIFT * LOOK_HEIGHT
-        camera.position, camera.look_at = (x - 8.0, y, LOOK_HEIGHT), (x, y, 0.0)
+        camera.position, camera.look_at = camera_over(self.step.focus, self.step.span, layouts.screen_of(camera))
 
     def animate(self) -> None:
-        """Glide the CAV's boxes along the step's motion in ``FRAMES`` pose updates over ``SECONDS``
-        (a newer redraw or another animation stops it)."""
+        """Glide the CAV's boxes along the step's motion over the seconds the slider sets
+        (``FRAMES_PER_SECOND`` pose updates a second; a newer redraw or another animation stops it)."""
         with self._lock:
             if not self.active or self.step is None or self.step.motion is None:
                 return
             self._generation += 1
             generation, step = self._generation, self.step
-        for pose in glide(*step.motion, FRAMES):
+        seconds = float(self.seconds.value)
+        frames = max(2, round(seconds * FRAMES_PER_SECOND))
+        for pose in glide(*step.motion, frames):
             with self._lock:
                 if generation != self._generation:
                     return
                 self.nodes.place(pose)
-            time.sleep(SECONDS / FRAMES)
+            time.sleep(seconds / frames)
 
     def _draw(self, outcome: Outcome) -> None:
         if self._facts is None or self._facts.outcome is not outcome:
@@ -117,7 +140,17 @@ class WalkthroughPanel:
 
     def _buttons(self) -> None:
         self.start.visible, self.leave.visible = not self.active, self.active
-        self.play.visible = self.active and self.step is not None and self.step.motion is not None
+        moves = self.active and self.step is not None and self.step.motion is not None
+        self.play.visible = self.seconds.visible = moves
         self.look.visible = self.active and self.step is not None and self.step.focus is not None
         self.prev.disabled = self.active and self.index == 0
         self.next.disabled = self.active and self.index == len(steps.BUILDERS) - 1
+
+
+def camera_over(focus: tuple[float, float], span: float,
+                screen: tuple[float, int, int]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A camera looking down on ``focus`` from the height at which ``span`` metres fit the page left
+    of the control panel, slid so that ``focus`` shows in the middle of that part."""
+    x, y = focus
+    z = layouts.fitting_height(span, screen)
+    return layouts.slid_clear_of_panel((x - TILT * z, y, z), (x, y, 0.0), screen)

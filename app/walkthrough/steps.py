@@ -15,6 +15,7 @@ from ..scene.colours import CAV_BOXES, EGO_BOXES, GHOST, MISSED, RIGHT, WRONG
 from ..scene.drawing import Lines, Mesh
 from ..scene.inspector import BAND, REGION
 from ..scene.text import number
+from ..scene.words import plural
 from ..session.explorer import Outcome, classified_pairs
 from . import shapes
 from .facts import Facts, gather, pose_error
@@ -25,6 +26,8 @@ FOCUSED = range(1, 6)
 """The steps about the followed pair (context vectors to the anchor's matches)."""
 MAX_LABELS = 20
 """Most per-pair labels (votes, weights) a step shows."""
+SPAN = (24.0, 160.0)
+"""Fewest and most metres across that a camera looking at a step's object shows."""
 Label = tuple[str, tuple[float, float, float]]
 
 
@@ -44,6 +47,9 @@ class Step:
     """(from, to) poses the CAV's boxes glide between when the animation plays; None: no motion."""
     focus: tuple[float, float] | None = None
     """Where the followed ego object stands, in the steps about its pair (a camera may look there)."""
+    span: float = SPAN[0]
+    """Metres across around ``focus`` that hold what the step draws about the pair (a camera
+    looking at the object fits them)."""
 
 
 NAMES = (("pose", "The wrong pose", "eq. 4"),
@@ -64,12 +70,27 @@ def title(k: int) -> str:
 
 
 def _step(facts: Facts, k: int, text: str, lines: dict[str, Lines], labels: dict[str, Label] | None = None,
-          pose: np.ndarray | None = None, motion: tuple[np.ndarray, np.ndarray] | None = None) -> Step:
+          pose: np.ndarray | None = None, motion: tuple[np.ndarray, np.ndarray] | None = None,
+          span: float | None = None) -> Step:
     trial = facts.trial
     meshes = {"ego_boxes": shapes.ego_mesh(trial.ego_boxes), "cav_boxes": shapes.cav_mesh(trial.cav_boxes)}
     focus = None if facts.pair is None or k not in FOCUSED else tuple(map(float, facts.ego_xy[facts.pair[0]]))
+    if focus is not None and span is None:
+        span = reach(focus, lines)
     return Step(NAMES[k][0], title(k), text, lines, meshes, labels or {},
-                facts.result.init if pose is None else pose, motion, focus)
+                facts.result.init if pose is None else pose, motion, focus, _clipped(span or SPAN[0]))
+
+
+def reach(focus: tuple[float, float], lines: dict[str, Lines]) -> float:
+    """Metres across a square centred on ``focus`` that holds every line drawn, and a margin."""
+    ends = [line.segments[..., :2].reshape(-1, 2) for line in lines.values() if len(line.segments)]
+    if not ends:
+        return SPAN[0]
+    return 2.0 * float(np.abs(np.concatenate(ends) - np.asarray(focus)).max()) + 6.0
+
+
+def _clipped(span: float) -> float:
+    return float(min(max(span, SPAN[0]), SPAN[1]))
 
 
 def _at(xy: np.ndarray, z: float = 3.0) -> tuple[float, float, float]:
@@ -95,7 +116,7 @@ def wrong_pose(facts: Facts) -> Step:
     trial, result = facts.trial, facts.result
     metres, degrees = pose_error(result.init, trial.T_true)
     truth = se2.apply_boxes(trial.T_true, trial.cav_boxes)
-    text = (f"The ego sees {len(trial.ego_boxes)} objects (blue), the CAV {len(trial.cav_boxes)} (orange). "
+    text = (f"The ego sees {plural(len(trial.ego_boxes), 'object')} (blue), the CAV {len(trial.cav_boxes)} (orange). "
             f"Its pose `init` is off by {metres:.2f} m and {degrees:.2f}° (eq. 4), so its boxes land beside "
             f"their true places (grey outlines). Play the animation to watch CBM's estimate move them back.")
     return _step(facts, 0, text, {"truth": Lines(shapes.outlines(truth), GHOST, 1.5)},
@@ -112,9 +133,9 @@ def context_vectors(facts: Facts) -> Step:
     same = ("the same object" if (i, j) in facts.truth() else
             "two different objects (an anchor need not be a true pair: its set's other pairs count)")
     text = (f"The pair followed, {'the winning anchor' if facts.is_anchor() else 'a true pair'}, is {same}. "
-            f"CBM describes {facts.ego_name(i)} by the vectors to its {len(ego_members)} neighbours, "
-            f"z = R(θ)ᵀ(p′ − p), in its own frame (eq. 5-6); {facts.cav_name(j)} likewise by its "
-            f"{len(cav_members)}. The vectors do not change with the agents' poses, so the two lists "
+            f"CBM describes {facts.ego_name(i)} by the vectors to its {plural(len(ego_members), 'neighbour')} "
+            f"(blue), z = R(θ)ᵀ(p′ − p), in its own frame (eq. 5-6); {facts.cav_name(j)} likewise by its "
+            f"{len(cav_members)} (orange). The vectors do not change with the agents' poses, so the two lists "
             f"can be compared although `init` is wrong.")
     lines = {"ego_vectors": Lines(shapes.rays(facts.ego_xy[i], facts.ego_xy[ego_members]), EGO_BOXES, 2.0),
              "cav_vectors": Lines(shapes.rays(facts.cav_xy[j], facts.cav_xy[cav_members]), CAV_BOXES, 2.0)}
@@ -139,22 +160,29 @@ def local_matching(facts: Facts) -> Step:
              "matched": Lines(placed(shapes.local_vectors(np.concatenate([ego_vectors[ego_hit],
                                                                             cav_vectors[cav_hit]]))), RIGHT, 4.0)}
     labels = {"ego_object": (f"{facts.ego_name(i)} ⇄ {facts.cav_name(j)}", _at(origin))}
-    shown = ""
+    shown, span = "", None
     if len(others):
         shown_pair = others[_showcase(others, cav_members, cav_vectors, params.sigma2)]
         cav_row = int(np.flatnonzero(cav_members == shown_pair[1])[0])
         wedge, diamond = shapes.tolerance_region(cav_vectors[cav_row], params.sigma1, params.sigma2)
         lines["wedge"], lines["diamond"] = Lines(placed(wedge), BAND, 1.5), Lines(placed(diamond), REGION, 2.5)
         tip = placed(shapes.local_vectors(cav_vectors[cav_row:cav_row + 1]))[0, 1]
-        labels["region"] = (f"σ1 {params.sigma1:g}° · σ2 {params.sigma2:g} m", _at(tip, 3.4))
+        labels["region"] = (f"{facts.cav_name(int(shown_pair[1]))} ⇄ {facts.ego_name(int(shown_pair[0]))}: "
+                            f"σ1 {params.sigma1:g}° · σ2 {params.sigma2:g} m", _at(tip, 3.4))
+        span = 2.0 * (float(np.linalg.norm(cav_vectors[cav_row])) + params.sigma2) + 8.0
         shown = (f" The grey wedge (σ1 = {params.sigma1:g}°) and the purple diamond (σ2 = {params.sigma2:g} m, "
                  f"L1) surround the vector to {facts.cav_name(int(shown_pair[1]))}; the vector to "
                  f"{facts.ego_name(int(shown_pair[0]))} lies in both, so they match.")
-    text = (f"The CAV object's {len(cav_vectors)} vectors (orange) are laid over the ego object's "
+    text = (f"The CAV object's {plural(len(cav_vectors), 'vector')} (orange) are laid over the ego object's "
             f"{len(ego_vectors)} (blue) in its frame; two vectors match when their angle is within σ1 and "
             f"their L1 distance within σ2 (eq. 7).{shown} |L_ij| = {len(detail.candidates)} "
             f"(the anchor pair included; green: the vectors that found a partner).")
-    return _step(facts, 2, text, lines, labels)
+    return _step(facts, 2, text, lines, labels, span=span)
+
+
+def _tally(count: int, noun: str, colour: str) -> str:
+    """``count`` of ``noun`` with the colour their lines are drawn in, or "no ``noun``" (nothing drawn)."""
+    return f"{plural(count, noun)} ({colour})" if count else f"no {noun}"
 
 
 def _showcase(pairs: np.ndarray, cav_members: np.ndarray, cav_vectors: np.ndarray, sigma2: float) -> int:
@@ -175,8 +203,8 @@ def candidate_set(facts: Facts) -> Step:
     segments = shapes.pair_segments(facts.ego_xy, facts.cav_xy, candidates)
     i, j = facts.pair
     text = (f"Every object pair whose vectors matched joins the anchor's candidate set L_ij (eq. 8): "
-            f"{len(candidates)} pairs for the anchor ({facts.ego_name(i)}, {facts.cav_name(j)}), "
-            f"{int(true.sum())} of them true (green) and {int((~true).sum())} wrong (red). "
+            f"{plural(len(candidates), 'pair')} for the anchor ({facts.ego_name(i)}, {facts.cav_name(j)}), "
+            f"{_tally(int(true.sum()), 'true pair', 'green')} and {_tally(int((~true).sum()), 'wrong pair', 'red')}. "
             + ("A set of fewer than two pairs is emptied." if len(candidates) == 0 else
                "A pair may still appear twice: an object is not yet matched one-to-one."))
     lines = {"true": Lines(segments[true], RIGHT, 3.0), "wrong": Lines(segments[~true], WRONG, 3.0),
@@ -201,8 +229,8 @@ def consensus(facts: Facts) -> Step:
                 "a candidate that shares its ego or CAV object with another needs a vote from a lone member")
         how = (f"Each candidate votes for the members it sees within σ3 = {params.sigma3:g} m (eq. 9); under the "
                f"{params.consensus_rule} rule {rule} (eq. 10).")
-    text = (f"{how} Of {len(kept)} candidates, {int(kept.sum())} are kept (green) and "
-            f"{int((~kept).sum())} removed (red); the labels give each candidate's votes.")
+    text = (f"{how} Of {plural(len(kept), 'candidate')}, it keeps {_tally(int(kept.sum()), 'candidate', 'green')} "
+            f"and removes {_tally(int((~kept).sum()), 'candidate', 'red')}; the labels give each candidate's votes.")
     lines = {"kept": Lines(segments[kept], RIGHT, 3.0), "removed": Lines(segments[~kept], WRONG, 3.0)}
     return _step(facts, 4, text, lines, labels)
 
@@ -218,7 +246,7 @@ def anchor(facts: Facts) -> Step:
     i, j = facts.pair
     if facts.is_anchor():
         verdict = (f"It is the largest set of all anchors (eq. 12-13): the anchor ({facts.ego_name(i)}, "
-                   f"{facts.cav_name(j)}) wins with {result.consensus_count} pairs against "
+                   f"{facts.cav_name(j)}) wins with {plural(result.consensus_count, 'pair')} against "
                    f"{result.runner_up_count} for the strongest rival (margin {result.margin}).")
     else:
         verdict = "No anchor won on this frame, so this true pair is shown instead; CBM matched nothing."
@@ -235,22 +263,36 @@ def robust_estimate(facts: Facts) -> Step:
     """Step 7: CBM's pairs with their Welsch weights as line widths, the fitted pose outlined (eq. 14-15)."""
     pairs, fit = facts.own_pairs, facts.fit
     if fit is None:
-        return _step(facts, 6, f"CBM matched {len(pairs)} pair(s): at least two are needed for a pose, so the "
-                               f"CAV stays where `init` put it.", {})
+        return _step(facts, 6, f"CBM matched {plural(len(pairs), 'pair')}: at least two are needed for a pose, so "
+                               f"the CAV stays where `init` put it.", {})
     segments = shapes.pair_segments(facts.ego_xy, facts.cav_xy, pairs)
     lines = shapes.weight_lines(segments, fit.weights, RIGHT)
     lines["estimate"] = Lines(shapes.outlines(se2.apply_boxes(facts.fit_pose, facts.trial.cav_boxes)), CAV_BOXES, 1.5)
     labels = {f"weight_{n}": (f"w {w:.2f}", tuple(map(float, at)))
               for n, (w, at) in enumerate(zip(fit.weights.tolist(), shapes.midpoints(segments))) if n < MAX_LABELS}
-    correction = fit.transform
     weighting = (f"Welsch's ψ with ν = {fit.scale:.2f} m, read from the residuals (σ = {fit.sigma:.2f} m): "
-                 f"{int((fit.weights < 0.5).sum())} of {len(pairs)} pairs weigh under 0.5"
+                 f"{int((fit.weights < 0.5).sum())} of {plural(len(pairs), 'pair')} weigh under 0.5"
                  if np.isfinite(fit.scale) else "least squares: every pair weighs 1")
-    text = (f"The correction minimises Σ ψ(‖p_i − (R p_j + t)‖) over CBM's {len(pairs)} pairs (eq. 14), "
-            f"{weighting}; line width shows each pair's weight. It moves the CAV by "
-            f"{np.linalg.norm(se2.translation_of(correction)):.2f} m and "
-            f"{abs(np.degrees(se2.yaw_of(correction))):.2f}° (eq. 15, orange outlines); play to see it.")
+    text = (f"The correction minimises Σ ψ(‖p_i − (R p_j + t)‖) over CBM's {plural(len(pairs), 'pair')} "
+            f"(eq. 14), {weighting}; line width shows each pair's weight. {_correction_words(facts)} "
+            f"Orange outlines: the boxes where it puts them; play to see it.")
     return _step(facts, 6, text, lines, labels, motion=(facts.result.init, facts.fit_pose))
+
+
+def _correction_words(facts: Facts) -> str:
+    """What the correction of eq. 15 does, and why its shift is not the CAV's error: it turns about
+    the ego's origin, which moves the CAV too, so the CAV itself moves by another distance."""
+    correction = facts.fit.transform
+    shift = float(np.linalg.norm(se2.translation_of(correction)))
+    turn = float(np.degrees(se2.yaw_of(correction)))
+    away = float(np.linalg.norm(se2.translation_of(facts.result.init)))
+    carried = 2.0 * away * abs(np.sin(np.radians(turn) / 2.0))
+    moved = float(np.linalg.norm(se2.translation_of(facts.fit_pose) - se2.translation_of(facts.result.init)))
+    off = pose_error(facts.result.init, facts.trial.T_true)[0]
+    return (f"The correction (eq. 15) turns the CAV's boxes by {abs(turn):.2f}° about the ego's origin and shifts "
+            f"them by {shift:.2f} m. Turning about the ego's origin also carries the CAV, {away:.1f} m from it, "
+            f"{carried:.2f} m sideways, and the shift makes up for that too: the CAV itself moves by {moved:.2f} m, "
+            f"back across the {off:.2f} m its pose was off.")
 
 
 def reassociation(facts: Facts) -> Step:
@@ -273,8 +315,8 @@ def reassociation(facts: Facts) -> Step:
     else:
         text = (f"Beyond the paper (cbm/reassociate.py): under the estimate, all boxes are paired one-to-one "
                 f"within {params.refine_gate:g} σ (σ = {facts.fit.sigma:.2f} m) and the pose is refitted. "
-                f"{len(added)} pairs were added (purple) and {len(dropped)} dropped (grey); "
-                f"{len(result.pairs)} pairs now against CBM's {len(own)}.")
+                f"It added {_tally(len(added), 'pair', 'purple')} and dropped {_tally(len(dropped), 'pair', 'grey')}: "
+                f"{plural(len(result.pairs), 'pair')} now against CBM's {len(own)}.")
     return _step(facts, 7, text, lines, pose=pose)
 
 
@@ -284,7 +326,8 @@ def outcome_step(facts: Facts) -> Step:
     moved = se2.apply_boxes(result.transform, trial.cav_boxes)
     right, wrong, _ = classified_pairs(result.pairs, trial.gt_pairs)
     before = pose_error(result.init, trial.T_true)
-    text = (f"{m.n_matched} pairs matched, {m.n_correct} right, of {m.n_true} co-visible objects: precision "
+    text = (f"{plural(m.n_matched, 'pair')} matched, {m.n_correct} right, of {plural(m.n_true, 'co-visible object')}: "
+            f"precision "
             f"{number(m.precision)}, recall {number(m.recall)}. The pose is off by {number(m.rte, ' m')} and "
             f"{number(m.rre, '°')} (RTE, RRE), against {before[0]:.2f} m and {before[1]:.2f}° before; "
             f"grey outlines: where the CAV's boxes truly are.")

@@ -116,7 +116,7 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
     ego_id = str(tab.last.trial.ego_ids[int(tab.last.result.anchor[0])])[:8]
     labels = tab.explore.inspector_view.labels
     assert labels["inspector_ego"].text == f"EGO {ego_id}: context in its own frame"
-    assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: grey = σ1")
+    assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: blue = ")
     assert any(name.startswith("inspector_ego_tip") and label.visible for name, label in labels.items())
     page.screenshot(path=str(ui.ARTIFACTS / "inspector-1280x720.png"))
     page.close()
@@ -160,6 +160,9 @@ def test_the_screenshot_can_include_the_control_panel(browser, server: ExplorerS
     assert image.shape[1] == camera.image_width + PANEL_WIDTH
     panel = image[:, camera.image_width + 4:]
     assert (panel.sum(axis=-1) < 200).sum() > 500, "the panel's text is drawn"
+    scene = image[:, : camera.image_width].astype(int)
+    assert np.median(scene) > 200, "the light theme's scene is light, not black (the render's transparent background)"
+    assert (np.abs(scene - (52, 120, 246)).sum(axis=-1) < 90).sum() > 50, "the ego's blue boxes are in it"
     page.close()
 
 

@@ -5,7 +5,7 @@ import math
 
 import numpy as np
 
-from app.scene import colours, drawing, presentation
+from app.scene import captions, colours, drawing, presentation
 from app.session.explorer import Explorer
 from app.session.settings import Settings, ViewOptions, from_preset, to_preset
 
@@ -29,7 +29,7 @@ def test_dark_theme_dims_the_map_and_lightens_the_ego_vehicle() -> None:
         assert sum(dark.ego_vehicle) > sum(light.ego_vehicle)
 
 
-def test_presentation_drawing_has_the_palette_large_labels_and_the_key_numbers(explorer: Explorer) -> None:
+def test_presentation_drawing_has_the_palette_large_labels_and_a_caption(explorer: Explorer) -> None:
     plain = drawing.draw(explorer.compute(Settings()), explorer.map_segments)
     outcome = explorer.compute(Settings().with_view(presentation=True, dark=True))
     shown = drawing.draw(outcome, explorer.map_segments)
@@ -38,10 +38,12 @@ def test_presentation_drawing_has_the_palette_large_labels_and_the_key_numbers(e
     assert shown.lines["right"].color == (0, 158, 115) and shown.lines["wrong"].thickness == 6.0
     assert shown.meshes["ego_boxes"].color == (0, 114, 178)
     assert shown.lines["map_lane_boundary"].color == colours.DARK_SCENE["map"]["lane_boundary"]
-    text, position = shown.labels["numbers"]
+    assert "numbers" not in shown.labels, "the key numbers are a caption beside the scene, not a label in it"
     m = outcome.metrics
-    assert text == (f"precision {m.precision:.2f} · recall {m.recall:.2f} · RTE {m.rte:.2f} m · RRE {m.rre:.1f}°")
-    assert len(shown.agents) == 2 and position[0] < min(x for x, _ in shown.agents)
+    assert captions.caption_lines(outcome) == [f"Frame {outcome.frame_index} · success",
+                                               f"precision {m.precision:.2f} · recall {m.recall:.2f}",
+                                               f"RTE {m.rte:.2f} m · RRE {m.rre:.1f}°"]
+    assert "Frame 0 · success<br>" in captions.caption_html(outcome) and len(shown.agents) == 2
 
 
 def test_missed_lines_are_dotted_in_presentation_mode(explorer: Explorer) -> None:

@@ -1,5 +1,6 @@
 """Real-browser test of presentation mode and the dark theme: tick them in the View tab and check
-the palette, the labels, the key numbers, the camera, the minimised panel and the page's colour
+the palette, the labels, the caption of key numbers (with the frame number, in the page's corner
+rather than in the scene, and whole when the control panel opens), the camera, the minimised panel and the page's colour
 scheme (in this tab only).
 
 With ``CBM_UPDATE_DOCS_IMG=1`` the test also saves the presentation as docs/img/presentation.png
@@ -13,11 +14,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from app.scene import colours
 from app.scene.view import VISER_LABEL_PX
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
+from evaluation.metrics import is_success
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
@@ -72,8 +75,12 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     assert _colour(tab.view.lines["right"]) == okabe.right.color
     assert _colour(tab.view.lines["wrong"]) == okabe.wrong.color and tab.view.lines["wrong"].thickness == 6.0
     assert _colour(tab.view.lines["missed"]) == okabe.missed.color
-    numbers = tab.view.labels["numbers"]
-    assert numbers.visible and numbers.text.startswith(f"precision {m.precision:.2f} · recall {m.recall:.2f}")
+    caption = page.locator("#cbm-caption")
+    caption.wait_for(timeout=20_000)
+    assert caption.inner_text().splitlines() == [f"Frame {FRAME} · {'success' if is_success(m) else 'failed'}",
+                                                 f"precision {m.precision:.2f} · recall {m.recall:.2f}",
+                                                 f"RTE {m.rte:.2f} m · RRE {m.rre:.1f}°"]
+    assert ui.in_first_screen(caption)
     assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in tab.view.labels.values() if label.visible)
     agents = np.array(tab.last_drawing.agents)
     middle = (agents.min(axis=0) + agents.max(axis=0)) / 2
@@ -82,14 +89,12 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     expand = page.get_by_role("button", name="Expand panel")
     expand.wait_for(timeout=20_000)
     ui.label(page, "presentation mode").wait_for(state="hidden", timeout=20_000)
-    assert _scheme(other) == "light" and "numbers" not in other_tab.view.labels
+    assert _scheme(other) == "light" and other.locator("#cbm-caption").count() == 0
     assert _colour(other_tab.view.lines["right"]) == colours.RIGHT
 
     ui.close_notifications(page)
     page.wait_for_timeout(2000)
     shot = page.screenshot()
-    from PIL import Image
-
     pixels = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"), dtype=int)
     assert np.median(pixels) < 60, "the dark theme's scene"
     if os.environ.get("CBM_UPDATE_DOCS_IMG"):
@@ -97,12 +102,23 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
 
     expand.click()
     page.get_by_text("Okabe-Ito").first.wait_for(timeout=20_000)
+    panel = ui.label(page, "presentation mode").locator("xpath=ancestor::*[contains(@class, 'mantine-Paper-root')][1]")
+    ui.wait_until(lambda: panel.bounding_box() is not None and panel.bounding_box()["height"] > 300)
+    assert ui.in_first_screen(caption) and not overlaps(caption.bounding_box(), panel.bounding_box())
+    assert caption.inner_text().startswith(f"Frame {FRAME}")
     tab.client.camera.look_at = (50.0, 50.0, 0.0)
     page.get_by_role("button", name="reset camera").click()
     ui.wait_until(lambda: np.allclose(tab.client.camera.look_at[:2], middle, atol=0.5))
     ui.label(page, "presentation mode").click()
     ui.wait_until(lambda: not tab.last.settings.view.presentation, timeout=60)
     page.get_by_text("green right pair").first.wait_for(timeout=20_000)
-    assert _colour(tab.view.lines["right"]) == colours.RIGHT and not tab.view.labels["numbers"].visible
+    assert _colour(tab.view.lines["right"]) == colours.RIGHT
+    caption.wait_for(state="hidden", timeout=20_000)
     page.close()
     other.close()
+
+
+def overlaps(a: dict, b: dict) -> bool:
+    return a["x"] < b["x"] + b["width"] and b["x"] < a["x"] + a["width"] and a["y"] < b["y"] + b["height"] \
+        and b["y"] < a["y"] + a["height"]
+

@@ -73,7 +73,7 @@ def test_the_page_holds_the_frames_as_json_and_nothing_from_the_network(outcomes
     data = page_data(page)
     assert [f["frame"] for f in data["frames"]] == [0, 1, 2] and data["dataset"] == "synthetic </script> <b>"
     assert data["app"] == "CBM Explorer" and data["version"]
-    assert data["settings"][0] == "Method: CBM" and "sigma1 10.0" in data["settings"][1]
+    assert data["settings"][0] == "Method: CBM" and "σ1 angle (°) 10.0" in data["settings"][1]
     first = data["frames"][0]
     assert len(first["ego"]) == outcomes[0].metrics.n_ego and len(first["right"]) == outcomes[0].metrics.n_correct
     assert ["co-visible", str(outcomes[0].metrics.n_true)] in first["table"]

@@ -85,9 +85,11 @@ def test_run_all_frames_fills_the_timeline_and_failures_are_stepped_through(brow
 
 
 def click_timeline_at(page, frame: int, n_frames: int) -> None:
-    """Click the timeline's slider where ``frame`` lies, after checking it marks every failed frame."""
-    control = ui.label(page, "go to frame").get_attribute("for")
+    """Click the frame slider where ``frame`` lies, after checking it marks every failed frame
+    (besides its two labelled ends)."""
+    control = ui.label(page, "frame").get_attribute("for")
     root = page.locator(f'[id="{control}"]')
-    ui.wait_until(lambda: root.locator(".mantine-Slider-mark").count() == len(FAILED), 30)
+    ui.wait_until(lambda: root.locator(".mantine-Slider-mark").count() == len(FAILED) + 2, 30)
+    root.scroll_into_view_if_needed()
     track = root.locator(".mantine-Slider-track").bounding_box()
     page.mouse.click(track["x"] + track["width"] * frame / (n_frames - 1), track["y"] + track["height"] / 2)

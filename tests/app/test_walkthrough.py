@@ -3,10 +3,15 @@ draws, and that it reuses CBM's own sets and fit."""
 from __future__ import annotations
 
 import dataclasses
+import re
 
 import numpy as np
 import pytest
 
+from app.scene.colours import CAV_BOXES, EGO_BOXES, GHOST, MISSED, RIGHT, WRONG
+from app.scene.inspector import BAND, REGION
+from app.scene.linecolours import as_shown
+from app.scene.words import plural
 from app.session.explorer import Explorer, Outcome
 from app.session.settings import Settings
 from app.walkthrough import shapes, steps
@@ -85,7 +90,7 @@ def test_reassociation_shows_the_pairs_it_added(outcome: Outcome) -> None:
     added = [p for p in outcome.result.pairs.tolist() if tuple(p) not in own]
     step = steps.build(facts, 7)
     assert len(step.lines["added"].segments) == len(added)
-    assert f"{len(added)} pairs were added" in step.text
+    assert (f"It added {plural(len(added), 'pair')} (purple)" if added else "It added no pair") in step.text
     assert np.allclose(step.cav_pose, facts.fit_pose)
 
 
@@ -102,3 +107,51 @@ def test_glide_runs_from_start_to_end_the_short_way() -> None:
     assert len(poses) == 21 and np.allclose(poses[0], start) and np.allclose(poses[-1], end)
     yaws = np.degrees([abs(se2.wrap_angle(se2.yaw_of(p) - np.radians(180.0))) for p in poses])
     assert yaws.max() <= 10.0 + 1e-9
+
+
+COLOUR_WORDS = {"orange": {CAV_BOXES}, "blue": {EGO_BOXES}, "green": {RIGHT}, "red": {WRONG},
+                "purple": {REGION, steps.ADDED}, "grey": {BAND, MISSED, GHOST}}
+
+
+def test_every_colour_the_words_name_is_drawn_and_every_object_named_is_labelled(outcome: Outcome) -> None:
+    """A step's text names only colours it draws and objects it labels in the scene."""
+    facts = gather(outcome)
+    for step in steps.walkthrough(outcome):
+        drawn = {line.color for line in step.lines.values() if len(line.segments)}
+        drawn |= {mesh.color for mesh in step.meshes.values()}
+        for word, colours in COLOUR_WORDS.items():
+            if re.search(rf"\b{word}\b", step.text):
+                assert drawn & colours, (step.key, word)
+        labelled = " ".join(text for text, _ in step.labels.values())
+        for name in re.findall(r"(?:EGO|CAV) [0-9a-f]{8}", step.text):
+            assert name in labelled, (step.key, name)
+    assert facts.pair is not None
+
+
+def test_the_lines_show_the_colours_the_words_name(small_explorer: Explorer) -> None:
+    """viser brightens per-vertex line colours: the nodes send the colour that shows as the named one."""
+    assert as_shown((255, 255, 255)) == (255, 255, 255) and as_shown((0, 0, 0)) == (0, 0, 0)
+    orange = as_shown(CAV_BOXES)
+    assert orange[0] == 255 and orange[1] < CAV_BOXES[1] / 2
+
+
+def test_the_robust_estimate_says_why_the_cav_moves_less_than_the_correction(explorer: Explorer) -> None:
+    facts = gather(explorer.compute(Settings()))
+    text = steps.build(facts, 6).text
+    moved = np.linalg.norm(se2.translation_of(facts.fit_pose) - se2.translation_of(facts.result.init))
+    assert "about the ego's origin" in text and f"the CAV itself moves by {moved:.2f} m" in text
+    assert "back across the 4.24 m its pose was off" in text
+
+
+def test_one_is_singular() -> None:
+    assert plural(1, "pair") == "1 pair" and plural(2, "pair") == "2 pairs" and plural(0, "vector") == "0 vectors"
+
+
+def test_a_step_about_the_pair_says_how_far_to_look(outcome: Outcome) -> None:
+    shown = steps.walkthrough(outcome)
+    facts = gather(outcome)
+    local = shown[2]
+    tip = local.labels["region"][1]
+    assert np.hypot(tip[0] - local.focus[0], tip[1] - local.focus[1]) < local.span / 2
+    assert all(steps.SPAN[0] <= s.span <= steps.SPAN[1] for s in shown if s.focus is not None)
+    assert facts.pair is not None

@@ -11,11 +11,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.scene.layouts import screen_of
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
 from app.walkthrough import steps
 from app.walkthrough.nodes import CAV_NODE, ROOT
-from app.walkthrough.panel import LOOK_HEIGHT, PANEL_SHIFT
+from app.walkthrough.panel import IDLE_TITLE, camera_over
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
@@ -37,7 +38,9 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
     page = ui.open_page(browser, small_server)
     tab = ui.session(small_server, 1)
     walk = tab.walkthrough
-    page.get_by_role("tab", name="Walkthrough").click()
+    page.get_by_role("tab", name="Steps").click()
+    ui.wait_until(lambda: tab.client.camera.update_timestamp > 0)
+    before = tuple(tab.client.camera.look_at)
     page.get_by_role("button", name="start walkthrough").click()
     _title(page, 0)
     ui.wait_until(lambda: f"{ROOT}/ego_boxes" in walk.nodes.visible_names)
@@ -48,6 +51,8 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
         page.get_by_role("button", name="next step ▶").click()
         _title(page, k)
         ui.wait_until(lambda k=k: walk.step is not None and walk.step.key == steps.NAMES[k][0])
+        if k == 2:
+            ui.wait_until(lambda: looks_at_the_object(tab), 20)
     ui.wait_until(lambda: f"{ROOT}/truth" in walk.nodes.visible_names)
     assert page.get_by_text("pairs matched").first.is_visible()
 
@@ -71,8 +76,7 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
                   and walk._facts.outcome is tab.last and walk.step.key == "local")
     _title(page, 2)
     page.get_by_role("button", name="look at the object").click()
-    x, y = walk.step.focus
-    ui.wait_until(lambda: np.allclose(tab.client.camera.look_at[:2], (x, y - PANEL_SHIFT * LOOK_HEIGHT), atol=0.5))
+    ui.wait_until(lambda: looks_at_the_object(tab), 20)
     if os.environ.get("CBM_UPDATE_DOCS_IMG") == "1":
         _save_screenshot(page)
 
@@ -80,7 +84,16 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
     page.get_by_role("button", name="start walkthrough").wait_for(timeout=10_000)
     ui.wait_until(lambda: not walk.active and not walk.nodes.visible_names)
     assert all(frame.visible for frame in walk.nodes._normal)
+    ui.wait_until(lambda: np.allclose(tab.client.camera.look_at, before, atol=0.5), 20)
+    assert walk.title.content == IDLE_TITLE
     page.close()
+
+
+def looks_at_the_object(tab) -> bool:
+    """Whether the camera looks down on the walkthrough's followed object as "look at the object" puts it."""
+    step, camera = tab.walkthrough.step, tab.client.camera
+    _, look_at = camera_over(step.focus, step.span, screen_of(camera))
+    return np.allclose(camera.look_at[:2], look_at[:2], atol=0.5)
 
 
 def _save_screenshot(page) -> None:

@@ -9,9 +9,11 @@ import pytest
 
 import evaluation
 from evaluation.outputs import write_atomic
+from evaluation.presets import default_preset
 
 REPO = Path(__file__).resolve().parents[2]
-TINY = ["--dataset", "synthetic:40", "synthetic:40:seed=1", "--frames", "0:20:10", "--methods", "cbm,icp,vips",
+TINY = ["--dataset", "synthetic:40", "synthetic:40:seed=1", "--frames", "0:20:10", "--protocol", "sind",
+        "--methods", "cbm,icp,vips",
         "--grid", "eta=0.4,0.8", "sigma_p=0,0.3", "sigma2=2,3", "--seed", "3"]
 
 
@@ -134,11 +136,13 @@ def test_reference_methods_bound_the_default_table(tmp_path):
 
 
 def test_the_evaluation_is_an_importable_package_and_the_command_is_thin(two_runs):
-    """``evaluation.run`` returns the same per-trial table the command writes; evaluate.py only
-    hands over to ``evaluation.cli``."""
+    """``evaluation.run`` returns the same per-trial table the command writes (from the default
+    preset, as the command starts); evaluate.py only hands over to ``evaluation.cli``."""
+    preset = default_preset()
     table = evaluation.run(["synthetic:40", "synthetic:40:seed=1"], methods=("cbm", "icp", "vips"),
                            grid={"eta": (0.4, 0.8), "sigma_p": (0.0, 0.3), "sigma2": (2.0, 3.0)}, seed=3,
-                           frames=lambda n: range(0, 20, 10))
+                           frames=lambda n: range(0, 20, 10), protocol="sind", scenario=preset.scenario,
+                           params=preset.params)
     assert isinstance(table, pl.DataFrame) and "runtime_s" in table.columns
     written = pl.read_parquet(two_runs[0] / "trials.parquet")
     assert evaluation.without_timing(table).equals(written)

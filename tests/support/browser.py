@@ -20,6 +20,8 @@ ARGS = ["--headless", "--no-sandbox", "--disable-gpu", "--disable-quic", "--no-f
         "--disable-background-networking", "--disable-component-update", "--disable-sync",
         "--use-gl=angle", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"]
 ARTIFACTS = Path(__file__).resolve().parents[1] / "_artifacts"
+FIRST_SCREEN = {"width": 1280, "height": 720}
+"""A projector's or a laptop's window: what must show in it without scrolling."""
 
 
 def launch(sync_api) -> Iterator:
@@ -36,6 +38,21 @@ def open_page(browser, server):
     page.goto(server.url)
     page.get_by_text("precision / recall").first.wait_for(timeout=30_000)
     return page
+
+
+def open_first_screen(browser, server):
+    """A new 1280x720 tab on ``server``, once its first frame's metrics are shown."""
+    page = browser.new_page(viewport=FIRST_SCREEN)
+    page.goto(server.url)
+    page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
+    return page
+
+
+def in_first_screen(locator) -> bool:
+    """Whether ``locator`` shows whole in a 1280x720 window as it stands (no scrolling)."""
+    box = locator.bounding_box()
+    return box is not None and box["x"] >= 0 and box["y"] >= 0 \
+        and box["x"] + box["width"] <= FIRST_SCREEN["width"] and box["y"] + box["height"] <= FIRST_SCREEN["height"]
 
 
 def metrics(page) -> str:

@@ -1,0 +1,79 @@
+"""The words the app shows for every method parameter (``cbm.methods``): a label with its unit and a
+hint in plain words, so that no control, note or export shows a field's raw name."""
+from __future__ import annotations
+
+WORDS = {
+    # (parameter set, field): (label, hint in plain words)
+    ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 5-6) "
+                        "count as the same neighbour only if they point within this angle of each other (eq. 7)."),
+    ("cbm", "sigma2"): ("σ2 L1 (m)", "Two neighbour vectors count as the same neighbour only if their tips are at most "
+                        "this far apart, |Δx| + |Δy| in metres (eq. 7). Larger: more candidate matches, more of them "
+                        "wrong."),
+    ("cbm", "sigma3"): ("σ3 voting (m)", "In the consensus vote, a candidate pair backs another when their "
+                        "neighbourhoods agree within this distance, |Δx| + |Δy| in metres (eq. 9); pairs nobody "
+                        "backs are dropped."),
+    ("cbm", "distance_limit"): ("distance limit (m)", "An anchor whose pairs lie farther apart than this on average "
+                                "under the initial pose is rejected."),
+    ("cbm", "consensus"): ("consensus", "The global consensus vote of eq. 9-10 (off: the paper's ablation)."),
+    ("cbm", "consensus_rule"): ("consensus rule", "paper: every candidate needs a vote from another member "
+                                "(eq. 9-10). released: as the authors' code, only candidates that share an object "
+                                "with another need one."),
+    ("cbm", "heading"): ("heading handling", "align: turn a CAV object's heading by 180° where that brings it "
+                         "closer to the ego object's. fold: fold every heading into (-90°, 90°], as the released "
+                         "code."),
+    ("cbm", "estimator"): ("pose estimator", "welsch: the robust fit of eq. 14, outliers weigh little. "
+                           "least_squares: the released code's plain fit, every pair weighs the same."),
+    ("cbm", "welsch_floor"): ("Welsch scale floor (m)", "The robust fit's scale ν never goes below this: the least "
+                              "detection noise assumed."),
+    ("cbm", "refine"): ("guided re-association", "After CBM, pair all boxes one-to-one under its estimate and refit "
+                        "until the pairs stop changing (beyond the paper)."),
+    ("cbm", "refine_gate"): ("refine gate (σ)", "The re-association pairs boxes closer than this many standard "
+                             "deviations of the pairs' noise."),
+    ("icp", "max_iterations"): ("most iterations", "ICP stops after this many rounds of closest points and fit."),
+    ("icp", "tolerance"): ("convergence tolerance", "ICP stops when the pose changes by less than this."),
+    ("icp", "max_correspondence_distance"): ("pairing distance (m)", "A CAV box farther than this from its nearest "
+                                             "ego box takes no part in the fit, and final pairs must be closer."),
+    ("ricp", "max_iterations"): ("most iterations per scale", "Most reweighted fits at one Welsch scale."),
+    ("ricp", "tolerance"): ("convergence tolerance", "The next scale starts when the pose changes by less than this."),
+    ("ricp", "nu_begin_k"): ("first scale (× median gap)", "The first Welsch scale is this times the median distance "
+                             "from a CAV box to its nearest ego box under the initial pose."),
+    ("ricp", "nu_end_k"): ("last scale (× spacing)", "The scale never falls below this times the median spacing "
+                           "of the ego's boxes."),
+    ("ricp", "nu_alpha"): ("scale shrink factor", "The scale is multiplied by this after each round."),
+    ("ricp", "anderson"): ("Anderson acceleration", "Speeds up the iteration by combining the last poses."),
+    ("ricp", "anderson_m"): ("Anderson window", "How many previous poses Anderson acceleration combines."),
+    ("ricp", "max_correspondence_distance"): ("pairing distance (m)", "Final pairs are mutual nearest boxes closer "
+                                              "than this."),
+    ("vips", "lambda_size"): ("size decay λ1 (1/m²)", "How fast the node affinity falls as two boxes' sizes differ."),
+    ("vips", "lambda_position"): ("position decay λ2 (1/m)", "How fast the node affinity falls with the distance "
+                                  "between two boxes under the initial pose."),
+    ("vips", "lambda_distance"): ("distance decay λ3 (1/m²)", "How fast the edge affinity falls as the distances "
+                                  "between two pairs of boxes differ."),
+    ("vips", "lambda_heading"): ("heading decay λ4", "How fast the edge affinity falls as relative headings differ."),
+    ("vips", "mu_size"): ("size weight μ1", "Weight of the size term in the node affinity."),
+    ("vips", "mu_position"): ("position weight μ2", "Weight of the position term in the node affinity."),
+    ("vips", "mu_distance"): ("distance weight μ3", "Weight of the distance term in the edge affinity."),
+    ("vips", "mu_heading"): ("heading weight μ4", "Weight of the relative-heading term in the edge affinity."),
+    ("vips", "candidate_radius"): ("candidate radius (m)", "Only boxes this close under the initial pose can pair."),
+    ("vips", "top_k"): ("candidates per object", "Each ego box keeps this many candidates of highest affinity."),
+    ("vips", "edge_gate"): ("edge gate (m)", "Two candidate pairs whose box distances differ by more than this do "
+                            "not support each other."),
+    ("vips", "score_threshold"): ("score threshold", "A pair is kept when its score is at least this share of the "
+                                  "best pair's."),
+}
+"""Every method parameter's label (words and unit) and hint: no control shows a field's raw name."""
+
+
+def label_of(key: str, name: str) -> str:
+    """The label of parameter ``name`` of the parameter set ``key`` (``Method.params_key``)."""
+    return WORDS[(key, name)][0]
+
+
+def plural(count: int, noun: str, nouns: str | None = None) -> str:
+    """``count`` and the noun in the number it takes: "1 pair", "3 pairs" (``nouns``: an irregular plural)."""
+    return f"{count} {noun if count == 1 else nouns or noun + 's'}"
+
+
+def margin_words(margin: int, count: int, runner_up: int) -> str:
+    """The consensus margin as the app prints it: the margin, then the winner's and the runner-up's counts."""
+    return f"{margin} ({count} vs {runner_up})"

@@ -1,0 +1,47 @@
+"""What the app offers on the dataset it serves: a choice that cannot work here (LiDAR points on a
+dataset without point clouds, the dataset's own localization on one that reports no poses, the
+joint pose graph with a single CAV) is not offered, and the page says why."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from cbm.methods import METHODS
+from loaders import Sequence
+
+from .settings import Settings
+
+GRAPH_CAVS = 2
+"""CAVs the joint pose graph needs: it ties each CAV's pose to the others'."""
+
+
+@dataclass(frozen=True)
+class Offers:
+    """Why each dataset-dependent choice is not offered (None: it is)."""
+
+    points: str | None = None
+    """Why the View tab's LiDAR points are unavailable."""
+    reported_poses: str | None = None
+    """Why localization ``dataset`` is unavailable."""
+
+    def pose_graph(self, cavs: int) -> str | None:
+        """Why a method that takes the other CAVs (the pose graph) cannot run with ``cavs`` CAVs."""
+        if cavs >= GRAPH_CAVS:
+            return None
+        return f"it calibrates several CAVs jointly: set CAVs to {GRAPH_CAVS} or more first"
+
+    def refusal(self, settings: Settings) -> str | None:
+        """Why ``settings`` cannot be computed on this dataset, in one sentence; None when they can."""
+        if settings.scenario.localization == "dataset" and self.reported_poses:
+            return f"localization 'dataset' is not offered: {self.reported_poses}"
+        method = METHODS[settings.method]
+        why = self.pose_graph(settings.cavs) if method.takes_peers else None
+        return None if why is None else f"{method.label} is not offered with {settings.cavs} CAV: {why}"
+
+
+def offers_of(sequence: Sequence) -> Offers:
+    """What ``sequence`` can show and compute."""
+    points = None if sequence.point_clouds else "this dataset ships no LiDAR points (OPV2V-family data with .pcd " \
+                                                "sweeps do)"
+    poses = None if sequence.predicted_poses else "this dataset reports no CAV poses of its own (OPV2V's " \
+                                                  "predicted_ego_pos)"
+    return Offers(points, poses)

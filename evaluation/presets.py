@@ -1,0 +1,161 @@
+"""Preset files, read the same way by the app and the command line: named settings as TOML, as CBM
+Explorer saves and exports them and as ``presets/`` ships them.
+
+A preset holds an optional ``description`` and ``name``, the ``method`` shown, a ``[scenario]``
+table (the fields of ``ScenarioParams``, angles in degrees), one table per method parameter set
+(``[cbm]``, ``[icp]``, ``[ricp]``, ``[vips]``: ``Method.params_key``) and the app's ``[view]``,
+which only the app reads. Keys a preset leaves out keep the values of the preset it is read over:
+the shipped ``default`` preset gives both the app and ``evaluate.py`` their defaults.
+
+    from evaluation.presets import default_preset, read_preset_file
+    params = read_preset_file("my-tuning.toml")  # PresetParams over the default preset
+"""
+from __future__ import annotations
+
+import dataclasses
+import functools
+import stat
+import sys
+from collections.abc import Iterable, Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from cbm.methods import METHODS
+from presets import SHIPPED_DIR
+
+from .scenario import ScenarioParams
+
+if sys.version_info >= (3, 11):
+    import tomllib
+else:
+    import tomli as tomllib
+
+DEFAULT = "default"
+"""The shipped preset whose values are everyone's defaults."""
+MAX_BYTES = 256 * 1024
+"""Largest preset file read (a saved preset is about 1 kB)."""
+ABOUT_KEYS = ("description", "name")
+"""Keys that describe a preset rather than set anything."""
+
+
+class PresetFileError(ValueError):
+    """A preset that cannot be read; the message names the file and, where one is at fault, the key."""
+
+
+def code_defaults() -> dict[str, Any]:
+    """Every method's default parameter set by its key (methods that share a set appear once)."""
+    return {m.params_key: m.params() for m in METHODS.values()}
+
+
+@dataclass(frozen=True)
+class PresetParams:
+    """What a preset sets for a run: the method shown, the scenario and every method's parameters."""
+
+    method: str = "cbm"
+    scenario: ScenarioParams = ScenarioParams()
+    params: Mapping[str, Any] = field(default_factory=code_defaults)
+    """Parameters of every method by ``Method.params_key``."""
+
+
+def replaced(table: str, value: Any, changes: Any) -> Any:
+    """The dataclass ``value`` with the keys of the TOML table ``changes`` replaced, each checked
+    against the field's type (an integer reads as a float); ``KeyError`` naming an unknown key,
+    ``TypeError`` a value of the wrong type, ``ValueError`` one the dataclass refuses."""
+    if not isinstance(changes, Mapping):
+        raise TypeError(f"[{table}] must be a table of keys, got {type(changes).__name__}")
+    fields = {f.name: f for f in dataclasses.fields(value)}
+    for key, new in changes.items():
+        if key not in fields:
+            raise KeyError(f"[{table}] unknown key {key!r}; expected one of {sorted(fields)}")
+        old = getattr(value, key)
+        expected = float if isinstance(old, float) and not isinstance(old, bool) else type(old)
+        allowed = (int, float) if expected is float else expected
+        if isinstance(new, bool) != isinstance(old, bool) or not isinstance(new, allowed):
+            raise TypeError(f"[{table}] {key} must be {expected.__name__}, got {new!r}")
+    try:
+        return dataclasses.replace(value, **{k: float(v) if isinstance(getattr(value, k), float) else v
+                                             for k, v in changes.items()})
+    except ValueError as error:
+        raise ValueError(f"[{table}] {error}") from None
+
+
+def preset_params(tables: Mapping[str, Any], base: PresetParams | None = None,
+                  other_tables: Iterable[str] = ("view",)) -> PresetParams:
+    """The preset ``tables`` (without ``description`` and ``name``) over ``base`` (default: the
+    code's defaults). ``other_tables`` are known and left to their reader (the app's ``[view]``);
+    ``KeyError``, ``TypeError`` or ``ValueError`` name the table and key at fault."""
+    base = base or PresetParams()
+    known = {"method", "scenario", *base.params, *other_tables}
+    for table in tables:
+        if table not in known:
+            raise KeyError(f"unknown table [{table}]; expected one of {sorted(known)}")
+    method = tables.get("method", base.method)
+    if method not in METHODS:
+        raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
+    params = {key: replaced(key, value, tables[key]) if key in tables else value for key, value in base.params.items()}
+    return PresetParams(method, replaced("scenario", base.scenario, tables.get("scenario", {})), params)
+
+
+def preset_tables(path: Path) -> dict[str, Any]:
+    """The tables of the preset file ``path`` (``description`` and ``name`` left out);
+    ``PresetFileError`` naming the file for one that is not a regular file, too large, not UTF-8
+    or not TOML."""
+    try:
+        if not stat.S_ISREG(path.stat().st_mode):
+            raise PresetFileError(f"{path}: not a regular file")
+        with path.open("rb") as handle:
+            data = handle.read(MAX_BYTES + 1)
+    except OSError as error:
+        raise PresetFileError(f"{path}: cannot be read ({error.strerror or error})") from None
+    if len(data) > MAX_BYTES:
+        raise PresetFileError(f"{path}: larger than {MAX_BYTES // 1024} KB; not a preset")
+    try:
+        tables = tomllib.loads(data.decode("utf-8"))
+    except UnicodeDecodeError as error:
+        raise PresetFileError(f"{path}: not UTF-8 text (byte {error.start})") from None
+    except (tomllib.TOMLDecodeError, RecursionError) as error:
+        raise PresetFileError(f"{path}: not a TOML preset ({error})") from None
+    return {key: value for key, value in tables.items() if key not in ABOUT_KEYS}
+
+
+def read_preset_file(path: Path | str, base: PresetParams | None = None) -> PresetParams:
+    """The preset file ``path`` over ``base`` (default: the shipped default preset);
+    ``PresetFileError`` with one line naming the file and the key at fault."""
+    path = Path(path)
+    try:
+        return preset_params(preset_tables(path), default_preset() if base is None else base)
+    except (KeyError, TypeError, ValueError) as error:
+        if isinstance(error, PresetFileError):
+            raise
+        raise PresetFileError(f"{path}: {error.args[0] if error.args else error}") from None
+
+
+def shipped_path(name: str) -> Path | None:
+    """The file of the shipped preset ``name``, or None when there is none of that name."""
+    path = SHIPPED_DIR / f"{name}.toml"
+    return path if name and "/" not in name and "\\" not in name and path.is_file() else None
+
+
+def shipped_names() -> list[str]:
+    return sorted(path.stem for path in SHIPPED_DIR.glob("*.toml"))
+
+
+def find_preset(name_or_file: str) -> PresetParams:
+    """The preset file at ``name_or_file``, else the shipped preset of that name, over the default
+    preset; ``PresetFileError`` when it is neither, or cannot be read."""
+    path = Path(name_or_file)
+    if not path.exists():
+        shipped = shipped_path(name_or_file)
+        if shipped is None:
+            raise PresetFileError(f"{name_or_file!r} is neither a preset file nor a shipped preset "
+                                  f"({', '.join(shipped_names())})")
+        path = shipped
+    return read_preset_file(path)
+
+
+@functools.lru_cache(maxsize=1)
+def default_preset() -> PresetParams:
+    """The shipped ``default`` preset over the code's defaults: the app's settings and the
+    command line's when nothing else is asked for."""
+    return read_preset_file(SHIPPED_DIR / f"{DEFAULT}.toml", PresetParams())

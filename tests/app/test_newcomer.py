@@ -1,0 +1,56 @@
+"""The words, offers and defaults behind what a newcomer reads (issue 24, items 7, 8, 12), without a browser."""
+from __future__ import annotations
+
+import dataclasses
+from pathlib import Path
+
+import loaders
+from app.scene.text import metrics_markdown
+from app.scene.words import WORDS
+from app.session.explorer import Explorer
+from app.session.names import agent_name
+from app.session.offers import offers_of
+from app.session.presets import discover
+from app.session.settings import Settings, ViewOptions
+from cbm.methods import METHODS
+
+
+def test_every_parameter_has_a_label_in_words_and_a_hint() -> None:
+    for method in METHODS.values():
+        for name in method.params.__dataclass_fields__:
+            label, hint = WORDS[(method.params_key, name)]
+            assert "_" not in label and len(hint.split()) >= 4, (method.name, name)
+
+
+def test_the_recording_car_is_named_once() -> None:
+    assert agent_name("ego", "ego") == "ego" and agent_name("CAV", "0af5cc06-3634", code=True) == "CAV `0af5cc06`"
+
+
+def test_the_header_of_the_shipped_scene_names_the_ego_once(explorer: Explorer) -> None:
+    header = metrics_markdown(explorer.compute(Settings())).splitlines()[0]
+    assert header.startswith("**Frame 0** · ego · CAV `0af5cc06`"), header
+
+
+def test_the_default_preset_is_the_apps_defaults_view_included(tmp_path) -> None:
+    presets, _ = discover(users=tmp_path)
+    assert presets["default"].apply(Settings()) == Settings()
+    teaching = presets["teaching"].apply(Settings())
+    back = presets["default"].apply(dataclasses.replace(teaching, view=dataclasses.replace(
+        teaching.view, presentation=True, dark=True)))
+    assert back.view == ViewOptions(presentation=True, dark=True), "default resets the view but the tab's theme"
+
+
+def test_what_the_shipped_scene_cannot_offer_and_why(explorer: Explorer) -> None:
+    offers = offers_of(explorer.sequence)
+    assert "no LiDAR points" in offers.points and "no CAV poses" in offers.reported_poses
+    own_pose = Settings().with_scenario(localization="dataset")
+    assert "localization 'dataset' is not offered" in offers.refusal(own_pose)
+    graph = dataclasses.replace(Settings(), method="cbm-graph")
+    assert "not offered with 1 CAV" in offers.refusal(graph)
+    assert offers.refusal(dataclasses.replace(graph, cavs=2)) is None and offers.refusal(Settings()) is None
+
+
+def test_an_opv2v_release_offers_its_points_and_poses() -> None:
+    fixtures = Path(__file__).resolve().parents[1] / "loaders" / "fixtures"
+    assert offers_of(loaders.open(str(fixtures / "opv2v" / "scenario"))).reported_poses is None
+    assert offers_of(loaders.open(str(fixtures / "opv2v_points" / "scenario"))).points is None
