@@ -74,8 +74,14 @@ def ctrl_c_held() -> Iterator[None]:
 
 def stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
     """End ``pool`` now (a stop signal or a failed task): pending tasks cancelled, every worker
-    process terminated (killed if still alive after ``grace_s``), none left orphaned."""
+    process terminated (killed if still alive after ``grace_s``), none left orphaned, then the
+    pool's manager thread joined (for at most ``grace_s``).
+
+    The manager thread holds the last references to the pool's queues: left running, it releases
+    their semaphores (unlink, then tell multiprocessing's resource tracker) while the process exits,
+    and an exit between the two makes the tracker warn of "leaked semaphore objects"."""
     processes = list((pool._processes or {}).values())
+    manager = pool._executor_manager_thread
     pool.shutdown(wait=False, cancel_futures=True)
     for process in processes:
         process.terminate()
@@ -85,6 +91,8 @@ def stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
         if process.is_alive():
             process.kill()
             process.join()
+    if manager is not None:
+        manager.join(grace_s)
 
 
 def _finished(result: Any, done: Callable[[Any], None]) -> Any:

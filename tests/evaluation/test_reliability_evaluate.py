@@ -1,16 +1,19 @@
 """evaluate.py under faults and bad input: a stop signal ends it at once with no orphan and no
 partial file, ``--out`` is checked before the run, a failed run keeps the older run's files whole."""
+import multiprocessing
 import os
 import signal
 import subprocess
 import sys
 import time
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import pytest
 
 import evaluation.cli
 import evaluation.outputs
+from evaluation.executors import stop_pool
 
 REPO = Path(__file__).resolve().parents[2]
 QUICK = ["--dataset", "synthetic:40", "--frames", "0:2", "--methods", "icp", "--workers", "1"]
@@ -166,3 +169,16 @@ def test_a_binary_file_given_as_a_csv_is_named_in_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert stop.value.code == 2 and err.count("\n") == 1
     assert f"{binary}: binary content, not a CSV file; expected UTF-8 text" in err
+
+
+def test_stopping_the_pool_ends_its_manager_thread_before_the_process_may_exit():
+    """The manager thread holds the pool's queues: were it still running when a stopped run exits,
+    it could be cut between unlinking a semaphore and telling the resource tracker ("leaked semaphore")."""
+    pool = ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("spawn"))
+    for _ in range(3):
+        pool.submit(time.sleep, 60)
+    wait_for(lambda: len(pool._processes or {}) == 2, 60, "the pool's two workers")
+    manager = pool._executor_manager_thread
+    processes = list(pool._processes.values())
+    stop_pool(pool)
+    assert not manager.is_alive() and not any(process.is_alive() for process in processes)
