@@ -29,7 +29,7 @@ from ..session.explorer import Outcome
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
 from ..session.sequence import SequenceRun, run_sequence
 from .actions import TabActions
-from .plot import add_frame_plot
+from .plot import add_run_plots, run_data, send
 from .reports import search_markdown, sequence_markdown, worst_markdown
 
 NO_RUN = "(run the sequence first)"
@@ -60,7 +60,7 @@ class ExplorePanel:
             with gui.add_folder("Sequence run"):
                 self.run_button = gui.add_button("run all frames", hint="the current settings on every frame")
                 self.summary = gui.add_markdown("Runs the current settings over every frame of the sequence.")
-                self.plot = add_frame_plot(gui, "per frame", with_rre=True)
+                self.ratios, self.errors = add_run_plots(gui)
             with gui.add_folder("Worst frames"):
                 self.metric = gui.add_dropdown("rank by", tuple(worst.RANKINGS))
                 self.worst = gui.add_dropdown("worst", (NO_RUN,))
@@ -133,7 +133,10 @@ class ExplorePanel:
     def _ran(self, result: tuple[SequenceRun, dict[int, list[Finding]]], cancelled: bool) -> None:
         self.run, self.findings = result
         self.summary.content = sequence_markdown(self.run)
-        self.plot.data = self.run.plot_data()
+        frames, precision, recall, rte, rre = self.run.plot_data()
+        n_frames = len(self.tab.explorer)
+        send(self.ratios, run_data(frames, (precision, recall), n_frames))
+        send(self.errors, run_data(frames, (rte, rre), n_frames))
         self.tab.add_frames(self.run.settings, list(self.run.rows))
         self._show_worst()
 

@@ -17,7 +17,7 @@ from viser._messages import GuiSliderMark
 from ..session.baseline import Baseline
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
 from .actions import TabActions, on_user
-from .plot import add_timeline
+from .plot import TIMELINE, add_timeline, send, timeline_series
 
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
@@ -59,7 +59,7 @@ class MetricsControls:
     def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int) -> None:
         """The timeline, its slider at ``frame`` with the failed frames marked, the list of failed
         frames and the pin button's label."""
-        self.plot.data = timeline
+        send(self.plot, timeline, timeline_series(len(timeline) > len(TIMELINE)))
         self.scrubber.value = frame
         ends = tuple(GuiSliderMark(value=float(v), label=str(int(v))) for v in (self.scrubber.min, self.scrubber.max))
         marks = ends + tuple(GuiSliderMark(value=float(f), label=None) for f in failures)

@@ -11,6 +11,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.panels.plot import TIMELINE
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
 from support import browser as ui
@@ -42,8 +43,11 @@ def run_all_frames(page, tab) -> None:
 
 
 def pinned_frames(tab) -> set[int]:
-    """Frames where the timeline draws the pinned precision."""
-    x, pinned_precision = tab.controls.metrics.plot.data[0], tab.controls.metrics.plot.data[4]
+    """Frames where the timeline draws the pinned precision (no pinned series: none)."""
+    data = tab.controls.metrics.plot.data
+    if len(data) == len(TIMELINE):
+        return set()
+    x, pinned_precision = data[0], data[len(TIMELINE)]
     return set(x[np.isfinite(pinned_precision)].astype(int))
 
 
