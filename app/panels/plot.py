@@ -71,12 +71,13 @@ def _placeholder(n_series: int) -> tuple[np.ndarray, ...]:
     return (np.array([0.0, 1.0]), *(np.full(2, np.nan) for _ in range(n_series - 1)))
 
 
-def add_run_plots(gui: viser.GuiApi) -> tuple[viser.GuiUplotHandle, viser.GuiUplotHandle]:
+def add_run_plots(gui: viser.GuiApi, ratios_title: str,
+                  errors_title: str) -> tuple[viser.GuiUplotHandle, viser.GuiUplotHandle]:
     """Two plots over a run's frames: precision and recall (0 to 1), and the pose errors (RTE in
     metres on the left axis, RRE in degrees on the right)."""
-    ratios = gui.add_uplot(_placeholder(3), (FRAME, PRECISION, RECALL), title="precision and recall per frame",
+    ratios = gui.add_uplot(_placeholder(3), (FRAME, PRECISION, RECALL), title=ratios_title,
                            aspect=2.0, scales=SCALES, axes=(X_AXIS, RATIO_AXIS), padding=PADDING)
-    errors = gui.add_uplot(_placeholder(3), (FRAME, RTE, RRE), title="pose error per frame", aspect=2.0,
+    errors = gui.add_uplot(_placeholder(3), (FRAME, RTE, RRE), title=errors_title, aspect=2.0,
                            scales=SCALES, axes=(X_AXIS, metres_axis(3), degrees_axis(1)), padding=PADDING)
     return ratios, errors
 
