@@ -21,8 +21,9 @@ from .plot import TIMELINE, add_timeline, send, timeline_series
 
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
-HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned. Fills with every "
-        "frame computed (stepping, play, *run all frames*) until a setting other than frame, CAV or view changes.")
+HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned; a gap: frames not "
+        "computed. Fills with every frame computed (stepping, play, *run all frames*) until a setting other than "
+        "frame, CAV or view changes.")
 
 
 class TimelineTab(TabActions, Protocol):

@@ -47,10 +47,11 @@ def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
     """Current against pinned on this frame, and the difference (current − pinned)."""
     m, p = outcome.metrics, pinned.metrics
     found = differences(pinned.settings, outcome.settings)
-    settings = f"pinned under {now_words(found)}" if found else "pinned under the same settings"
+    settings = f"Pinned under other settings: {now_words(found)}." if found else "Pinned under the same settings."
     return "\n".join([
-        f"**Pinned baseline** (same frame and CAV; {settings}; its matches: {PINNED_WORDS}, View → show "
-        "pinned matches)",
+        f"**Pinned baseline** (same frame and CAV; its matches: {PINNED_WORDS})",
+        "",
+        f"*{settings}*",
         "",
         "| | current | pinned | current − pinned |",
         "|---|---|---|---|",

@@ -60,13 +60,13 @@ def test_the_pinned_table_names_the_settings_it_was_pinned_under(browser, server
     page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     page.get_by_role("button", name="pin baseline").click()
-    page.get_by_text("pinned under the same settings").first.wait_for(timeout=60_000)
+    page.get_by_text("Pinned under the same settings").first.wait_for(timeout=60_000)
     page.get_by_role("tab", name="Presets").click()
     ui.pick_option(page, "preset", "stress")
     page.get_by_role("button", name="load", exact=True).click()
     ui.wait_until(lambda: tab.last.settings.scenario.sigma_p == 0.9, 60)
-    page.get_by_text("pinned under").first.wait_for(timeout=60_000)
-    table = page.get_by_text("pinned under").first.inner_text()
+    page.get_by_text("Pinned under other settings").first.wait_for(timeout=60_000)
+    table = page.get_by_text("Pinned under other settings").first.inner_text()
     assert "position noise σp (m) 1 (now 0.9)" in table and "seed" not in table
     drawn = tab.last_drawing.lines
     assert len(drawn["pinned"].segments) and drawn["pinned"].color != drawn["missed"].color
