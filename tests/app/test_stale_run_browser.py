@@ -28,9 +28,7 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 
 def load_stress(page, tab) -> None:
-    page.get_by_role("tab", name="Presets").click()
-    ui.pick_option(page, "preset", "stress")
-    page.get_by_role("button", name="load", exact=True).click()
+    ui.load_preset(page, "stress")
     ui.wait_until(lambda: tab.last.settings.scenario.sigma_p == STRESS_SIGMA_P, 60)
     page.get_by_role("tab", name="Explore").click()
 
