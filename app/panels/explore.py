@@ -132,13 +132,16 @@ class ExplorePanel:
         """Run the tab's current settings over every frame, then ``then(run)`` if it completes; False
         when another task is running."""
         settings, explorer = self.tab.settings, self.tab.explorer
-        self.after_run = then
+        waiting, self.after_run = self.after_run, then
 
         def work(task: Task) -> tuple[SequenceRun, dict[int, list[Finding]]]:
             run = run_sequence(explorer, settings, task)
             return run, {} if run.cancelled else worst.diagnoses(explorer, run, worst.candidate_frames(run), task.check)
 
-        return self._start("Sequence run", work, self._ran)
+        started = self._start("Sequence run", work, self._ran)
+        if not started:
+            self.after_run = waiting
+        return started
 
     def _ran(self, result: tuple[SequenceRun, dict[int, list[Finding]]], cancelled: bool) -> None:
         self.run, self.findings = result
