@@ -2,7 +2,9 @@
 
 Long work (a sequence run, a search, a screenshot) runs off the GUI threads; a sequence run or a
 search at a time, with the progress bar and a cancel button. Results are plain values
-(``SequenceRun``, ``SearchResult``) that the tab keeps and shows.
+(``SequenceRun``, ``SearchResult``) that the tab keeps and shows; once the controls move to other
+settings, a run's outputs name the settings they were computed under, *jump there* asks before
+setting them, and the per-frame export runs the current settings first.
 """
 from __future__ import annotations
 

@@ -58,6 +58,7 @@ def test_a_run_under_other_settings_is_marked_asks_before_a_jump_and_exports_the
     ui.wait_until(lambda: stale_marks(page) >= 2, 30)
     assert f"position noise σp (m) {RUN_SIGMA_P:g} (now {STRESS_SIGMA_P:g})" in \
         page.get_by_text(STALE).first.locator("xpath=..").inner_text()
+    page.get_by_text("pose error per frame (other settings)").wait_for(timeout=30_000)
     worst_frame = worst.frame_of(tab.explore.worst.value)
     if tab.settings.frame == worst_frame:
         page.get_by_role("button", name="next ▶").click()
