@@ -34,17 +34,18 @@ DOTS = uplot.Series_Points(show=True, size=4)
 FRAME = uplot.Series(label="frame")
 PRECISION = uplot.Series(label="precision", stroke="#1e9c3c", width=2, scale="y", points=DOTS)
 RECALL = uplot.Series(label="recall", stroke="#3478f6", width=2, scale="y", points=DOTS)
-RTE = uplot.Series(label="RTE (m)", stroke="#e1261e", width=2, scale="m", points=DOTS)
+RTE = uplot.Series(label="RTE (m)", stroke="#e8820c", width=2, scale="m", points=DOTS)
 RRE = uplot.Series(label="RRE (°)", stroke="#9b59b6", width=2, scale="deg", points=DOTS)
 FAILED = uplot.Series(label="failed", stroke="#c0141e", width=0, scale="y",
-                      points=uplot.Series_Points(show=True, size=8, fill="#c0141e", stroke="#c0141e"))
+                      points=uplot.Series_Points(show=True, size=9, width=1.5, fill="#c0141e", stroke="#5c000a"))
 NOW = uplot.Series(label="this frame", stroke="#222222", width=2, scale="y", points=uplot.Series_Points(show=False))
 PINNED = (uplot.Series(label="pinned precision", stroke="#8fd19e", width=1.5, dash=(6.0, 4.0), scale="y"),
           uplot.Series(label="pinned recall", stroke="#9cbcf9", width=1.5, dash=(6.0, 4.0), scale="y"),
-          uplot.Series(label="pinned RTE", stroke="#f19a96", width=1.5, dash=(6.0, 4.0), scale="m"))
+          uplot.Series(label="pinned RTE", stroke="#f5c28a", width=1.5, dash=(6.0, 4.0), scale="m"))
 TIMELINE = (FRAME, PRECISION, RECALL, RTE, FAILED, NOW)
-"""frame; precision, recall, RTE; failed frames (red dots on the x axis); the current frame (a
-vertical bar). While a baseline is pinned, ``PINNED`` follows (``timeline_series``)."""
+"""frame; precision, recall, RTE; failed frames (large red dots ringed dark red on the x axis, apart
+from RTE's small orange ones); the current frame (a vertical bar). While a baseline is pinned,
+``PINNED`` follows (``timeline_series``)."""
 
 FROM_ZERO = {"min": {"pad": 0.0, "soft": 0.0, "mode": 1}, "max": {"pad": 0.1, "soft": 1.0, "mode": 1}}
 """An error axis starts at 0 and reaches at least 1 (the success test's 1 m and 1°)."""
@@ -58,7 +59,7 @@ PADDING = (12, 4, 0, 0)
 
 
 def metres_axis(side: int) -> uplot.Axis:
-    return uplot.Axis(scale="m", side=side, label="RTE (m)", stroke="#e1261e", grid=uplot.Axis_Grid(show=side == 3),
+    return uplot.Axis(scale="m", side=side, label="RTE (m)", stroke="#e8820c", grid=uplot.Axis_Grid(show=side == 3),
                       **LABEL)
 
 
