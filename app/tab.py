@@ -174,7 +174,7 @@ class ClientSession:
 
     def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
         rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
-        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer))
+        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer), self.baseline.pinned)
 
     def notify(self, title: str, body: str, color: str) -> None:
         self.client.add_notification(title, body, color=color, auto_close_seconds=8)

@@ -2,7 +2,9 @@
 
 Long work (a sequence run, a search, a screenshot) runs off the GUI threads; a sequence run or a
 search at a time, with the progress bar and a cancel button. Results are plain values
-(``SequenceRun``, ``SearchResult``) that the tab keeps and shows.
+(``SequenceRun``, ``SearchResult``) that the tab keeps and shows; once the controls move to other
+settings, a run's outputs name the settings they were computed under, *jump there* asks before
+setting them, and the per-frame export runs the current settings first.
 """
 from __future__ import annotations
 
@@ -19,6 +21,7 @@ from PIL import Image
 from evaluation.diagnosis import Finding
 
 from ..scene import inspector, layouts
+from ..scene.differences import Difference, differences, now_words
 from ..scene.drawing import Drawing
 from ..scene.recording_html import recording_html
 from ..scene.view import SceneView
@@ -28,12 +31,15 @@ from ..session.calibration import CalibrationCheck
 from ..session.explorer import Outcome
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
 from ..session.sequence import SequenceRun, run_sequence
+from . import confirm
 from .actions import TabActions
-from .plot import add_frame_plot
-from .reports import search_markdown, sequence_markdown, worst_markdown
+from .plot import add_run_plots, run_data, send
+from .reports import jump_markdown, search_markdown, sequence_markdown, stale_markdown, worst_markdown
 
 NO_RUN = "(run the sequence first)"
 NO_SEARCH = "(search first)"
+RATIOS_TITLE, ERRORS_TITLE = "precision and recall per frame", "pose error per frame"
+JUMP_HINT = "that frame with the run's settings and noise draw"
 WAITING = "*waiting for another tab's job…*"
 
 
@@ -47,6 +53,10 @@ class ExplorePanel:
         self.run: SequenceRun | None = None
         self.findings: dict[int, list[Finding]] = {}
         self.searched: SearchResult | None = None
+        self.marked: list[Difference] | None = None
+        """The settings the run's outputs say they differ in (None: not shown yet)."""
+        self.after_run: Callable[[SequenceRun], None] | None = None
+        """What to do with the next run once it is complete (an export asked for before it)."""
         self.inspected: tuple[int, int | None, int | None] | None = None
         """(frame, ego index, CAV index) of the pair the inspector shows."""
         self.shown: inspector.ContextPicture | None = None
@@ -60,11 +70,11 @@ class ExplorePanel:
             with gui.add_folder("Sequence run"):
                 self.run_button = gui.add_button("run all frames", hint="the current settings on every frame")
                 self.summary = gui.add_markdown("Runs the current settings over every frame of the sequence.")
-                self.plot = add_frame_plot(gui, "per frame", with_rre=True)
+                self.ratios, self.errors = add_run_plots(gui, RATIOS_TITLE, ERRORS_TITLE)
             with gui.add_folder("Worst frames"):
                 self.metric = gui.add_dropdown("rank by", tuple(worst.RANKINGS))
                 self.worst = gui.add_dropdown("worst", (NO_RUN,))
-                self.jump = gui.add_button("jump there", hint="that frame with the run's settings and noise draw")
+                self.jump = gui.add_button("jump there", hint=JUMP_HINT)
                 self.worst_table = gui.add_markdown("")
             with gui.add_folder("Context inspector"):
                 self.inspect_winner = gui.add_button("inspect the winning anchor")
@@ -103,7 +113,7 @@ class ExplorePanel:
         self.go.on_click(lambda e: self.go_to_flagged(self.flagged.value))
         self.run_button.on_click(lambda e: self.start_run())
         self.metric.on_update(lambda e: self._show_worst())
-        self.jump.on_click(lambda e: self.jump_to(worst.frame_of(self.worst.value))
+        self.jump.on_click(lambda e: self.ask_jump(worst.frame_of(self.worst.value))
                            if self.worst.value != NO_RUN else None)
         self.inspect_winner.on_click(lambda e: self.inspect_anchor())
         self.clear.on_click(lambda e: self.clear_inspector())
@@ -120,21 +130,51 @@ class ExplorePanel:
 
     # sequence run and worst frames
 
-    def start_run(self) -> bool:
-        """Run the tab's current settings over every frame; False when another task is running."""
+    def start_run(self, then: Callable[[SequenceRun], None] | None = None) -> bool:
+        """Run the tab's current settings over every frame, then ``then(run)`` if it completes; False
+        when another task is running."""
         settings, explorer = self.tab.settings, self.tab.explorer
+        waiting, self.after_run = self.after_run, then
 
         def work(task: Task) -> tuple[SequenceRun, dict[int, list[Finding]]]:
             run = run_sequence(explorer, settings, task)
             return run, {} if run.cancelled else worst.diagnoses(explorer, run, worst.candidate_frames(run), task.check)
 
-        return self._start("Sequence run", work, self._ran)
+        started = self._start("Sequence run", work, self._ran)
+        if not started:
+            self.after_run = waiting
+        return started
 
     def _ran(self, result: tuple[SequenceRun, dict[int, list[Finding]]], cancelled: bool) -> None:
         self.run, self.findings = result
-        self.summary.content = sequence_markdown(self.run)
-        self.plot.data = self.run.plot_data()
+        self.marked = None
+        frames, precision, recall, rte, rre = self.run.plot_data()
+        n_frames = len(self.tab.explorer)
+        send(self.ratios, run_data(frames, (precision, recall), n_frames))
+        send(self.errors, run_data(frames, (rte, rre), n_frames))
         self.tab.add_frames(self.run.settings, list(self.run.rows))
+        self.mark_stale()
+        then, self.after_run = self.after_run, None
+        if then is not None and self.run.cancelled:
+            self.tab.notify("Nothing exported", "the run was cancelled before every frame was done", "yellow")
+        elif then is not None:
+            then(self.run)
+
+    def run_differences(self) -> list[Difference]:
+        """How the last run's settings differ from the controls' (empty: no run, or the same)."""
+        return [] if self.run is None else differences(self.run.settings, self.tab.settings)
+
+    def mark_stale(self) -> None:
+        """Show the run's summary and worst frames marked, when the controls have moved since, with
+        the settings they were computed under (each change of settings calls this)."""
+        found = self.run_differences()
+        if self.run is None or found == self.marked:
+            return
+        self.marked = found
+        self.summary.content = stale_markdown(found) + sequence_markdown(self.run)
+        for chart, title in ((self.ratios, RATIOS_TITLE), (self.errors, ERRORS_TITLE)):
+            chart.title = f"{title} (other settings)" if found else title
+        self.jump.hint = JUMP_HINT if not found else "the run used other settings: asks before setting them"
         self._show_worst()
 
     def _show_worst(self) -> None:
@@ -144,14 +184,23 @@ class ExplorePanel:
         rows = worst.rank(self.run.rows, metric)
         self.worst.options = tuple(worst.label(row, metric) for row in rows)
         self.worst.value = self.worst.options[0]
-        self.worst_table.content = worst_markdown(rows, metric, self.findings)
+        self.worst_table.content = stale_markdown(self.marked or []) + worst_markdown(rows, metric, self.findings)
 
-    def jump_to(self, frame: int) -> None:
-        """Show ``frame`` with the last run's settings (and so its noise draw), keeping the view."""
+    def ask_jump(self, frame: int) -> None:
+        """Show ``frame`` as the run computed it; when the controls have moved since, first ask,
+        listing the settings the jump would set."""
         if self.run is None:
             return
-        settings = dataclasses.replace(self.run.settings, frame=frame, view=self.tab.settings.view)
-        self.tab.apply(lambda s: settings, move_controls=True)
+        found = self.run_differences()
+        if not found:
+            self.tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True)
+            return
+        run, apply = self.run, self.tab.apply
+        confirm.ask(self.gui, f"Jump to frame {frame}", jump_markdown(frame, found), {
+            "set the run's settings and jump": lambda: apply(
+                lambda s: dataclasses.replace(run.settings, frame=frame, view=s.view), move_controls=True),
+            "jump, keep my settings": lambda: apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True),
+            "cancel": None})
 
     # dataset calibration
 
@@ -207,8 +256,9 @@ class ExplorePanel:
         self.look_at_inspector()
 
     def refresh(self, outcome: Outcome, picture: Drawing) -> None:
-        """Follow a recompute: the same pair on the same frame is redrawn under the new thresholds;
-        anything else clears the inspector."""
+        """Follow a recompute: the run's outputs say whether they are still the controls'; the same
+        pair on the same frame is redrawn under the new thresholds, anything else clears the inspector."""
+        self.mark_stale()
         if self.inspected is None:
             return
         frame, ego, cav = self.inspected
@@ -255,11 +305,20 @@ class ExplorePanel:
     # export
 
     def _download_rows(self, suffix: str, encode: Callable[[list[dict]], bytes]) -> None:
-        if self.run is None or not self.run.rows:
-            self.tab.notify("Nothing to export", "run the sequence first", "yellow")
+        """The per-frame rows of the current settings: the last run's when it ran them, else those
+        of a run started now (the file follows when it completes)."""
+        found = self.run_differences()
+        if self.run is not None and self.run.rows and not found:
+            self._export(self.run, suffix, encode)
             return
+        why = "no run yet" if self.run is None else f"the last run used other settings: {now_words(found)}"
+        if self.start_run(then=lambda run: self._export(run, suffix, encode)):
+            self.tab.notify("Running the current settings first", f"{why}. The file downloads when every frame "
+                            "is done.", "blue")
+
+    def _export(self, run: SequenceRun, suffix: str, encode: Callable[[list[dict]], bytes]) -> None:
         name = _slug(self.tab.explorer.sequence.name)
-        self._download(f"cbm-{name}-seed{self.run.settings.scenario.seed}.{suffix}", encode(list(self.run.rows)))
+        self._download(f"cbm-{name}-seed{run.settings.scenario.seed}.{suffix}", encode(list(run.rows)))
 
     def download_recording(self) -> None:
         """The frames this tab has shown under its current settings as a self-contained HTML page."""

@@ -17,12 +17,13 @@ from viser._messages import GuiSliderMark
 from ..session.baseline import Baseline
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
 from .actions import TabActions, on_user
-from .plot import add_timeline
+from .plot import TIMELINE, add_timeline, send, timeline_series
 
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
-HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned. Fills with every "
-        "frame computed (stepping, play, *run all frames*) until a setting other than frame, CAV or view changes.")
+HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned; a gap: frames not "
+        "computed. Fills with every frame computed (stepping, play, *run all frames*) until a setting other than "
+        "frame, CAV or view changes.")
 
 
 class TimelineTab(TabActions, Protocol):
@@ -59,7 +60,7 @@ class MetricsControls:
     def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int) -> None:
         """The timeline, its slider at ``frame`` with the failed frames marked, the list of failed
         frames and the pin button's label."""
-        self.plot.data = timeline
+        send(self.plot, timeline, timeline_series(len(timeline) > len(TIMELINE)))
         self.scrubber.value = frame
         ends = tuple(GuiSliderMark(value=float(v), label=str(int(v))) for v in (self.scrubber.min, self.scrubber.max))
         marks = ends + tuple(GuiSliderMark(value=float(f), label=None) for f in failures)
@@ -68,7 +69,9 @@ class MetricsControls:
         options = (f"{FAILED_HEADER} ({len(failures)} known)", *(f"frame {f}" for f in failures))
         if tuple(self.failed.options) != options:
             self.failed.options = options
-            self.failed.value = options[0]
+        shown = f"frame {frame}" if frame in failures else options[0]
+        if self.failed.value != shown:
+            self.failed.value = shown
         self.pin.label = UNPIN if pinned else PIN
 
 
@@ -96,15 +99,31 @@ def go_to(tab: TabActions, frame: int) -> None:
 
 
 def step_failure(tab: TimelineTab, direction: int) -> None:
-    """Show the nearest failed frame before or after this one among the frames computed."""
+    """Show the nearest failed frame before or after this one among the frames computed; past the
+    last (or before the first) wrap round to the first (the last), and say so."""
     frame = tab.settings.frame
-    found = step_to_failure(dict(tab.history.rows) if tab.history.matches(tab.settings) else {}, frame, direction)
+    rows = dict(tab.history.rows) if tab.history.matches(tab.settings) else {}
+    found = step_to_failure(rows, frame, direction)
     if found is None:
-        where = "after" if direction > 0 else "before"
-        tab.notify("No failed frame known", f"none {where} frame {frame} among the frames computed so far; "
-                   "run all frames (Explore tab) to find every failure", "yellow")
-        return
+        found = step_to_failure(rows, -1 if direction > 0 else len(tab.explorer), direction)
+        if found is None:
+            tab.notify("No failed frame known", "none among the frames computed so far; run all frames (Explore "
+                       "tab) to find every failure", "yellow")
+            return
+        tab.notify(*wrapped_words(found, frame, direction, len(rows) == len(tab.explorer)))
+        if found == frame:
+            return
     go_to(tab, found)
+
+
+def wrapped_words(found: int, frame: int, direction: int, all_known: bool) -> tuple[str, str, str]:
+    """The notification of a step past the last failure (or before the first) that wraps to ``found``."""
+    if found == frame:
+        return "The only failed frame known", f"frame {frame} is the only failure known", "blue"
+    title, where, start = ("Past the last failure", "after", "first") if direction > 0 else \
+        ("Before the first failure", "before", "last")
+    known = "in the sequence" if all_known else "among the frames computed so far (run all frames to find every one)"
+    return title, f"no failed frame {where} frame {frame} {known}; back to the {start}, frame {found}", "blue"
 
 
 def jump(tab: TabActions, option: str) -> None:

@@ -7,6 +7,7 @@ from typing import Any
 from cbm.methods import METHODS
 from evaluation.diagnosis import Finding
 
+from ..scene.differences import Difference, change_lines, now_words
 from ..scene.text import number
 from ..session.search import OBJECTIVE_LABELS, SearchResult
 from ..session.sequence import SequenceRun
@@ -61,3 +62,19 @@ def worst_markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[i
                      f"| {number(row['rte'], ' m')} | {number(row['rre'], '°')} | {number(row['margin'], '', 0)} "
                      f"| {why} |")
     return "\n".join(lines)
+
+
+def stale_markdown(found: list[Difference]) -> str:
+    """The mark above a run's outputs computed under other settings than the controls' (empty when
+    they are the controls')."""
+    if not found:
+        return ""
+    return (f"⚠ **Computed under other settings** than the controls': {now_words(found)}. *run all frames* "
+            "again for the current ones.\n\n")
+
+
+def jump_markdown(frame: int, found: list[Difference]) -> str:
+    """What *jump there* would change, asked before it changes it."""
+    return (f"The run was computed under other settings than the controls'. Frame {frame} as the run saw it "
+            f"(the same noise draw) needs the run's settings; the jump sets:\n\n{change_lines(found)}\n\n"
+            f"Keeping your settings shows frame {frame} under them instead.")

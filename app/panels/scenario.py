@@ -7,20 +7,21 @@ from dataclasses import dataclass, field
 
 import viser
 
+from ..scene.words import SCENARIO_WORDS
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, on_user
 
 SLIDERS = {
     # field: (label, min, max, step, hint)
-    "eta": ("co-visibility eta", 0.0, 1.0, 0.05, "SIND protocol: share of objects both agents see"),
-    "sigma_p": ("position noise σp (m)", 0.0, 2.0, 0.05, "detection position noise, std-dev on x and y"),
-    "sigma_theta": ("heading noise σθ (°)", 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
-    "flip_prob": ("heading flip prob.", 0.0, 1.0, 0.05, "probability a detection faces backwards"),
-    "loc_x": ("localization x (m)", 0.0, 15.0, 0.25, "CAV pose error in x: offset (fixed) or std-dev (gaussian)"),
-    "loc_y": ("localization y (m)", 0.0, 15.0, 0.25, "CAV pose error in y"),
-    "loc_yaw": ("localization yaw (°)", 0.0, 30.0, 0.5, "CAV pose error in yaw"),
-    "sensor_range": ("sensor range (m)", 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
+    "eta": (SCENARIO_WORDS["eta"], 0.0, 1.0, 0.05, "SIND protocol: share of objects both agents see"),
+    "sigma_p": (SCENARIO_WORDS["sigma_p"], 0.0, 2.0, 0.05, "detection position noise, std-dev on x and y"),
+    "sigma_theta": (SCENARIO_WORDS["sigma_theta"], 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
+    "flip_prob": (SCENARIO_WORDS["flip_prob"], 0.0, 1.0, 0.05, "probability a detection faces backwards"),
+    "loc_x": (SCENARIO_WORDS["loc_x"], 0.0, 15.0, 0.25, "CAV pose error in x: offset (fixed) or std-dev (gaussian)"),
+    "loc_y": (SCENARIO_WORDS["loc_y"], 0.0, 15.0, 0.25, "CAV pose error in y"),
+    "loc_yaw": (SCENARIO_WORDS["loc_yaw"], 0.0, 30.0, 0.5, "CAV pose error in yaw"),
+    "sensor_range": (SCENARIO_WORDS["sensor_range"], 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
 }
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the

@@ -66,7 +66,7 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
                                     hint="CBM's own pairs (eq. 13), or all pairs after the guided re-association"),
         labels=gui.add_checkbox("label clicked objects", view.labels),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
-                                      hint="The pinned baseline's match lines, faint grey (pin under the timeline)"),
+                                      hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
         reset_camera=gui.add_button("reset camera"),
         presentation=gui.add_checkbox("presentation mode", view.presentation,
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "

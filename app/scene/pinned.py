@@ -10,12 +10,16 @@ from cbm import se2
 
 from ..session.explorer import Outcome
 from . import geometry
+from .differences import differences, now_words
 from .drawing import LINE_HEIGHT, Drawing, Lines, no_lines
 from .layouts import LAYOUTS
+from .linecolours import as_shown
 from .text import number
 
-PINNED_LINES = (175, 175, 175)
-"""The pinned run's match lines: a faint grey, thinner and lower than the current run's."""
+PINNED_LINES = (125, 80, 190)
+"""The pinned run's match lines: a thin violet, lower than the current run's, apart from every
+palette's colours (missed true pairs are grey and dashed or dotted)."""
+PINNED_WORDS = "thin violet lines"
 PINNED_HEIGHT = LINE_HEIGHT - 0.4
 
 
@@ -42,8 +46,12 @@ def _row(name: str, current: float, pinned: float, unit: str, digits: int) -> st
 def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
     """Current against pinned on this frame, and the difference (current − pinned)."""
     m, p = outcome.metrics, pinned.metrics
+    found = differences(pinned.settings, outcome.settings)
+    settings = f"Pinned under other settings: {now_words(found)}." if found else "Pinned under the same settings."
     return "\n".join([
-        "**Pinned baseline** (same frame and CAV)",
+        f"**Pinned baseline** (same frame and CAV; its matches: {PINNED_WORDS})",
+        "",
+        f"*{settings}*",
         "",
         "| | current | pinned | current − pinned |",
         "|---|---|---|---|",
@@ -60,7 +68,7 @@ def with_baseline(picture: Drawing, outcome: Outcome, pinned: Outcome | None) ->
     for its lines) and, when pinned, the comparison below the metrics."""
     show = pinned is not None and outcome.settings.view.pinned_lines
     lines = {**picture.lines, "pinned": Lines(pinned_segments(outcome, pinned) if show else no_lines(),
-                                              PINNED_LINES, 1.5)}
+                                              as_shown(PINNED_LINES), 1.5)}
     text = picture.metrics_markdown if pinned is None else \
         f"{picture.metrics_markdown}\n\n{comparison_markdown(outcome, pinned)}"
     return dataclasses.replace(picture, lines=lines, metrics_markdown=text)

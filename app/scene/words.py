@@ -77,3 +77,19 @@ def plural(count: int, noun: str, nouns: str | None = None) -> str:
 def margin_words(margin: int, count: int, runner_up: int) -> str:
     """The consensus margin as the app prints it: the margin, then the winner's and the runner-up's counts."""
     return f"{margin} ({count} vs {runner_up})"
+
+
+SCENARIO_WORDS = {
+    "protocol": "protocol",
+    "localization": "localization error",
+    "eta": "co-visibility eta",
+    "sigma_p": "position noise σp (m)",
+    "sigma_theta": "heading noise σθ (°)",
+    "flip_prob": "heading flip prob.",
+    "loc_x": "localization x (m)",
+    "loc_y": "localization y (m)",
+    "loc_yaw": "localization yaw (°)",
+    "sensor_range": "sensor range (m)",
+    "seed": "seed",
+}
+"""Every scenario field's label (words and unit), as the Scenario tab shows it."""

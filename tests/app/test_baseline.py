@@ -5,7 +5,7 @@ import dataclasses
 
 import numpy as np
 
-from app.panels.plot import TIMELINE, timeline_data
+from app.panels.plot import TIMELINE, timeline_data, timeline_series
 from app.scene.drawing import draw
 from app.scene.pinned import with_baseline
 from app.session.baseline import Baseline
@@ -19,13 +19,22 @@ def row(failed: bool) -> Row:
 
 
 def test_the_timeline_spans_the_sequence_and_marks_failures_and_the_current_frame() -> None:
-    data = timeline_data({3: row(False), 5: row(True)}, {3: row(False)}, 5, 50)
-    x, precision, failed, now = data[0], data[1], data[7], data[8]
-    assert len(data) == len(TIMELINE) and all(len(a) == len(x) for a in data)
+    data = timeline_data({3: row(False), 5: row(True)}, {3: row(False)}, 5, 50, with_pinned=True)
+    x, precision, rte, failed, now, pinned_precision = data[0], data[1], data[3], data[4], data[5], data[6]
+    assert len(data) == len(timeline_series(True)) and all(len(a) == len(x) for a in data)
     assert x[0] == 0 and x[-1] == 49 and list(x).count(5) == 2
-    assert set(x[np.isfinite(precision)]) == {3, 5}
+    assert set(x[np.isfinite(precision)]) == {3, 5} and set(x[np.isfinite(rte)]) == {3, 5}
+    assert set(x[np.isfinite(pinned_precision)]) == {3}
     assert set(x[np.isfinite(failed)]) == {5}
     assert list(now[np.isfinite(now)]) == [0.0, 1.0] and set(x[np.isfinite(now)]) == {5}
+    assert len(timeline_data({3: row(False)}, {3: row(False)}, 3, 50)) == len(TIMELINE)
+
+
+def test_no_timeline_line_bridges_frames_never_computed() -> None:
+    x, precision = timeline_data({2: row(False), 3: row(False), 9: row(False)}, {}, 9, 20)[:2]
+    between = (x > 3) & (x < 9)
+    assert between.any() and np.isnan(precision[between]).all()
+    assert not ((x > 2) & (x < 3)).any()
 
 
 def test_failures_are_stepped_through_in_either_direction() -> None:

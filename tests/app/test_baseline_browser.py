@@ -1,5 +1,6 @@
-"""Pinning a baseline: the metrics compare current and pinned, the timeline shows both, the pinned
-run's matches can be shown ghosted in the scene, and unpinning takes it all away.
+"""Pinning a baseline: the metrics compare current and pinned and name the settings that differ, the
+timeline shows both, the pinned run's matches can be shown in the scene (violet, apart from the grey
+missed pairs), and unpinning takes it all away.
 
 With ``CBM_UPDATE_DOCS_IMG=1`` the test also saves the pinned timeline as docs/img/timeline.png."""
 from __future__ import annotations
@@ -11,6 +12,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from app.panels.plot import TIMELINE
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
 from support import browser as ui
@@ -42,8 +44,11 @@ def run_all_frames(page, tab) -> None:
 
 
 def pinned_frames(tab) -> set[int]:
-    """Frames where the timeline draws the pinned precision."""
-    x, pinned_precision = tab.controls.metrics.plot.data[0], tab.controls.metrics.plot.data[4]
+    """Frames where the timeline draws the pinned precision (no pinned series: none)."""
+    data = tab.controls.metrics.plot.data
+    if len(data) == len(TIMELINE):
+        return set()
+    x, pinned_precision = data[0], data[len(TIMELINE)]
     return set(x[np.isfinite(pinned_precision)].astype(int))
 
 
@@ -53,11 +58,14 @@ def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browse
     run_all_frames(page, tab)
     page.get_by_role("button", name="pin baseline").click()
     page.get_by_text("current − pinned").first.wait_for(timeout=60_000)
-    page.get_by_role("tab", name="Presets").click()
-    ui.pick_option(page, "preset", "stress")
-    page.get_by_role("button", name="load", exact=True).click()
+    page.get_by_text("Pinned under the same settings").first.wait_for(timeout=30_000)
+    ui.load_preset(page, "stress")
     ui.wait_until(lambda: tab.last.settings.scenario.sigma_p == 0.9, 60)
     page.get_by_text("current − pinned").first.wait_for(timeout=30_000)
+    settings = page.get_by_text("Pinned under other settings").first.inner_text()
+    assert "position noise σp (m) 0.2 (now 0.9)" in settings and "seed" not in settings
+    drawn = tab.last_drawing.lines
+    assert len(drawn["pinned"].segments) and drawn["pinned"].color != drawn["missed"].color
     for frame in (1, 2, 3):
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda f=frame: tab.last.frame_index == f, 60)

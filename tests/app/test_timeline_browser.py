@@ -1,5 +1,7 @@
 """The timeline in the metrics area: it fills as frames are computed (stepping, run all frames), marks
-the failed frames (``evaluation.metrics.is_success``), and its controls step to and jump to them."""
+the failed frames (``evaluation.metrics.is_success``), and its controls step to and jump to them:
+past the last failure *next failure* goes round to the first and says so, and *jump to* shows the
+frame on screen, not the one picked last."""
 from __future__ import annotations
 
 import io
@@ -93,3 +95,33 @@ def click_timeline_at(page, frame: int, n_frames: int) -> None:
     root.scroll_into_view_if_needed()
     track = root.locator(".mantine-Slider-track").bounding_box()
     page.mouse.click(track["x"] + track["width"] * frame / (n_frames - 1), track["y"] + track["height"] / 2)
+
+
+def jump_list(page) -> str:
+    """What the *jump to* list shows."""
+    return page.locator(f'[id="{ui.label(page, "jump to").get_attribute("for")}"]').input_value()
+
+
+def test_next_failure_wraps_with_a_message_and_jump_to_follows_the_frame(browser, server: ExplorerServer) -> None:
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    page.get_by_role("tab", name="Explore").click()
+    page.get_by_role("button", name="run all frames").click()
+    ui.wait_until(lambda: len(tab.history.rows) == len(tab.explorer), 180)
+    ui.close_notifications(page)
+    for frame in (*FAILED, FAILED[0]):
+        page.get_by_role("button", name="next failure ▶").click()
+        ui.wait_until(lambda f=frame: frame_shown(tab, f), 60)
+    page.get_by_text(f"back to the first, frame {FAILED[0]}").first.wait_for(timeout=30_000)
+    page.get_by_text("Past the last failure").first.wait_for(timeout=30_000)
+    ui.wait_until(lambda: jump_list(page) == f"frame {FAILED[0]}", 30)
+    page.get_by_role("button", name="◀ previous failure").click()
+    ui.wait_until(lambda: frame_shown(tab, FAILED[1]), 60)
+    page.get_by_text(f"back to the last, frame {FAILED[1]}").first.wait_for(timeout=30_000)
+
+    ui.pick_option(page, "jump to", f"frame {FAILED[0]}")
+    ui.wait_until(lambda: frame_shown(tab, FAILED[0]), 60)
+    page.get_by_role("button", name="next ▶").click()
+    ui.wait_until(lambda: frame_shown(tab, FAILED[0] + 1), 60)
+    ui.wait_until(lambda: jump_list(page).startswith("failed frames"), 30)
+    page.close()

@@ -92,6 +92,13 @@ def pick_option(page, text: str, option: str) -> None:
     page.get_by_role("option", name=option, exact=True).click()
 
 
+def load_preset(page, name: str) -> None:
+    """Load the preset ``name`` from the Presets tab (the tab stays open)."""
+    page.get_by_role("tab", name="Presets").click()
+    pick_option(page, "preset", name)
+    page.get_by_role("button", name="load", exact=True).click()
+
+
 def close_notifications(page) -> None:
     for button in page.locator(".mantine-Notification-root button").all():
         button.click()
