@@ -25,7 +25,7 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
     count2 = np.zeros(n_ego * n_cav, np.int64)
     radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
     vote_anchor, vote_member = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
-                                         -1.0 if sigma3 is None else sigma3, count2, sigma3 is not None)
+                                        -1.0 if sigma3 is None else sigma3, count2)
     count2 += count2 > 0
     candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2), signs)
     return candidates, vote_anchor, vote_member

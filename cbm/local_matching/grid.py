@@ -54,60 +54,79 @@ class VectorGrid:
 
 def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
-    sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``)."""
-    x, y, anchor, member, check = _signed_rows(cav.vectors, cav.anchor, cav.member, cav_sign.astype(np.int64))
-    if len(x) == 0:
-        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), x, y, anchor, member, check)
-    u, v = x + y, x - y
-    u0, v0 = float(u.min()), float(v.min())
-    width, height = float(u.max()) - u0, float(v.max()) - v0
-    most_cells = min(MAX_CELLS, CELLS_PER_ROW * len(x) + 1)
+    sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
+    Two passes over the vectors: their extent, then a counting sort that turns them as it places them."""
+    sign = cav_sign.astype(np.int64)
+    n, u0, v0, u1, v1 = _extent(cav.vectors, cav.anchor, sign)
+    if n == 0:
+        empty, ids = np.zeros(0), np.zeros(0, np.int64)
+        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), empty, empty.copy(), ids, ids.copy(), ids.copy())
+    width, height = u1 - u0, v1 - v0
+    most_cells = min(MAX_CELLS, CELLS_PER_ROW * n + 1)
     cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
     nx, ny = int(width // cell) + 1, int(height // cell) + 1
+    return VectorGrid(u0, v0, cell, nx, ny, *_place(cav.vectors, cav.anchor, cav.member, sign, n, u0, v0, cell, nx, ny))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _turned_signs(fixed):
+    """The signs a CAV object's vectors take in the grid (first, last, step): its fixed sign, or both."""
+    if fixed > 0:
+        return 1, 2, 2
+    if fixed < 0:
+        return -1, -2, -2
+    return 1, -2, -2
+
+
+@numba.njit(cache=True, nogil=True)
+def _extent(vectors, anchor, cav_sign):
+    """(rows, lowest u, lowest v, highest u, highest v) of the turned vectors in u = x + y, v = x - y:
+    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies."""
+    n, u0, v0, u1, v1 = 0, np.inf, np.inf, -np.inf, -np.inf
+    for r in range(len(vectors)):
+        first, last, step = _turned_signs(cav_sign[anchor[r]])
+        for sign in range(first, last, step):
+            x, y = sign * vectors[r, 0], sign * vectors[r, 1]
+            u, v = x + y, x - y
+            u0, v0, u1, v1 = min(u0, u), min(v0, v), max(u1, u), max(v1, v)
+            n += 1
+    return n, u0, v0, u1, v1
+
+
+@numba.njit(cache=True, nogil=True)
+def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
+    """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
+    of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
+    row's sign. Returns (start, x, y, anchor, member, check)."""
     start = np.zeros(nx * ny + 1, np.int64)
-    rows = (x, y, anchor, member, check)
-    grid = tuple(np.empty_like(values) for values in rows)
-    _bucket(*rows, u0, v0, cell, nx, ny, start, *grid)
-    return VectorGrid(u0, v0, cell, nx, ny, start, *grid)
-
-
-@numba.njit(cache=True, nogil=True)
-def _signed_rows(vectors, anchor, member, cav_sign):
-    """Rows of (sign * x, sign * y, anchor, member, check): one per vector of a CAV object with a
-    fixed sign (check 0), two (check +1 and -1) per vector of one whose sign varies."""
-    n = 0
-    for v in range(len(vectors)):
-        n += 1 if cav_sign[anchor[v]] != 0 else 2
-    x, y = np.empty(n), np.empty(n)
-    out_anchor, out_member, check = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
-    r = 0
-    for v in range(len(vectors)):
-        fixed = cav_sign[anchor[v]]
-        for sign in (1, -1):
-            if fixed != 0 and sign != fixed:
-                continue
-            x[r], y[r] = sign * vectors[v, 0], sign * vectors[v, 1]
-            out_anchor[r], out_member[r], check[r] = anchor[v], member[v], 0 if fixed != 0 else sign
-            r += 1
-    return x, y, out_anchor, out_member, check
-
-
-@numba.njit(cache=True, nogil=True)
-def _bucket(x, y, anchor, member, check, u0, v0, cell, nx, ny, start, gx, gy, g_anchor, g_member, g_check):
-    """Counting sort of the rows by cell of (x + y, x - y) (column-major), keeping their order inside a cell."""
-    cell_of = np.empty(len(x), np.int64)
-    for v in range(len(x)):
-        kx = min(int(math.floor((x[v] + y[v] - u0) / cell)), nx - 1)
-        ky = min(int(math.floor((x[v] - y[v] - v0) / cell)), ny - 1)
-        cell_of[v] = kx * ny + ky
-        start[cell_of[v] + 1] += 1
+    for r in range(len(vectors)):
+        first, last, step = _turned_signs(cav_sign[anchor[r]])
+        for sign in range(first, last, step):
+            start[_cell_of(sign * vectors[r, 0], sign * vectors[r, 1], u0, v0, cell, nx, ny) + 1] += 1
     for c in range(nx * ny):
         start[c + 1] += start[c]
     fill = start[:-1].copy()
-    for v in range(len(x)):
-        row = fill[cell_of[v]]
-        gx[row], gy[row], g_anchor[row], g_member[row], g_check[row] = x[v], y[v], anchor[v], member[v], check[v]
-        fill[cell_of[v]] += 1
+    gx, gy = np.empty(n), np.empty(n)
+    g_anchor, g_member, g_check = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    for r in range(len(vectors)):
+        fixed = cav_sign[anchor[r]]
+        first, last, step = _turned_signs(fixed)
+        for sign in range(first, last, step):
+            x, y = sign * vectors[r, 0], sign * vectors[r, 1]
+            c = _cell_of(x, y, u0, v0, cell, nx, ny)
+            row = fill[c]
+            gx[row], gy[row], g_anchor[row], g_member[row] = x, y, anchor[r], member[r]
+            g_check[row] = 0 if fixed != 0 else sign
+            fill[c] += 1
+    return start, gx, gy, g_anchor, g_member, g_check
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cell_of(x, y, u0, v0, cell, nx, ny):
+    """The cell (column-major) of the row (x, y)."""
+    kx = min(int(math.floor((x + y - u0) / cell)), nx - 1)
+    ky = min(int(math.floor((x - y - v0) / cell)), ny - 1)
+    return kx * ny + ky
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from ..context import Context
-from .grid import accepts, build_grid, cells, column, group_signs, heading_groups
+from .grid import build_grid, cells, column, group_signs, heading_groups
 
 PARALLEL_FROM = 20_000
 """Context vectors per agent from which the joins are split over threads."""
@@ -51,20 +51,20 @@ def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_sta
 
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
-          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2, list_votes):
+          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
-    Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; with
-    ``list_votes``, returns those within sigma3 as (anchor, member) rows. A grid row with ``check``
+    Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
+    within sigma3 as (anchor, member) rows. A grid row with ``check``
     s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
     time are visited column by column of the grid, so consecutive queries read the same few
     columns (from the cache) and the chunk's counters stay in it too. The counting loop combines
-    the tests of ``grid.accepts`` without branches (the data decide no jump in it); the votes are listed
-    in a second, narrower pass over the cells within sigma3.
+    the tests of ``grid.accepts`` without branches; the quadruples within sigma3 (a part of those
+    it accepts, as sigma3 <= radius) are listed from the same loop, in the order it meets them.
+    A negative sigma3 lists nothing.
     """
     n_cav = signs.shape[1]
-    capacity = 1024 if list_votes else 0
-    vote_anchor, vote_member, n_votes = np.empty(capacity, np.int32), np.empty(capacity, np.int32), 0
+    vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
     order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
     column_start = np.empty(nx + 1, np.int64)
     for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
@@ -86,31 +86,25 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
                     ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
                           & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
                     count2[row + b] += ok & (l1 <= sigma2)
-            if not list_votes:
-                continue
-            k0, k1, c0, c1 = cells(zu, zv, sigma3, u0, v0, cell, nx, ny)
-            for k in range(k0, k1 + 1):
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-                    b = g_anchor[v]
-                    if g_check[v] != 0 and sign_row[b] != g_check[v]:
-                        continue
-                    if accepts(zx, zy, gx[v], gy[v], cos2_sigma1, sigma3) < 0.0:
-                        continue
-                    if n_votes == capacity:
-                        capacity *= 2
-                        grown_anchor, grown_member = np.empty(capacity, np.int32), np.empty(capacity, np.int32)
-                        grown_anchor[:n_votes], grown_member[:n_votes] = vote_anchor, vote_member
-                        vote_anchor, vote_member = grown_anchor, grown_member
-                    vote_anchor[n_votes] = row + b
-                    vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
-                    n_votes += 1
+                    if ok & (l1 <= sigma3):
+                        if n_votes == len(vote_anchor):
+                            vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
+                        vote_anchor[n_votes] = row + b
+                        vote_member[n_votes] = ego_member[u] * n_cav + g_member[v]
+                        n_votes += 1
     return vote_anchor[:n_votes], vote_member[:n_votes]
 
 
+@numba.njit(cache=True, nogil=True)
+def _grown(values, n):
+    """``values[:n]`` in an array twice as long."""
+    grown = np.empty(2 * len(values), values.dtype)
+    grown[:n] = values[:n]
+    return grown
+
 
 def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
-              radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
-              list_votes: bool) -> tuple[np.ndarray, np.ndarray]:
+             radius: float, sigma2: float, sigma3: float, count2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
     at a time, then their ego objects are joined in parts; the votes come back in a fixed order."""
     per_anchor = max(len(ego_heading) - 1, 0)
@@ -125,7 +119,7 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
         for group, grid in zip(batch, grids):
             common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
                       grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
-                      radius, sigma2, sigma3, count2, list_votes)
+                      radius, sigma2, sigma3, count2)
             parts = np.array_split(group, THREADS) if parallel else [group]
             jobs += [run(_join, part, *common) for part in parts if len(part)]
         votes += [job.result() for job in jobs]
