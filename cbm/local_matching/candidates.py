@@ -102,8 +102,15 @@ class CandidateSets:
 
 
 
-def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad: float, sigma2: float) -> tuple:
-    """What ``members_into`` needs after (i, j, sign) to list any anchor's candidate set."""
-    e, c = sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav)
+def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad: float, sigma2: float,
+                  kept: dict | None = None) -> tuple:
+    """What ``members_into`` needs after (i, j, sign) to list any anchor's candidate set; the sorted
+    blocks are taken from ``kept`` when an earlier call on the same contexts put them there."""
+    blocks = None if kept is None else kept.get("blocks")
+    if blocks is None:
+        blocks = (sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav))
+        if kept is not None:
+            kept["blocks"] = blocks
+    e, c = blocks
     return (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
             math.cos(sigma1_rad) ** 2, sigma2)

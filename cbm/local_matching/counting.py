@@ -15,9 +15,12 @@ MOST_PAIRS = 2**31 - 1
 
 
 def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
-                     sigma2: float, sigma3: float | None) -> tuple[CandidateSets, np.ndarray, np.ndarray]:
+                     sigma2: float, sigma3: float | None,
+                     kept: dict | None = None) -> tuple[CandidateSets, np.ndarray, np.ndarray]:
     """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
-    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join."""
+    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join.
+    ``kept`` (``cbm.reuse.Prepared.kept``): the grids and sorted blocks built earlier for the same
+    contexts, read and filled."""
     n_ego, n_cav = signs.shape
     if n_ego * n_cav > MOST_PAIRS:
         raise ValueError(f"cbm.match: {n_ego} x {n_cav} boxes make more than {MOST_PAIRS} pairs (the voting "
@@ -25,8 +28,8 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
     count2 = np.zeros(n_ego * n_cav, np.int64)
     radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
     vote_anchor, vote_member = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
-                                        -1.0 if sigma3 is None else sigma3, count2)
+                                        -1.0 if sigma3 is None else sigma3, count2, kept)
     count2 += count2 > 0
-    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2), signs)
+    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs)
     return candidates, vote_anchor, vote_member
 

@@ -25,6 +25,9 @@ THREADS = 2
 ANCHORS_PER_CHUNK = 64
 """Ego objects whose context vectors are joined together, column by column of the grid (their
 counters, 64 rows of Nc, stay in a core's cache)."""
+REUSE_RADII = 2.0
+"""A kept grid serves radii up to this factor from the one it was built for; beyond it, the cells
+would make a window scan many more vectors (or visit many more cells) than a new grid's."""
 POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 """The threads the kernels (numba, without the interpreter lock) share."""
 
@@ -104,9 +107,12 @@ def _grown(values, n):
 
 
 def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
-             radius: float, sigma2: float, sigma3: float, count2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+             radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
+             kept: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
-    at a time, then their ego objects are joined in parts; the votes come back in a fixed order."""
+    at a time, then their ego objects are joined in parts; the votes come back in a fixed order.
+    ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
+    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
     parallel = len(ego.vectors) >= PARALLEL_FROM
@@ -114,7 +120,7 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     votes = []
     for first in range(0, len(groups), THREADS if parallel else 1):
         batch = groups[first:first + (THREADS if parallel else 1)]
-        grids = [grid.result() for grid in [run(build_grid, cav, group_signs(signs, g), radius) for g in batch]]
+        grids = _grids(batch, first, cav, signs, radius, run, kept)
         jobs = []
         for group, grid in zip(batch, grids):
             common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
@@ -126,6 +132,20 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     if not votes:
         return np.zeros(0, np.int32), np.zeros(0, np.int32)
     return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
+
+
+def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
+           kept: dict | None) -> list:
+    """The grids of the heading groups ``batch`` (numbered from ``first``): those in ``kept`` when
+    they were built for a radius within ``REUSE_RADII`` of this one, the others built by ``run`` (and
+    put there)."""
+    if kept is not None and not radius / REUSE_RADII <= kept.get("grid_radius", -1.0) <= radius * REUSE_RADII:
+        kept["grid_radius"], kept["grids"] = radius, {}
+    known = {} if kept is None else kept["grids"]
+    jobs = {first + k: run(build_grid, cav, group_signs(signs, g), radius)
+            for k, g in enumerate(batch) if first + k not in known}
+    known.update({k: job.result() for k, job in jobs.items()})
+    return [known.pop(first + k) if kept is None else known[first + k] for k in range(len(batch))]
 
 
 class _Done:
