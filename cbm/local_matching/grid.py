@@ -100,7 +100,7 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     row's sign. Sorted by column, then each column by cell: both passes count into small arrays
     that stay in the cache, where one pass over all the cells would miss it on every row.
     Returns (start, x, y, anchor, member, check)."""
-    source, turn, kx, ky = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    source, turn, kx, ky = np.empty(n, np.int32), np.empty(n, np.int8), np.empty(n, np.int32), np.empty(n, np.int32)
     column_start = np.zeros(nx + 1, np.int64)
     r = 0
     for v in range(len(vectors)):
@@ -114,7 +114,7 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
             r += 1
     for k in range(nx):
         column_start[k + 1] += column_start[k]
-    by_column, fill = np.empty(n, np.int64), column_start[:-1].copy()
+    by_column, fill = np.empty(n, np.int32), column_start[:-1].copy()
     for r in range(n):
         by_column[fill[kx[r]]] = r
         fill[kx[r]] += 1
