@@ -110,7 +110,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
                     n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
                                 & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
                                 & (dot * dot >= cos2_sigma1 * squared_norms))
-    return vote_anchor[:n_votes], vote_member[:n_votes]
+    return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
 
 
 @numba.njit(cache=True, nogil=True)
