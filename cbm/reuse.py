@@ -6,7 +6,8 @@ Per input (the boxes, the initial pose and the heading mode; ``Prepared``): step
 in the ego frame, folded headings, the signs of eq. 6's frames), the context vectors of eq. 5-6,
 the sorted blocks that list candidate sets, and the grids of the join for the latest search radius.
 A change of noise or frame changes the boxes, so it is a new input. ``Reuse`` keeps the ``FRAMES``
-inputs used last and forgets the least recently used one.
+inputs used last (fewer when they hold more than ``MOST_BYTES``) and forgets the least recently
+used one.
 """
 from __future__ import annotations
 
@@ -22,6 +23,9 @@ from .context import Context, build_context, fold_heading, pair_signs
 
 FRAMES = 4
 """Inputs kept: the frame on screen and the few the user stepped through last."""
+MOST_BYTES = 256 * 2**20
+"""Memory the kept inputs may hold (a grid at 1000 objects per agent is tens of MB): past it the
+least recently used go, down to the latest one."""
 
 
 @dataclass(frozen=True)
@@ -49,11 +53,12 @@ def prepare(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str) ->
 
 
 class Reuse:
-    """The ``Prepared`` of the ``frames`` inputs used last, least recently used out; safe to share
-    between threads (two threads asking for a new input at once may both build it)."""
+    """The ``Prepared`` of the ``frames`` inputs used last, least recently used out, and fewer when
+    they hold more than ``most_bytes``; safe to share between threads (two threads asking for a
+    new input at once may both build it)."""
 
-    def __init__(self, frames: int = FRAMES) -> None:
-        self.frames = frames
+    def __init__(self, frames: int = FRAMES, most_bytes: int = MOST_BYTES) -> None:
+        self.frames, self.most_bytes = frames, most_bytes
         self.hits = self.misses = 0
         self._entries: OrderedDict[bytes, Prepared] = OrderedDict()
         self._lock = threading.Lock()
@@ -69,14 +74,37 @@ class Reuse:
             if found is not None:
                 self._entries.move_to_end(key)
                 self.hits += 1
+                self._trim()
                 return found
             self.misses += 1
         made = prepare(ego, cav, init, heading)
         with self._lock:
             self._entries[key] = made
-            while len(self._entries) > self.frames:
-                self._entries.popitem(last=False)
+            self._trim()
         return made
+
+    def _trim(self) -> None:
+        """Forget the least recently used inputs past ``frames`` or ``most_bytes`` (what the
+        earlier calls' joins added counts), keeping the latest; called under the lock."""
+        while len(self._entries) > self.frames or (len(self._entries) > 1 and self.nbytes() > self.most_bytes):
+            self._entries.popitem(last=False)
+
+    def nbytes(self) -> int:
+        """The bytes of every array the kept inputs hold (what local matching added to them too)."""
+        return sum(_nbytes(entry) for entry in list(self._entries.values()))
+
+
+def _nbytes(value) -> int:
+    """The bytes of the arrays in ``value``: an array, a dataclass, a dict, a list or tuple of them."""
+    if isinstance(value, np.ndarray):
+        return value.nbytes
+    if isinstance(value, dict):
+        return sum(_nbytes(v) for v in list(value.values()))
+    if isinstance(value, (list, tuple)):
+        return sum(_nbytes(v) for v in value)
+    if hasattr(value, "__dataclass_fields__"):
+        return sum(_nbytes(getattr(value, name)) for name in value.__dataclass_fields__)
+    return 0
 
 
 def _key(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str) -> bytes:

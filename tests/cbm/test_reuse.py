@@ -62,3 +62,16 @@ def test_a_noise_or_frame_change_is_a_new_input_and_only_the_latest_inputs_are_k
     outcome(trials[2], CBMParams(sigma2=2.5), reuse)
     outcome(trials[0], CBMParams(), reuse)
     assert (reuse.misses, reuse.hits, len(reuse)) == (4, 1, 2)
+
+
+def test_past_the_memory_budget_only_the_latest_inputs_are_kept():
+    trials = [trial("dense", seed) for seed in range(3)]
+    probe = Reuse()
+    outcome(trials[0], CBMParams(), probe)
+    one = probe.nbytes()
+    assert one > 0
+    reuse = Reuse(frames=4, most_bytes=int(1.5 * one))
+    for t in trials:
+        outcome(t, CBMParams(), reuse)
+    outcome(trials[2], CBMParams(sigma1=12.0), reuse)
+    assert reuse.hits == 1 and len(reuse) == 1 and reuse.nbytes() <= 1.5 * one
