@@ -131,25 +131,36 @@ def build_compare_parser(prog: str) -> Parser:
 
 
 def parse_frames(text: str, n_frames: int) -> list[int]:
-    """Sorted distinct frame indices from ``all`` or a comma list of ``N`` and ``A:B[:STEP]``."""
+    """Sorted distinct frame indices from ``all`` or a comma list of ``N`` and ``A:B[:STEP]``. Each
+    range is checked against ``n_frames`` before it is expanded, so memory stays within the dataset's length."""
     if text.strip() == "all":
         return list(range(n_frames))
-    frames: set[int] = set()
-    for part in text.split(","):
-        try:
-            numbers = [int(p) for p in part.split(":")]
-        except ValueError:
-            raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with integers") from None
-        if len(numbers) > 3 or min(numbers) < 0 or (len(numbers) == 3 and numbers[2] < 1):
-            raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with non-negative integers and STEP >= 1")
-        frames.update(numbers if len(numbers) == 1 else range(*numbers))
-    outside = sorted(f for f in frames if f >= n_frames)
+    ranges = [_frame_range(part) for part in text.split(",")]
+    outside = [_first_at_or_after(r, n_frames) for r in ranges if r and r[-1] >= n_frames]
     if outside:
-        raise CliError(f"--frames: frame {outside[0]} is out of range: "
+        raise CliError(f"--frames: frame {min(outside)} is out of range: "
                        f"the dataset has {n_frames} frames (0 to {n_frames - 1})")
+    frames = sorted(set().union(*ranges))
     if not frames:
         raise CliError(f"--frames: {text!r} selects no frame")
-    return sorted(frames)
+    return frames
+
+
+def _frame_range(part: str) -> range:
+    """``N`` or ``A:B[:STEP]`` as a range (not expanded)."""
+    try:
+        numbers = [int(p) for p in part.split(":")]
+    except ValueError:
+        raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with integers") from None
+    if len(numbers) > 3 or min(numbers) < 0 or (len(numbers) == 3 and numbers[2] < 1):
+        raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with non-negative integers and STEP >= 1")
+    return range(numbers[0], numbers[0] + 1) if len(numbers) == 1 else range(*numbers)
+
+
+def _first_at_or_after(frames: range, n: int) -> int:
+    """The smallest index of ``frames`` (increasing, its last one >= ``n``) that is at least ``n``."""
+    steps = max(0, -(-(n - frames.start) // frames.step))
+    return frames.start + steps * frames.step
 
 
 def parse_methods(text: str) -> tuple[str, ...]:
