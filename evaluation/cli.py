@@ -247,6 +247,24 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(str(error)) from None
 
 
+GRAPH_WARNING_CAVS = 8
+"""CAVs per frame from which ``cbm-graph``'s cost (CBM on every CAV for each CAV's trial) is warned about."""
+
+
+def cost_warnings(planned: Plan, agents: int) -> list[str]:
+    """What the user should know of ``--agents`` before the run: more agents asked for than the
+    frames have, and the pose graph's cost, quadratic in the frame's CAVs."""
+    most = planned.most_cavs
+    found = []
+    if agents - 1 > most:
+        found.append(f"--agents {agents}: the chosen frames have at most {most + 1} agents (the ego and {most} "
+                     f"CAV(s)), so a frame gives at most {most} trial(s) per method")
+    if "cbm-graph" in planned.sweep.methods and most >= GRAPH_WARNING_CAVS:
+        found.append(f"--agents {agents}: cbm-graph matches every CAV of the frame for each CAV's trial: up to "
+                     f"{most * most} CBM runs per frame and scenario point ({most} for cbm); this may take hours")
+    return found
+
+
 def main_compare(argv: Sequence[str], prog: str) -> int:
     """Compare two runs (``evaluation.compare``); 2 on bad input."""
     parser = build_compare_parser(prog)
@@ -315,6 +333,8 @@ def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> 
         planned = prepare(args)
     except CliError as error:
         parser.error(str(error))
+    for warning in cost_warnings(planned, args.agents):
+        print(f"{parser.prog}: warning: {warning}", file=sys.stderr, flush=True)
     with tqdm(total=planned.trial_count, unit="trial", disable=None) as bar:
         try:
             table = run_plan(planned, workers=args.workers, progress=bar.update, ray=args.ray)

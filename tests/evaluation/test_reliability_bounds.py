@@ -1,5 +1,6 @@
 """evaluate.py with inputs that would grow without bound (issue 27): each is checked against the
 dataset before it is expanded, so a run under a memory cap ends with one line naming the input."""
+import os
 import resource
 import subprocess
 import sys
@@ -7,19 +8,24 @@ from pathlib import Path
 
 import pytest
 
-from evaluation.cli import CliError, parse_frames
+import evaluation
+import loaders
+from evaluation.cli import GRAPH_WARNING_CAVS, CliError, cost_warnings, parse_frames
+from evaluation.trials import frame_cav_inputs
 
 REPO = Path(__file__).resolve().parents[2]
-MEMORY_CAP = 1500 * 2**20
-"""Bytes of address space: enough to start evaluate.py and refuse its input, far from enough to expand it."""
+MEMORY_CAP = 2500 * 2**20
+"""Bytes of address space: enough for a small run of evaluate.py (OpenBLAS at one thread: its
+per-thread buffers alone take most of 1.5 GB), far from enough to expand a huge input."""
 
 
 def run_capped(*args: str, cap: int = MEMORY_CAP, timeout: float = 300) -> subprocess.CompletedProcess:
     """``evaluate.py ARGS`` in a subprocess whose address space is capped at ``cap`` bytes."""
     def limit() -> None:
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
+    environment = {**os.environ, "OPENBLAS_NUM_THREADS": "1"}
     return subprocess.run([sys.executable, str(REPO / "evaluate.py"), *args], cwd=REPO, preexec_fn=limit,
-                          capture_output=True, text=True, timeout=timeout)
+                          env=environment, capture_output=True, text=True, timeout=timeout)
 
 
 @pytest.mark.parametrize(("frames", "first_outside"), [
@@ -39,3 +45,40 @@ def test_parse_frames_names_the_first_frame_out_of_range_without_expanding() -> 
         parse_frames("60:70,70", 50)
     with pytest.raises(CliError, match="selects no frame"):
         parse_frames("5:5", 50)
+
+
+PEDESTRIANS = ["frame,track_id,category,x,y,length,width,yaw",
+               *(f"{f},p{k},pedestrian,{3 * k},{k},0.5,0.5,0" for f in (0, 1) for k in range(3))]
+"""Two frames of three pedestrians: no two vehicles, so the sind protocol deals them to abstract agents."""
+
+
+def test_a_huge_agents_count_is_bounded_by_the_frame_and_warned_about(tmp_path) -> None:
+    dataset = tmp_path / "pedestrians.csv"
+    dataset.write_text("\n".join(PEDESTRIANS) + "\n")
+    done = run_capped("--dataset", str(dataset), "--protocol", "sind", "--agents", "100000", "--methods", "icp",
+                      "--workers", "1", "--no-timing", "--out", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert ("evaluate.py: warning: --agents 100000: the chosen frames have at most 4 agents (the ego and 3 CAV(s)), "
+            "so a frame gives at most 3 trial(s) per method") in done.stderr.splitlines()
+    rows = (tmp_path / "out" / "trials.csv").read_text().strip().splitlines()
+    assert len(rows) == 1 + 2 * 3
+
+
+def test_a_frame_of_k_cavs_holds_k_references_to_its_cohort_not_k_squared() -> None:
+    sequence = loaders.open("synthetic:300")
+    inputs = frame_cav_inputs(sequence[0], "range", agents=1000)
+    assert len(inputs) > 200
+    assert len({id(item.cohort) for item in inputs}) == 1
+    first = inputs[0]
+    assert [peer.stream for peer in first.peers] == list(range(1, len(inputs)))
+
+
+def test_cbm_graph_on_many_cavs_warns_of_its_quadratic_cost() -> None:
+    planned = evaluation.plan(["synthetic:30"], methods=("cbm", "cbm-graph"), agents=50, frames=lambda n: [0])
+    most = planned.most_cavs
+    assert most >= GRAPH_WARNING_CAVS
+    assert cost_warnings(planned, 50)[-1] == (
+        f"--agents 50: cbm-graph matches every CAV of the frame for each CAV's trial: up to {most * most} CBM runs "
+        f"per frame and scenario point ({most} for cbm); this may take hours")
+    few = evaluation.plan(["synthetic:30"], methods=("cbm", "cbm-graph"), agents=3, frames=lambda n: [0])
+    assert cost_warnings(few, 3) == []
