@@ -59,7 +59,7 @@ from . import calibration_check
 from .compare import CompareError, compare
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
-from .stop import Stopped, StopSignals
+from .stop import Stopped, StopSignals, Watchdog
 
 
 class CliError(ValueError):
@@ -288,13 +288,17 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.check_calibration is not None:
         return check_calibration(parser, args)
     with StopSignals() as signals:
+        watchdog = Watchdog(lambda name: f"{parser.prog}: stopped by {name}; nothing written",
+                            held=lambda: signals.holding) if command else None
         try:
-            return evaluate(parser, args, signals)
+            code = evaluate(parser, args, signals)
         except Stopped as stop:
             print(f"{parser.prog}: stopped by {stop.name}; nothing written", file=sys.stderr)
             code = 128 + stop.signum
-    if command:
-        exit_now(code)
+            if command:
+                exit_now(code)
+        if watchdog:
+            watchdog.disarm()
     return code
 
 
