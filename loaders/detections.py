@@ -41,6 +41,9 @@ POSE_TOLERANCE = 0.05
 """Metres between a sample's ego pose and the frame's agent pose for them to be the same frame."""
 DAIR_AGENTS = {"0": "vehicle", "1": "infrastructure"}
 CORNERS = "N boxes of 8 corners of 3 numbers"
+MAX_COORDINATE = 1e5
+"""Metres: a corner farther than this from its agent's LiDAR is not a detection (finite values as
+large as 1e300 would overflow the box fit and fail a trial later, far from the file)."""
 
 
 @dataclass(frozen=True)
@@ -139,6 +142,9 @@ def _sample_boxes(path: Path, key: str, sample, agents: list[str], left_handed: 
         if corners.size and (corners.ndim != 3 or corners.shape[1:] != (8, 3)):
             raise LoaderError(f"{path}: {where}: expected {CORNERS}, got shape {corners.shape}")
         corners = corners.reshape(-1, 8, 3)
+        if corners.size and np.abs(corners).max() > MAX_COORDINATE:
+            raise LoaderError(f"{path}: {where}: a corner coordinate is {np.abs(corners).max():.3g} m from the agent; "
+                              f"expected box corners within {MAX_COORDINATE:.0e} m of its LiDAR")
         if left_handed:
             corners[:, :, 1] *= -1
         uncertainty = np.zeros((len(corners), 0))

@@ -99,3 +99,14 @@ def test_missing_key_and_no_matching_sample(tmp_path, fixtures):
         loaders.open(fixtures / SCENARIO, detections=path)
     with pytest.raises(loaders.LoaderError, match="detections file .* does not exist"):
         loaders.open(fixtures / SCENARIO, detections=tmp_path / "absent.json")
+
+
+@pytest.mark.parametrize("value", [1e300, -1e7])
+def test_finite_but_huge_corners_are_refused_at_load_naming_the_file_and_field(tmp_path, fixtures, value) -> None:
+    def huge(samples):
+        samples["13"]["pred_corner3d_np_list"][0][0][3][1] = value
+    path = _rewritten(tmp_path, fixtures, huge)
+    with pytest.raises(loaders.LoaderError) as raised:
+        loaders.open(fixtures / SCENARIO, detections=path)
+    assert str(raised.value) == (f"{path}: 13.pred_corner3d_np_list[0]: a corner coordinate is {abs(value):.3g} m from "
+                                 "the agent; expected box corners within 1e+05 m of its LiDAR")
