@@ -1,5 +1,6 @@
 """evaluate.py with inputs that would grow without bound (issue 27): each is checked against the
 dataset before it is expanded, so a run under a memory cap ends with one line naming the input."""
+import json
 import os
 import resource
 import subprocess
@@ -82,3 +83,35 @@ def test_cbm_graph_on_many_cavs_warns_of_its_quadratic_cost() -> None:
         f"per frame and scenario point ({most} for cbm); this may take hours")
     few = evaluation.plan(["synthetic:30"], methods=("cbm", "cbm-graph"), agents=3, frames=lambda n: [0])
     assert cost_warnings(few, 3) == []
+
+
+FIXTURES = REPO / "tests" / "loaders" / "fixtures"
+
+
+def big_detections(path: Path, samples: int = 2600, boxes: int = 300) -> Path:
+    """The fixture's stage1_boxes.json with ``samples`` more samples of ``boxes`` boxes each, for egos
+    far from the scenario (about 130 MB; json.loads would make over 4 GB of it)."""
+    fixture = (FIXTURES / "stage1" / "stage1_boxes.json").read_text().strip()
+    corners = json.dumps([[[float(k % 97), float(k % 89), -1.75]] * 8 for k in range(boxes)])
+    with path.open("w") as file:
+        file.write(fixture[:-1].rstrip())
+        for k in range(samples):
+            file.write(f', "{1000 + k}": {{"cav_id_list": ["641"], "lidar_pose_clean_np": '
+                       f'[[{900 + k}.0, 20.0, 1.9, 0, 90, 0]], "pred_corner3d_np_list": [{corners}]}}')
+        file.write("}\n")
+    return path
+
+
+def test_a_detections_file_of_130_mb_is_streamed_within_the_memory_cap(tmp_path) -> None:
+    detections = big_detections(tmp_path / "stage1_boxes.json")
+    assert detections.stat().st_size > 120e6
+    scenario = str(FIXTURES / "opv2v" / "scenario")
+    done = run_capped("--dataset", scenario, "--detections", str(detections), "--protocol", "opv2v", "--methods",
+                      "icp", "--workers", "1", "--no-timing", "--out", str(tmp_path / "out"))
+    assert done.returncode == 0, done.stderr[-2000:]
+    assert (tmp_path / "out" / "trials.csv").read_text().count("\n") == 1 + 2
+    probe = ("import resource, sys, loaders; loaders.open(sys.argv[1], detections=sys.argv[2]); "
+             "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
+    peak_kb = int(subprocess.run([sys.executable, "-c", probe, scenario, str(detections)], capture_output=True,
+                                 text=True, check=True, timeout=300).stdout)
+    assert peak_kb < 700_000, f"loading the detections peaked at {peak_kb / 1024:.0f} MB (json.loads: about 1.4 GB)"
