@@ -36,6 +36,7 @@ For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import multiprocessing.util
 import os
@@ -50,7 +51,7 @@ from tqdm import tqdm
 import loaders
 from cbm.methods import METHODS
 from evaluation.agents import TARGET_DISTANCE
-from evaluation.executors import ExecutorError, TaskError
+from evaluation.executors import ExecutorError, TaskError, check_reachable
 from evaluation.fusion import FUSIONS
 from evaluation.presets import PresetFileError, PresetParams, default_preset, find_preset, shipped_names
 from evaluation.sweep import grid_defaults
@@ -59,7 +60,7 @@ from . import calibration_check
 from .compare import CompareError, compare
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
-from .stop import Stopped, StopSignals, Watchdog
+from .stop import Stopped, StopSignals, Watchdog, descendants
 
 
 class CliError(ValueError):
@@ -234,6 +235,11 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(str(error)) from None
     if len(set(args.dataset)) != len(args.dataset):
         raise CliError("--dataset: a dataset is named twice")
+    if args.ray not in (None, "local", "auto"):
+        try:
+            check_reachable(args.ray)
+        except ExecutorError as error:
+            raise CliError(str(error)) from None
     if args.detections is not None and len(args.dataset) != 1:
         raise CliError("--detections: give exactly one --dataset (the detections belong to one dataset)")
     methods = parse_methods(args.methods)
@@ -323,8 +329,12 @@ def exit_now(code: int) -> NoReturn:
     """End the process at once after a stop, everything already released (the pool's workers ended,
     the staging folder removed): the interpreter's teardown of numpy, polars and matplotlib alone
     takes over a second on a busy machine, and a stop must take less than two. The pool's semaphores
-    are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about."""
+    are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about;
+    any process still descended from this one (a Ray instance cut in its start-up) is killed, none left orphaned."""
     multiprocessing.util._run_finalizers(0)
+    for pid in descendants():
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
