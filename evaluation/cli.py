@@ -257,6 +257,16 @@ GRAPH_WARNING_CAVS = 8
 """CAVs per frame from which ``cbm-graph``'s cost (CBM on every CAV for each CAV's trial) is warned about."""
 
 
+def bounded_workers(workers: int, ray: str | None) -> tuple[int, str | None]:
+    """``--workers`` at most this machine's CPUs (a process pool spawns one worker per pending task up
+    to it, each over 100 MB), and the warning saying so; a Ray cluster sizes itself."""
+    cpus = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    if ray not in (None, "local") or workers <= cpus:
+        return workers, None
+    return cpus, (f"--workers {workers}: this machine has {cpus} CPU(s) for this process; using {cpus} "
+                  "(more workers would share them and each take its own memory)")
+
+
 def cost_warnings(planned: Plan, agents: int) -> list[str]:
     """What the user should know of ``--agents`` before the run: more agents asked for than the
     frames have, and the pose graph's cost, quadratic in the frame's CAVs."""
@@ -347,7 +357,8 @@ def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> 
         planned = prepare(args)
     except CliError as error:
         parser.error(str(error))
-    for warning in cost_warnings(planned, args.agents):
+    args.workers, too_many = bounded_workers(args.workers, args.ray)
+    for warning in ([too_many] if too_many else []) + cost_warnings(planned, args.agents):
         print(f"{parser.prog}: warning: {warning}", file=sys.stderr, flush=True)
     with tqdm(total=planned.trial_count, unit="trial", disable=None) as bar:
         try:

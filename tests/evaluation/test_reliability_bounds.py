@@ -11,7 +11,7 @@ import pytest
 
 import evaluation
 import loaders
-from evaluation.cli import GRAPH_WARNING_CAVS, CliError, cost_warnings, parse_frames
+from evaluation.cli import GRAPH_WARNING_CAVS, CliError, bounded_workers, cost_warnings, main, parse_frames
 from evaluation.trials import frame_cav_inputs
 
 REPO = Path(__file__).resolve().parents[2]
@@ -115,3 +115,14 @@ def test_a_detections_file_of_130_mb_is_streamed_within_the_memory_cap(tmp_path)
     peak_kb = int(subprocess.run([sys.executable, "-c", probe, scenario, str(detections)], capture_output=True,
                                  text=True, check=True, timeout=300).stdout)
     assert peak_kb < 700_000, f"loading the detections peaked at {peak_kb / 1024:.0f} MB (json.loads: about 1.4 GB)"
+
+
+def test_more_workers_than_cpus_are_bounded_with_a_warning(tmp_path, capsys) -> None:
+    cpus = len(os.sched_getaffinity(0))
+    assert bounded_workers(cpus, None) == (cpus, None)
+    assert bounded_workers(10_000, "auto") == (10_000, None)
+    assert bounded_workers(10_000, "local")[0] == cpus
+    assert main(["--dataset", "synthetic:20", "--frames", "0:2", "--methods", "icp", "--workers", "10000",
+                 "--out", str(tmp_path / "out")]) == 0
+    assert (f"evaluate.py: warning: --workers 10000: this machine has {cpus} CPU(s) for this process; using {cpus} "
+            "(more workers would share them and each take its own memory)") in capsys.readouterr().err.splitlines()
