@@ -11,7 +11,8 @@ import pytest
 
 import evaluation
 import loaders
-from evaluation.cli import GRAPH_WARNING_CAVS, CliError, bounded_workers, cost_warnings, main, parse_frames
+from evaluation.bounds import GRAPH_WARNING_CAVS, bounded_workers, cost_warnings
+from evaluation.cli import CliError, main, parse_frames
 from evaluation.trials import frame_cav_inputs
 
 REPO = Path(__file__).resolve().parents[2]
