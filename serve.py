@@ -4,7 +4,7 @@
 """
 import sys
 
-from app.commands import serve
+from app.commands import serve as main
 
 if __name__ == "__main__":
-    sys.exit(serve())
+    sys.exit(main())

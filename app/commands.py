@@ -25,15 +25,18 @@ def stop_while_importing(prog: str) -> None:
         signal.signal(signum, handle)
 
 
-def evaluate() -> int:
-    """``cbm-evaluate``: ``evaluation.cli.main`` once imported."""
-    stop_while_importing("evaluate.py")
+def evaluate(argv: list[str] | None = None) -> int:
+    """``cbm-evaluate``: ``evaluation.cli.main`` once imported; the command's handler only when run as
+    the command (``argv`` None), never inside a caller's process."""
+    if argv is None:
+        stop_while_importing("evaluate.py")
     from evaluation.cli import main
-    return main()
+    return main(argv)
 
 
-def serve() -> int:
-    """``cbm-explorer``: ``app.cli.main`` once imported."""
-    stop_while_importing(os.path.basename(sys.argv[0]))
+def serve(argv: list[str] | None = None) -> int:
+    """``cbm-explorer``: ``app.cli.main`` once imported (the handler as for :func:`evaluate`)."""
+    if argv is None:
+        stop_while_importing(os.path.basename(sys.argv[0]))
     from app.cli import main
-    return main()
+    return main(argv)
