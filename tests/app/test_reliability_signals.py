@@ -13,7 +13,7 @@ import numpy as np
 import polars as pl
 import pytest
 
-from support.processes import alive, descendants, wait_for
+from support.processes import alive, descendants, has_loaded, wait_for
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -52,3 +52,17 @@ def test_a_stop_signal_while_the_dataset_loads_stops_within_2_s(slow_dataset, tm
     assert stdout == "" and stderr.strip() == f"serve.py: stopped by {signal.Signals(signum).name} while starting"
     assert took < 2.0
     assert children and not any(alive(child) for child in children)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_signal_while_serve_py_imports_is_one_line(tmp_path, signum: int) -> None:
+    process = subprocess.Popen([sys.executable, "serve.py", "--dataset", "synthetic:5", "--port", "0"], cwd=REPO,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "CBM_EXPLORER_PRESETS": str(tmp_path)})
+    wait_for(lambda: has_loaded(process.pid, "numpy") or process.poll() is not None, 120, "numpy being imported")
+    process.send_signal(signum)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 128 + signum, stderr
+    lines = stderr.strip().splitlines()
+    assert stdout == "" and len(lines) == 1
+    assert lines[0].startswith(f"serve.py: stopped by {signal.Signals(signum).name}")
