@@ -1,9 +1,12 @@
 """What a run's inputs may cost, told before it starts: ``--workers`` bounded by the machine's CPUs,
 ``--agents`` beyond what the frames have, and the pose graph's cost (``evaluate.py`` prints these
-as warnings)."""
+as warnings); a ``--grid`` of too many points is refused before it is expanded."""
 from __future__ import annotations
 
+import math
 import os
+from collections.abc import Mapping, Sequence
+from typing import Any
 
 from .run import Plan
 
@@ -33,3 +36,17 @@ def cost_warnings(planned: Plan, agents: int) -> list[str]:
         found.append(f"--agents {agents}: cbm-graph matches every CAV of the frame for each CAV's trial: up to "
                      f"{most * most} CBM runs per frame and scenario point ({most} for cbm); this may take hours")
     return found
+
+
+MAX_GRID_POINTS = 100_000
+"""Points of ``--grid`` (the product of its value counts) one run may take: each is a row per frame
+and method, and the sweep lists them all before it starts."""
+
+
+def grid_too_large(grid: Mapping[str, Sequence[Any]]) -> str | None:
+    """What is wrong with a grid whose points exceed :data:`MAX_GRID_POINTS` (counted, not listed), or None."""
+    points = math.prod(len(values) for values in grid.values())
+    if points <= MAX_GRID_POINTS:
+        return None
+    sizes = " x ".join(f"{len(values)} {name}" for name, values in grid.items())
+    return f"--grid: {points:,} points ({sizes}); at most {MAX_GRID_POINTS:,} in one run"

@@ -57,7 +57,7 @@ from evaluation.presets import PresetFileError, PresetParams, default_preset, fi
 from evaluation.sweep import grid_defaults
 
 from . import calibration_check
-from .bounds import bounded_workers, cost_warnings
+from .bounds import bounded_workers, cost_warnings, grid_too_large
 from .compare import CompareError, compare
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
@@ -245,6 +245,9 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError("--detections: give exactly one --dataset (the detections belong to one dataset)")
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
+    too_large = grid_too_large(grid)
+    if too_large:
+        raise CliError(too_large)
     try:
         return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,

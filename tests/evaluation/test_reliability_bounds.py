@@ -127,3 +127,13 @@ def test_more_workers_than_cpus_are_bounded_with_a_warning(tmp_path, capsys) -> 
                  "--out", str(tmp_path / "out")]) == 0
     assert (f"evaluate.py: warning: --workers 10000: this machine has {cpus} CPU(s) for this process; using {cpus} "
             "(more workers would share them and each take its own memory)") in capsys.readouterr().err.splitlines()
+
+
+def test_a_grid_of_too_many_points_is_refused_before_it_is_expanded(tmp_path) -> None:
+    thousand, ninety = (",".join(str(k) for k in range(1, n + 1)) for n in (1000, 90))
+    done = run_capped("--dataset", "synthetic:5", "--frames", "0", "--methods", "cbm", "--grid", f"sigma2={thousand}",
+                      f"sigma1={ninety}", f"sigma3={thousand}", "--out", str(tmp_path / "out"))
+    assert done.returncode == 2, done.stderr[-2000:]
+    assert done.stderr.strip().splitlines() == [
+        "evaluate.py: error: --grid: 90,000,000 points (1000 sigma2 x 90 sigma1 x 1000 sigma3); "
+        "at most 100,000 in one run"]
