@@ -285,6 +285,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         try:
             code = evaluate(parser, args, signals)
         except Stopped as stop:
+            if watchdog:
+                watchdog.disarm()
             print(f"{parser.prog}: stopped by {stop.name}; nothing written", file=sys.stderr)
             code = 128 + stop.signum
             if command:
