@@ -29,6 +29,7 @@ class ViewControls:
     labels: viser.GuiCheckboxHandle
     pinned_lines: viser.GuiCheckboxHandle
     reset_camera: viser.GuiButtonHandle
+    view_3d: viser.GuiButtonHandle
     presentation: viser.GuiCheckboxHandle
     dark: viser.GuiCheckboxHandle
     points: viser.GuiCheckboxHandle
@@ -67,7 +68,8 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         labels=gui.add_checkbox("label clicked objects", view.labels),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
-        reset_camera=gui.add_button("reset camera"),
+        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene: footprints show as compared"),
+        view_3d=gui.add_button("3D view", hint="From behind and above the ego (reset camera: back to top-down)"),
         presentation=gui.add_checkbox("presentation mode", view.presentation,
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),
@@ -89,4 +91,5 @@ def bind(c: ViewControls, tab: TabActions) -> None:
         on_user(control, lambda n=name, h=control: tab.apply(lambda s: s.with_view(**{n: h.value})))
     on_user(c.line_pairs, lambda: tab.apply(lambda s: s.with_view(line_pairs=LINE_PAIR_KEYS[c.line_pairs.value])))
     c.reset_camera.on_click(lambda e: tab.reset_camera())
+    c.view_3d.on_click(lambda e: tab.reset_camera(oblique=True))
     on_user(c.points_every, lambda: tab.apply(lambda s: s.with_view(points_every=int(c.points_every.value))))

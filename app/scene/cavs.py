@@ -9,7 +9,7 @@ from evaluation.metrics import TrialMetrics, is_success
 
 from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS
-from . import geometry
+from . import geometry, planes
 from .colours import CAV_COLOURS
 from .layouts import Panel
 
@@ -34,7 +34,7 @@ def other_cav_boxes(outcome: Outcome, panels: list[Panel]) -> dict[str, tuple[np
             where = {"before": other.result.init, "after": other.result.transform}
             boxes = np.concatenate([se2.apply_boxes(se2.make(*panel.offset, 0.0) @ where[panel.placement],
                                                     _slimmer(other.trial.cav_boxes)) for panel in panels])
-        meshes[mesh_name(rank)] = (*geometry.footprint_mesh(boxes), CAV_COLOURS[rank - 2])
+        meshes[mesh_name(rank)] = (*geometry.footprint_mesh(boxes, planes.cav(rank)), CAV_COLOURS[rank - 2])
     return meshes
 
 
@@ -57,5 +57,4 @@ def _slimmer(boxes: np.ndarray) -> np.ndarray:
     """The other CAVs' boxes drawn narrower than the first CAV's, so boxes on one object all show."""
     out = boxes.copy()
     out[:, 3:5] *= 0.5
-    out[:, 5] *= 1.5
     return out

@@ -13,17 +13,13 @@ from cbm import se2
 from loaders import Frame
 
 from ..session.explorer import Outcome, classified_pairs
-from . import captions, cavs, colours, geometry
+from . import captions, cavs, colours, geometry, planes
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .points import PointCloud, clouds, problems_markdown
 from .text import metrics_markdown
 
-LINE_HEIGHT = 1.7
-"""Metres above the ground at which match lines run (above most boxes)."""
 MOST_PANELS = 2
 """The most copies of the scene a layout draws (side by side): each copy has its own map nodes."""
-FUSED_Z = 0.3
-"""Metres above the ground of the fused boxes' outlines (above the boxes' tiles)."""
 
 
 @dataclass(frozen=True)
@@ -137,10 +133,10 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
-    """Boxes as top-down tiles (``geometry.footprint_mesh``), vehicles as small bodies."""
+    """Boxes as their footprints, flat in the plane of comparison (``planes``), vehicles as small bodies."""
     return {
-        "ego_boxes": Mesh(*geometry.footprint_mesh(ego), palette.ego_boxes),
-        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav)), palette.cav_boxes),
+        "ego_boxes": Mesh(*geometry.footprint_mesh(ego, planes.EGO), palette.ego_boxes),
+        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav), planes.cav(1)), palette.cav_boxes),
         "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
         "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), palette.cav_vehicle),
         "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), palette.cav_vehicle, opacity=0.3),
@@ -149,14 +145,13 @@ def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Pa
 
 def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
     """Match lines; outlines of the CAV's boxes where ``init`` put them and of the ground truth."""
-    ghosts = geometry.outline_segments(np.concatenate(parts.ghosts)) if parts.ghosts else no_lines()
-    before = geometry.outline_segments(np.concatenate(parts.before), 0.1) if parts.before else no_lines()
+    ghosts, before = _outlines(parts.ghosts, planes.OUTLINES), _outlines(parts.before, planes.OUTLINES)
     strokes = {"right": palette.right, "wrong": palette.wrong, "missed": palette.missed}
     return {**{name: Lines(_joined(getattr(parts, name)), s.color, s.thickness) for name, s in strokes.items()},
             "cav_before": Lines(before, palette.cav_before, 1.5),
             "ghosts": Lines(ghosts, palette.ghost, 1.5),
-            "fused_tp": Lines(_outlines(parts.fused_tp, FUSED_Z), palette.right.color, 3.0),
-            "fused_fp": Lines(_outlines(parts.fused_fp, FUSED_Z), palette.wrong.color, 3.0)}
+            "fused_tp": Lines(_outlines(parts.fused_tp, planes.FUSED), palette.right.color, 3.0),
+            "fused_fp": Lines(_outlines(parts.fused_fp, planes.FUSED), palette.wrong.color, 3.0)}
 
 
 def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
@@ -181,8 +176,8 @@ def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
 def _labels(parts: _Parts, panels: list[Panel]) -> dict[str, tuple[str, tuple[float, float, float]]]:
     labels = {}
     for panel, ego_pose, cav_pose in zip(panels, parts.ego_poses, parts.cav_poses):
-        labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(ego_pose), 2.5))
-        labels[f"cav_{panel.placement}"] = ("CAV", (*se2.translation_of(cav_pose), 2.5))
+        labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(ego_pose), planes.LABELS))
+        labels[f"cav_{panel.placement}"] = ("CAV", (*se2.translation_of(cav_pose), planes.LABELS))
         if panel.title:
             labels[panel.placement] = (panel.title, (TITLE_AT[0], float(panel.offset[1]), TITLE_AT[1]))
     return labels
@@ -195,15 +190,14 @@ def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarra
     right, wrong, missed = classified_pairs(pairs, trial.gt_pairs)
     drawn = [(ego_xy[p[:, 0]], cav_xy[p[:, 1]], stroke.dash)
              for p, stroke in ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
-    return tuple(geometry.segments(a, b, LINE_HEIGHT) if dash is None else geometry.dashed(a, b, LINE_HEIGHT, dash)
+    return tuple(geometry.segments(a, b, planes.LINES) if dash is None else geometry.dashed(a, b, planes.LINES, dash)
                  for a, b, dash in drawn)
 
 
 def _slim(boxes: np.ndarray) -> np.ndarray:
-    """CAV boxes drawn narrower and taller than the ego's, so a matched pair shows both colours."""
+    """CAV boxes drawn narrower than the ego's (about the same centre), so a matched pair shows both colours."""
     out = boxes.copy()
     out[:, 3:5] *= 0.7
-    out[:, 5] *= 1.3
     return out
 
 
