@@ -9,6 +9,7 @@ import viser
 
 from cbm.methods import METHODS
 
+from ..scene.cavs import legend as cavs_legend
 from ..scene.colours import palette
 from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
@@ -53,7 +54,7 @@ class ViewControls:
         self.points.disabled = why is not None
         self.points.hint = POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}"
         self.points_every.disabled = not settings.view.points or why is not None
-        self.legend.content = palette(settings.view).legend
+        self.legend.content = palette(settings.view).legend + cavs_legend(settings.cavs)
 
 
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls:
@@ -78,7 +79,7 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
                                     hint="Draw every Nth LiDAR point (1: all of them)"),
         note=gui.add_markdown(f"*Disabled ({offers.points}): LiDAR points.*", visible=offers.points is not None),
-        legend=gui.add_markdown(palette(view).legend),
+        legend=gui.add_markdown(palette(view).legend + cavs_legend(settings.cavs)),
         fused=gui.add_checkbox("fused boxes (late fusion)", view.fused,
                                hint="The ego's and the CAV's boxes merged by NMS at this pose: outlines green for "
                                     "a true positive, red for a false one (BEV IoU 0.7 against the ground truth)"),

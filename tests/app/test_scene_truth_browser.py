@@ -4,15 +4,18 @@ wrong pair are marked themselves; every CAV is drawn as a CAV."""
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 
 import numpy as np
 import pytest
 
+from app.scene.colours import CAV_COLOURS
 from app.scene.geometry import footprints
 from app.server import ExplorerServer
-from app.session.explorer import Explorer
+from app.session.explorer import Explorer, classified_pairs
 from app.session.presets import SHIPPED_DIR, read
 from app.session.settings import Settings
+from cbm import se2
 from support import browser as ui
 from support import pixels
 
@@ -119,3 +122,73 @@ def middle(mask: np.ndarray) -> np.ndarray:
 def extent(mask: np.ndarray) -> np.ndarray:
     ys, xs = np.nonzero(mask)
     return np.array([xs.max() - xs.min() + 1, ys.max() - ys.min() + 1], float)
+
+
+def red(image: np.ndarray) -> np.ndarray:
+    r, g, b = (image[..., k].astype(int) for k in range(3))
+    return (r > 190) & (r - g > 90) & (abs(g - b) < 45)
+
+
+def test_a_wrong_pair_whose_boxes_overlap_is_marked_on_its_boxes(browser, explorer: Explorer, tmp_path) -> None:
+    settings = read(SHIPPED_DIR / "stress.toml", True).apply(Settings(frame=18))
+    with running(explorer, settings, tmp_path) as server:
+        page = ui.open_first_screen(browser, server)
+        tab = ui.session(server, 1)
+        outcome, drawing = tab.last, tab.last_drawing
+        assert outcome.metrics.n_matched > 0 and outcome.metrics.n_correct == 0
+        camera = settled_camera(tab)
+        ui.close_notifications(page)
+        page.wait_for_timeout(1500)
+        image = pixels.screenshot(page)
+        i, j = overlapping_wrong_pair(outcome, camera)
+        box = outcome.trial.ego_boxes[i]
+        corners = pixels.project(camera, np.c_[footprints(box[None])[0], np.zeros(4)])
+        low, high = np.floor(corners.min(axis=0)).astype(int) - 6, np.ceil(corners.max(axis=0)).astype(int) + 6
+        marked = red(image)[low[1]:high[1], low[0]:high[0]].sum()
+        perimeter = np.sum(np.linalg.norm(corners - np.roll(corners, 1, axis=0), axis=1))
+        assert marked > perimeter, f"{marked} red pixels on wrong pair {i, j}, outline {perimeter:.0f} px long"
+        ego_id, cav_id = str(outcome.trial.ego_ids[i])[:8], str(outcome.trial.cav_ids[j])[:8]
+        label = tab.view.labels[f"pairs_after_wrong_{i}_{j}"]
+        assert label.visible and ego_id in label.text and cav_id in label.text, label.text
+        page.close()
+    assert len(drawing.lines["wrong_marks"].segments) == 8 * outcome.metrics.n_matched
+
+
+def overlapping_wrong_pair(outcome, camera) -> tuple[int, int]:
+    """The wrong pair (ego row, CAV row) in the free part of the page whose drawn boxes are closest
+    (its match line shortest), less than half a metre apart."""
+    _, wrong, _ = classified_pairs(outcome.result.pairs, outcome.trial.gt_pairs)
+    cav = se2.apply_boxes(outcome.result.transform, outcome.trial.cav_boxes)
+    ego = outcome.trial.ego_boxes
+    gaps = np.hypot(*(ego[wrong[:, 0], :2] - cav[wrong[:, 1], :2]).T)
+    where = pixels.project(camera, np.c_[ego[wrong[:, 0], :2], np.zeros(len(wrong))])
+    inside = (FREE[0] < where[:, 0]) & (where[:, 0] < FREE[2]) & (FREE[1] < where[:, 1]) & (where[:, 1] < FREE[3])
+    assert inside.any(), "no wrong pair in view"
+    k = int(np.argmin(np.where(inside, gaps, np.inf)))
+    assert gaps[k] < 0.5, gaps[k]
+    return int(wrong[k, 0]), int(wrong[k, 1])
+
+
+def test_three_cavs_each_have_a_vehicle_label_lines_legend_and_key_numbers(browser, explorer: Explorer,
+                                                                          tmp_path) -> None:
+    settings = dataclasses.replace(Settings(frame=10), cavs=3)
+    with running(explorer, settings, tmp_path) as server:
+        page = ui.open_first_screen(browser, server)
+        tab = ui.session(server, 1)
+        outcome = tab.last
+        assert len(outcome.others) == 2
+        ui.wait_until(lambda: "CAV 3" in page.locator("#cbm-key-numbers").inner_text(), 30)
+        key_numbers = page.locator("#cbm-key-numbers").inner_text()
+        page.get_by_role("tab", name="View").click()
+        legend = page.get_by_text("CAVs:").first.inner_text()
+        view = tab.view
+        for rank, colour in ((2, CAV_COLOURS[0]), (3, CAV_COLOURS[1])):
+            vehicle = view.meshes[f"cav_vehicle_{rank}"]
+            assert vehicle.visible and tuple(vehicle.color) == colour
+            assert view.labels[f"cav_{rank}_after"].visible and view.labels[f"cav_{rank}_after"].text == f"CAV {rank}"
+            assert f"CAV {rank}" in legend and f"CAV {rank} ·" in key_numbers
+        page.close()
+    pairs = sum(len(cav.result.pairs) for cav in (outcome, *outcome.others))
+    assert len(tab.last_drawing.lines["right"].segments) == pairs == outcome.metrics.n_correct + sum(
+        other.metrics.n_correct for other in outcome.others)
+    assert "CAV 1 ·" in key_numbers and "3 of 3 CAVs succeed" in key_numbers

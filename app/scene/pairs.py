@@ -1,0 +1,69 @@
+"""What the scene draws for one CAV's pairs: match lines from the centre of the ego footprint drawn
+to the centre of the CAV footprint drawn (the very boxes the tiles show, so lines and boxes agree),
+and the boxes of wrong and missed pairs marked themselves: outlined in the pair's colour and
+labelled with both ids, so that a wrong pair whose boxes overlap (its line has no length) shows."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evaluation.diagnosis import short_id
+
+from ..session.explorer import classified_pairs
+from . import colours, geometry, planes
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """Boxes as the scene draws them (their footprints, in the scene's frame) and their object ids."""
+
+    boxes: np.ndarray
+    """(N, 7)."""
+    ids: np.ndarray
+    """(N,)."""
+
+
+@dataclass(frozen=True)
+class PairShapes:
+    """Segments of one CAV's pairs in one copy of the scene, and the labels of its wrong and missed ones."""
+
+    right: np.ndarray
+    wrong: np.ndarray
+    missed: np.ndarray
+    wrong_marks: np.ndarray
+    """Outlines of the two boxes of every wrong pair."""
+    missed_marks: np.ndarray
+    """Outlines of the two boxes of every true pair the method missed."""
+    labels: dict[str, tuple[str, tuple[float, float, float]]]
+
+
+def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, palette: colours.Palette,
+                cav_name: str, key: str) -> PairShapes:
+    """The lines and marks of ``pairs`` (ego index, CAV index) against the true ``truth``, between
+    the drawn boxes ``ego`` and ``cav``; labels named ``key`` and the pair, the CAV called ``cav_name``."""
+    right, wrong, missed = classified_pairs(pairs, truth)
+    lines = [_segments(ego, cav, p, stroke.dash) for p, stroke in
+             ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
+    labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗ wrong:", cav_name),
+              **_labels(missed, ego, cav, f"{key}_missed", "missed:", cav_name)}
+    return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), labels)
+
+
+def _segments(ego: Drawn, cav: Drawn, pairs: np.ndarray, dash: float | None) -> np.ndarray:
+    """Lines from each pair's drawn ego centre to its drawn CAV centre, solid or in dashes ``dash`` long."""
+    a, b = ego.boxes[pairs[:, 0], :2], cav.boxes[pairs[:, 1], :2]
+    return geometry.segments(a, b, planes.LINES) if dash is None else geometry.dashed(a, b, planes.LINES, dash)
+
+
+def _marks(pairs: np.ndarray, ego: Drawn, cav: Drawn) -> np.ndarray:
+    """Outlines of both boxes of each pair, as drawn."""
+    return geometry.outline_segments(np.concatenate([ego.boxes[pairs[:, 0]], cav.boxes[pairs[:, 1]]]), planes.MARKS)
+
+
+def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str,
+            cav_name: str) -> dict[str, tuple[str, tuple[float, float, float]]]:
+    """A label per pair on its CAV box: what went wrong and both ids (the partner's included)."""
+    return {f"{key}_{i}_{j}": (f"{kind} ego {short_id(ego.ids[i])} ↔ {cav_name} {short_id(cav.ids[j])}",
+                               (float(cav.boxes[j, 0]), float(cav.boxes[j, 1]), planes.LINES))
+            for i, j in pairs.tolist()}
