@@ -45,8 +45,8 @@ def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, pa
     right, wrong, missed = classified_pairs(pairs, truth)
     lines = [_segments(ego, cav, p, stroke.dash) for p, stroke in
              ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
-    labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗ wrong:", cav_name),
-              **_labels(missed, ego, cav, f"{key}_missed", "missed:", cav_name)}
+    labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗", cav_name, on_cav=True),
+              **_labels(missed, ego, cav, f"{key}_missed", "missed", cav_name, on_cav=False)}
     return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), labels)
 
 
@@ -61,9 +61,14 @@ def _marks(pairs: np.ndarray, ego: Drawn, cav: Drawn) -> np.ndarray:
     return geometry.outline_segments(np.concatenate([ego.boxes[pairs[:, 0]], cav.boxes[pairs[:, 1]]]), planes.MARKS)
 
 
-def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str,
-            cav_name: str) -> dict[str, tuple[str, tuple[float, float, float]]]:
-    """A label per pair on its CAV box: what went wrong and both ids (the partner's included)."""
-    return {f"{key}_{i}_{j}": (f"{kind} ego {short_id(ego.ids[i])} ↔ {cav_name} {short_id(cav.ids[j])}",
-                               (float(cav.boxes[j, 0]), float(cav.boxes[j, 1]), planes.LINES))
-            for i, j in pairs.tolist()}
+def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str, cav_name: str,
+            on_cav: bool) -> dict[str, tuple[str, tuple[float, float, float]]]:
+    """A label per pair, on its CAV box (``on_cav``) or its ego box: what went wrong and both ids
+    (one id when both detections are of the same object, as a missed pair's are)."""
+    labels = {}
+    for i, j in pairs.tolist():
+        ego_id, cav_id = short_id(ego.ids[i]), short_id(cav.ids[j])
+        ids = ego_id if ego_id == cav_id else f"ego {ego_id} ↔ {cav_name} {cav_id}"
+        x, y = (cav.boxes[j] if on_cav else ego.boxes[i])[:2]
+        labels[f"{key}_{i}_{j}"] = (f"{kind} {ids}", (float(x), float(y), planes.LINES))
+    return labels
