@@ -101,7 +101,8 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
                    for pose in (*parts.ego_poses, *(p for poses in parts.cav_poses.values() for p in poses)))
     points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
                     (parts.ego_poses, parts.cav_poses[1]), view.points_every, (palette.ego_boxes, palette.cav_boxes))
-    return Drawing(meshes=_meshes(parts, ego, palette), lines=lines, labels=parts.labels,
+    labels = {**parts.labels, **pairs.spread({k: v for shapes in parts.shapes for k, v in shapes.labels.items()})}
+    return Drawing(meshes=_meshes(parts, ego, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
                    agents=agents, label_px=captions.label_px(view), points=points)
@@ -151,7 +152,6 @@ def _add_cav(parts: _Parts, cav: cavs.ShownCav, count: int, panel: Panel, ego: p
         shapes = pairs.pair_shapes(cav.pairs, cav.trial.gt_pairs, partners, drawn, palette, name,
                                    f"{cavs.node('pairs', cav.rank)}_{panel.placement}")
         parts.shapes.append(shapes)
-        parts.labels.update(shapes.labels)
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:

@@ -13,6 +13,13 @@ from evaluation.diagnosis import short_id
 from ..session.explorer import classified_pairs
 from . import colours, geometry, planes
 
+Labels = dict[str, tuple[str, tuple[float, float, float]]]
+"""Text and (x, y, z) of each label, by name."""
+LABEL_LINE_M = 1.3
+"""Metres a label's line of text covers up the screen under the default camera (``LABEL_PX`` at its height)."""
+LABEL_CHAR_M = 0.6
+"""Metres a character of a label covers across the screen under the default camera."""
+
 
 @dataclass(frozen=True)
 class Drawn:
@@ -35,7 +42,7 @@ class PairShapes:
     """Outlines of the two boxes of every wrong pair."""
     missed_marks: np.ndarray
     """Outlines of the two boxes of every true pair the method missed."""
-    labels: dict[str, tuple[str, tuple[float, float, float]]]
+    labels: Labels
 
 
 def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, palette: colours.Palette,
@@ -46,8 +53,29 @@ def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, pa
     lines = [_segments(ego, cav, p, stroke.dash) for p, stroke in
              ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
     labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗", cav_name, on_cav=True),
-              **_labels(missed, ego, cav, f"{key}_missed", "missed", cav_name, on_cav=False)}
+              **_labels(unexplained(missed, wrong), ego, cav, f"{key}_missed", "missed", cav_name, on_cav=False)}
     return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), labels)
+
+
+def unexplained(missed: np.ndarray, wrong: np.ndarray) -> np.ndarray:
+    """The missed pairs whose boxes are not both in wrong pairs (a swap's missed pairs are named by
+    its wrong pairs' labels already, and their outlines stay)."""
+    both = np.isin(missed[:, 0], wrong[:, 0]) & np.isin(missed[:, 1], wrong[:, 1])
+    return missed[~both]
+
+
+def spread(labels: Labels) -> Labels:
+    """The labels moved down the screen (-x, the top-down camera's down), one line at a time, until
+    none overprints one placed before it (a label's text runs from its point to the screen's right, -y)."""
+    placed: list[tuple[float, float, float]] = []
+    out = {}
+    for name, (text, (x, y, z)) in sorted(labels.items(), key=lambda item: -item[1][1][0]):
+        width = LABEL_CHAR_M * len(text)
+        while any(abs(x - px) < LABEL_LINE_M and y - width < py and py - pw < y for px, py, pw in placed):
+            x -= LABEL_LINE_M
+        placed.append((x, y, width))
+        out[name] = (text, (x, y, z))
+    return out
 
 
 def _segments(ego: Drawn, cav: Drawn, pairs: np.ndarray, dash: float | None) -> np.ndarray:
@@ -62,7 +90,7 @@ def _marks(pairs: np.ndarray, ego: Drawn, cav: Drawn) -> np.ndarray:
 
 
 def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str, cav_name: str,
-            on_cav: bool) -> dict[str, tuple[str, tuple[float, float, float]]]:
+            on_cav: bool) -> Labels:
     """A label per pair, on its CAV box (``on_cav``) or its ego box: what went wrong and both ids
     (one id when both detections are of the same object, as a missed pair's are)."""
     labels = {}
