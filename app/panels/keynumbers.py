@@ -9,9 +9,11 @@ import html
 import numpy as np
 import viser
 
-from evaluation.metrics import is_success
+from evaluation.metrics import TrialMetrics, is_success
 from loaders import is_vehicle
 
+from ..scene import cavs
+from ..scene.colours import Palette, palette
 from ..scene.text import number
 from ..session.explorer import Explorer, Outcome
 from ..session.settings import Settings
@@ -25,12 +27,29 @@ STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:mi
 
 
 def key_numbers_html(outcome: Outcome) -> str:
-    """One line per fact: the frame and its verdict, precision / recall, the pose errors."""
+    """One line per fact: the frame and its verdict, precision / recall, the pose errors; with
+    several CAVs, how many succeed and a line per CAV (``per_cav_line``)."""
     m = outcome.metrics
-    verdict = "success" if is_success(m) else "failed"
-    return _box([f"<b>Frame {outcome.frame_index}</b> · {verdict}",
-                 f"precision / recall {number(m.precision)} / {number(m.recall)}",
-                 f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}"])
+    if not outcome.others:
+        return _box([f"<b>Frame {outcome.frame_index}</b> · {_verdict(m)}",
+                     f"precision / recall {number(m.precision)} / {number(m.recall)}",
+                     f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}"])
+    shown = cavs.every_cav(outcome)
+    wins = sum(is_success(cav.metrics) for cav in shown)
+    return _box([f"<b>Frame {outcome.frame_index}</b> · {wins} of {len(shown)} CAVs succeed",
+                 *(per_cav_line(cav, palette(outcome.settings.view)) for cav in shown)])
+
+
+def per_cav_line(cav: cavs.ShownCav, colours: Palette) -> str:
+    """One CAV's verdict, precision / recall and pose errors, after a square of its colour."""
+    m, (r, g, b) = cav.metrics, cavs.box_colour(cav.rank, colours)
+    return (f'<span style="color:rgb({r},{g},{b})">■</span> CAV {cav.rank} · {_verdict(m)} · '
+            f"P / R {number(m.precision)} / {number(m.recall)} · "
+            f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}")
+
+
+def _verdict(m: TrialMetrics) -> str:
+    return "success" if is_success(m) else "failed"
 
 
 def problem_html(title: str) -> str:
