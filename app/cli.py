@@ -81,7 +81,8 @@ def usable_frame(explorer: Explorer, settings: Settings) -> int | None:
 def _stop_while_starting() -> Watchdog:
     """Until the server runs, SIGTERM and SIGINT end the command at once (the kernels' compiling
     subprocesses killed, one line, status 128 + the signal); the watchdog acts for them when the main
-    thread is stuck in a long call (reading a large dataset)."""
+    thread is stuck in a long call (reading a large dataset, or a server that never gets ready).
+    Once the server is built the watchdog stands down and a signal stops the server cleanly."""
     def line(name: str) -> str:
         return f"{os.path.basename(sys.argv[0])}: stopped by {name} while starting"
 
@@ -147,12 +148,12 @@ def main(argv: list[str] | None = None) -> int:
               f"among {len(sampled_frames(len(sequence)))} frames tried: CBM cannot run; the page says what is "
               f"missing")
     stopping = _stop_on_signals()
-    if starting:
-        starting.disarm()
     try:
         server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
     except OSError as error:
         return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+    if starting:
+        starting.disarm()
     if not local:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")
