@@ -114,7 +114,7 @@ class _ObjectStream:
 
     def __init__(self, path: Path, file: BinaryIO, expected: str) -> None:
         self.path, self.file, self.expected = path, file, expected
-        self.decode = codecs.getincrementaldecoder("utf-8")().decode
+        self.decode = codecs.getincrementaldecoder("utf-8-sig")().decode
         self.decoder = json.JSONDecoder()
         self.text, self.at, self.consumed, self.ended = "", 0, 0, False
 

@@ -144,3 +144,9 @@ def test_the_file_is_read_one_sample_at_a_time_and_must_be_one_whole_object(tmp_
         with pytest.raises(loaders.LoaderError, match="expected a JSON object of sample index" if reason is None
                            else f"not valid JSON \\({reason}"):
             loaders.open(fixtures / SCENARIO, detections=path)
+
+
+def test_a_file_with_a_byte_order_mark_is_read_as_json_loads_reads_it(tmp_path, fixtures):
+    path = tmp_path / "stage1_boxes.json"
+    path.write_bytes(b"\xef\xbb\xbf" + (fixtures / STAGE1).read_bytes())
+    assert list(loaders.open(fixtures / SCENARIO, detections=path).detections) == [0]
