@@ -152,8 +152,14 @@ class FrameInputs:
     frame): they replace that agent's simulated detections (``evaluation.detected.with_detections``)."""
     stream: int = 0
     """The CAV's rank among the frame's CAVs: its trial draws from ``trial_rng(seed, index, stream)``."""
-    peers: tuple[FrameInputs, ...] = ()
-    """The inputs of the frame's other CAVs (more than two agents), for the joint pose estimate."""
+    cohort: tuple[FrameInputs, ...] = ()
+    """The inputs of every CAV of the frame, this one among them (more than two agents): one tuple
+    shared by the frame's inputs, so a frame of K CAVs holds K references, not K squared."""
+
+    @property
+    def peers(self) -> tuple[FrameInputs, ...]:
+        """The inputs of the frame's other CAVs, for the joint pose estimate."""
+        return tuple(other for other in self.cohort if other.stream != self.stream)
 
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the

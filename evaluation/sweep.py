@@ -131,7 +131,10 @@ def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
     """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
     (frame, scenario point) tasks in a process pool, ``ray`` (``local``, ``auto`` or an address) on
     Ray (``evaluation.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
-    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point."""
+    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point.
+    The frames' other CAVs travel with each task only when a method takes them (``cbm-graph``)."""
+    if not any(METHODS[m].takes_peers for m in sweep.methods):
+        frames = [dataclasses.replace(frame, cohort=()) for frame in frames]
     tasks = [(sweep, frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
     done = progress or (lambda n: None)
     results = run_tasks(run_task, tasks, workers=workers, ray=ray, done=lambda rows: done(len(rows)),
