@@ -3,12 +3,14 @@ object may lie, read from the scene itself rather than fixed.
 
 The scale is the pairs' own: the residuals' per-axis std-dev (``scene_sigma``), read from pairs the
 robust fit (eq. 14) and the gate have already cleaned, never below the least detection noise
-assumed. The gate then weighs a pair against coincidence: a CAV box lands within distance d of an ego box by chance with
-probability about ``lambda * pi d^2`` (``lambda`` the boxes' density, ``clutter_density``), while a
-true pair lies there with the 2-D Gaussian density of the residuals. A pair is kept while its
-log-likelihood ratio (``pair_log_ratio``) is positive: in a crowded or noisy scene the gate narrows
-(wrong pairs 2-3 m off are dropped), in a sparse or clean one it widens to ``CBMParams.refine_gate``
-sigma.
+assumed; the heading noise likewise (``heading_sigma``). A pair is then weighed against
+coincidence: a CAV box lies within distance d of an ego box by chance with probability about
+``lambda * pi d^2`` (``lambda`` the boxes' density, ``clutter_density``) and its heading axis at a
+uniform angle, while one object seen twice lies there with the 2-D Gaussian density of the
+residuals and a half-normal heading angle. A pair is kept while the sum of the two log-likelihood
+ratios (``pair_log_ratio``, ``heading_log_ratio``) is positive, inside ``CBMParams.refine_gate``
+sigma: in a crowded or noisy scene the gate narrows (wrong pairs 2-3 m off are dropped unless
+their headings agree), in a sparse or clean one it stays at 3 sigma.
 """
 from __future__ import annotations
 
@@ -16,8 +18,6 @@ import math
 
 import numpy as np
 
-MIN_GATE = 2.0
-"""Sigmas. The narrowest gate: a true pair falls outside 2 sigma with probability exp(-2) = 13.5 %."""
 SMALLEST_AREA = 100.0
 """Square metres. The least area the boxes are spread over (a handful of boxes in a line has none)."""
 
@@ -49,8 +49,21 @@ def pair_log_ratio(d: np.ndarray, sigma: float, density: float) -> np.ndarray:
     return -math.log(2.0 * math.pi * sigma ** 2 * density) - np.asarray(d) ** 2 / (2.0 * sigma ** 2)
 
 
-def gate_width(sigma: float, density: float, widest: float) -> float:
-    """Sigmas. Where ``pair_log_ratio`` turns negative, ``sqrt(-2 log(2 pi sigma^2 density))``,
-    clipped to [``MIN_GATE``, ``widest``] (``widest`` below ``MIN_GATE`` wins)."""
-    log_ratio = -math.log(2.0 * math.pi * sigma ** 2 * density)
-    return min(max(math.sqrt(2.0 * max(log_ratio, 0.0)), MIN_GATE), widest)
+HEADING_FLOOR = math.radians(5.0)
+"""Radians. The least std-dev assumed of the angle between two detections' heading axes."""
+
+
+def heading_sigma(axis_difference: np.ndarray, floor: float = HEADING_FLOOR) -> float:
+    """Std-dev of the angle between the heading axes of the pairs' two detections (radians): their
+    root mean square, at least ``floor``."""
+    if len(axis_difference) == 0:
+        return floor
+    return max(math.sqrt(float(np.mean(np.asarray(axis_difference) ** 2))), floor)
+
+
+def heading_log_ratio(axis_difference: np.ndarray, sigma: float) -> np.ndarray:
+    """Log-likelihood ratio of the angles between heading axes (in [0, pi/2]): a half-normal of
+    std-dev ``sigma`` (one object seen twice) against the uniform angle of two unrelated boxes:
+    ``log(2 / (sqrt(2 pi) sigma)) - a^2 / (2 sigma^2) - log(2 / pi)``."""
+    a = np.asarray(axis_difference)
+    return math.log(2.0 / (math.sqrt(2.0 * math.pi) * sigma)) - a ** 2 / (2.0 * sigma ** 2) - math.log(2.0 / math.pi)

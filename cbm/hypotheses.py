@@ -6,13 +6,13 @@ So the ``HYPOTHESES`` anchors with the largest filtered sets (eq. 12; among the 
 candidate sets, the eq. 13 winner always first) are each
 
 1. fitted robustly (eq. 14, ``cbm.estimate.robust_fit``) and re-associated (``cbm.reassociate``);
-2. re-associated once more under the noise-aware gate (``cbm.gates``): the scale read from the
-   pairs' residuals, the gate where a pair stops being likelier than a coincidence, a one-to-one
-   assignment (``cbm.reassociate.gated_assignment``), then least squares on the pairs kept, until
-   the pairs stop changing;
-3. scored by the evidence it has: the summed log-likelihood ratio of its pairs
-   (``cbm.gates.pair_log_ratio``). A pose that pairs many boxes tightly scores high; a loose pose
-   pays for its wide noise on every pair, and boxes it leaves unpaired add nothing.
+2. re-associated once more under the noise-aware gate (``cbm.gates``): a one-to-one assignment
+   (``cbm.reassociate.gated_assignment``) inside 3 sigma, sigma read from the pairs' residuals,
+   keeping the pairs more likely one object seen twice than a coincidence (``evidence``: centres
+   and heading axes), then least squares on the pairs kept, until the pairs stop changing;
+3. scored by the evidence it has: the summed log-likelihood ratio of its pairs (``evidence``). A
+   pose that pairs many boxes tightly scores high; a loose pose pays for its wide noise on every
+   pair, and boxes it leaves unpaired add nothing.
 
 The best-scoring hypothesis is the answer; the best one whose pose differs from it (by more than
 ``SAME_POSE_M`` or ``SAME_POSE_DEG``) is the runner-up, and the difference of their scores is the
@@ -28,8 +28,8 @@ import numpy as np
 
 from . import se2
 from .estimate import Fit, least_squares_fit, residuals
-from .gates import clutter_density, gate_width, pair_log_ratio, scene_sigma
-from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
+from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
+from .reassociate import MAX_ROUNDS, axis_difference, gated_assignment, reassociate
 from .selection import anchor_sets
 
 HYPOTHESES = 6
@@ -100,7 +100,9 @@ def refine(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, refit:
     current = reassociate(ego, cav, pairs, fit, widest, refit).pairs
     T, sigma = least_squares(ego, cav, current, floor)
     for _ in range(MAX_ROUNDS):
-        found = gated_assignment(ego, se2.apply_boxes(T, cav), gate_width(sigma, density, widest) * sigma, sigma)
+        moved = se2.apply_boxes(T, cav)
+        found = gated_assignment(ego, moved, widest * sigma, sigma)
+        found = found[evidence(ego, moved, found, sigma, density, current) > 0]
         if len(found) < 2 or np.array_equal(found, current):
             break
         current = found
@@ -120,8 +122,19 @@ def hypothesis(ego: np.ndarray, cav: np.ndarray, anchor: int, pairs: np.ndarray,
                floor: float, widest: float, density: float) -> Hypothesis:
     """One anchor's set and its robust fit refined (``refine``) and scored (step 3)."""
     found, T, sigma = refine(ego, cav, pairs, fit, refit, floor, widest, density)
-    r = residuals(T, cav[found[:, 1], :2], ego[found[:, 0], :2])
-    return Hypothesis(anchor, pairs, found, T, sigma, float(pair_log_ratio(r, sigma, density).sum()))
+    score = evidence(ego, se2.apply_boxes(T, cav), found, sigma, density, found).sum()
+    return Hypothesis(anchor, pairs, found, T, sigma, float(score))
+
+
+def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float, density: float,
+             reference: np.ndarray) -> np.ndarray:
+    """Each pair's log-likelihood ratio, one object seen twice against a coincidence: its centres'
+    (``pair_log_ratio``) plus its heading axes' (``heading_log_ratio``, the heading noise read from
+    the ``reference`` pairs). ``moved``: the CAV boxes under the pose."""
+    d = np.linalg.norm(moved[pairs[:, 1], :2] - ego[pairs[:, 0], :2], axis=1)
+    heading = heading_sigma(axis_difference(moved[reference[:, 1], 6], ego[reference[:, 0], 6]))
+    return pair_log_ratio(d, sigma, density) + heading_log_ratio(
+        axis_difference(moved[pairs[:, 1], 6], ego[pairs[:, 0], 6]), heading)
 
 
 def same_pose(a: np.ndarray, b: np.ndarray) -> bool:

@@ -9,7 +9,7 @@ import loaders
 from cbm import CBMParams, match, se2
 from cbm import hypotheses as module
 from cbm.estimate import least_squares_fit
-from cbm.gates import MIN_GATE, clutter_density, gate_width, pair_log_ratio, scene_sigma
+from cbm.gates import HEADING_FLOOR, clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from cbm.hypotheses import EVIDENCE_MARGIN, MIN_SHARED, Hypothesis, Verdict
 from evaluation.conditions import CONDITIONS
 from evaluation.metrics import evaluate, is_success, rte
@@ -87,11 +87,14 @@ def test_the_scene_sigma_is_the_residuals_rms_with_the_fits_freedom_taken_out():
     assert scene_sigma(r, 1.0) == 1.0 and scene_sigma(r[:1], 0.2) == 0.2
 
 
-def test_the_gate_narrows_in_crowded_noisy_scenes_and_widens_in_sparse_clean_ones():
-    sparse, crowded = clutter_density(np.random.default_rng(0).uniform(0, 100, (20, 2))), 0.01
-    assert gate_width(0.3, sparse, 3.0) == 3.0
-    assert MIN_GATE <= gate_width(1.1, crowded, 3.0) < 2.6
-    assert gate_width(5.0, 1.0, 3.0) == MIN_GATE
-    g = gate_width(1.1, crowded, 3.0)
-    assert pair_log_ratio(np.array([0.99 * g * 1.1]), 1.1, crowded)[0] > 0 > pair_log_ratio(
-        np.array([1.01 * g * 1.1]), 1.1, crowded)[0]
+def test_the_evidence_of_a_pair_falls_with_distance_and_heading_disagreement_and_with_crowding():
+    sparse = clutter_density(np.random.default_rng(0).uniform(0, 100, (20, 2)))
+    assert sparse == pytest.approx(20 / np.prod(np.ptp(np.random.default_rng(0).uniform(0, 100, (20, 2)), axis=0)))
+    near, far = pair_log_ratio(np.array([0.3, 3.0]), 1.0, sparse)
+    assert near > 0 > pair_log_ratio(np.array([3.0]), 1.0, 0.05)[0] and near > far
+    assert pair_log_ratio(np.array([0.3]), 1.0, 0.05)[0] < near
+    sigma = heading_sigma(np.radians([5.0, 10.0, 20.0]))
+    assert sigma == pytest.approx(np.sqrt(np.mean(np.radians([5.0, 10.0, 20.0]) ** 2)))
+    agree, across = heading_log_ratio(np.radians([3.0, 80.0]), sigma)
+    assert agree > 0 > across
+    assert heading_sigma(np.zeros(3)) == HEADING_FLOOR
