@@ -60,7 +60,7 @@ class MatchResult:
     @property
     def evidence_margin(self) -> float:
         """How much better the answer explains the scene than the runner-up pose (natural-log
-        likelihood ratio: 3 is 20 times better); inf when no other pose was found, NaN when not verified."""
+        likelihood ratio: 8 is 3000 times better); inf when no other answer was found, NaN when not verified."""
         return self.evidence - self.runner_up_evidence
 
     @property
