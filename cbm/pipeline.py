@@ -148,20 +148,22 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
         residuals=residuals(correction, sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]]),
         timings=timings,
         context_pairs=context_pairs,
-        **verdict_fields(verdict, len(pairs), n_cav),
+        **verdict_fields(verdict, len(pairs), n_cav, init),
     )
 
 
-def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int) -> dict[str, Any]:
+def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int, init: np.ndarray) -> dict[str, Any]:
     """The result's evidence fields (step 7c): whether CBM abstains and why, the answer's and the
-    runner-up's evidence, how many hypotheses were verified and the answer's anchor. Without a
-    verdict (no re-association, or fewer than 2 pairs) only the count of pairs can make it abstain."""
+    runner-up's evidence, the runner-up's transform, how many hypotheses were verified and the
+    answer's anchor. Without a verdict (no re-association, or fewer than 2 pairs) only the count of
+    pairs can make it abstain."""
     if verdict is None:
         reason = f"fewer than {MIN_SHARED} objects could be paired" if n_pairs < MIN_SHARED else ""
         return dict(abstained=bool(reason), reason=reason)
     best, rival = verdict.best, verdict.runner_up
     return dict(abstained=bool(verdict.reason), reason=verdict.reason, evidence=best.score,
                 runner_up_evidence=-math.inf if rival is None else rival.score, hypotheses=verdict.tried,
+                runner_up_transform=None if rival is None else rival.correction @ init,
                 answer_anchor=(best.anchor // n_cav, best.anchor % n_cav))
 
 

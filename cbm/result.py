@@ -46,6 +46,8 @@ class MatchResult:
     without verified hypotheses."""
     runner_up_evidence: float = math.nan
     """The same for the best hypothesis with a different pose; -inf when every hypothesis agreed."""
+    runner_up_transform: np.ndarray | None = None
+    """(3, 3) the runner-up's CAV->ego transform (the best different answer), None without one."""
     hypotheses: int = 0
     """Hypotheses refined and verified (0 without the guided re-association)."""
     answer_anchor: tuple[int, int] | None = None

@@ -55,6 +55,7 @@ def test_the_result_reports_the_runner_up_and_the_margin():
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init)
     assert result.hypotheses >= 1 and result.evidence > 0
     assert result.evidence_margin == result.evidence - result.runner_up_evidence >= EVIDENCE_MARGIN
+    assert result.runner_up_transform is None or rte(result.runner_up_transform, result.transform) > 0.5
     paper = match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams(refine=False))
     assert paper.hypotheses == 0 and math.isnan(paper.evidence) and math.isnan(paper.evidence_margin)
 
