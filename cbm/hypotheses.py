@@ -160,13 +160,13 @@ def same_answer(a: Hypothesis, b: Hypothesis) -> bool:
     return 2 * shared > min(len(a.pairs), len(b.pairs))
 
 
-def verify(sets, winner: int, refit: Refit, floor: float, widest: float) -> Verdict | None:
-    """Refine and score the eq. 13 ``winner`` and the next best anchors' sets of ``sets``
-    (``cbm.pipeline.Sets``); None when no set holds 2 pairs. A set whose robust fit lands on the
-    pose of a set already tried (``same_pose``, before or after its refinement) would refine to
-    the same answer: it is skipped, so an easy scene costs about one refinement. Only the winner
-    runs the guided re-association (its robust refit every round is the costly part); the others
-    go straight to the noise-aware one."""
+def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, widest: float) -> Verdict | None:
+    """Refine and score the eq. 13 ``winner`` (its set's robust fit ``winner_fit``) and the next
+    best anchors' sets of ``sets`` (``cbm.pipeline.Sets``); None when no set holds 2 pairs. A set
+    whose robust fit lands on the pose of a set already tried (``same_pose``, before or after its
+    refinement) would refine to the same answer: it is skipped, so an easy scene costs about one
+    refinement. Only the winner runs the guided re-association (its robust refit every round is the
+    costly part); the others go straight to the noise-aware one."""
     density = clutter_density(sets.cav_xy)
     ego, cav = sets.ego_boxes, sets.cav_boxes
     found: list[Hypothesis] = []
@@ -175,7 +175,7 @@ def verify(sets, winner: int, refit: Refit, floor: float, widest: float) -> Verd
                                      sets.params.distance_limit, winner, HYPOTHESES, POOL):
         if len(pairs) < 2:
             continue
-        fit = refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])
+        fit = winner_fit if anchor == winner else refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])
         if any(same_pose(fit.transform, pose) for pose in poses):
             continue
         found.append(hypothesis(ego, cav, anchor, pairs, fit, refit, floor, widest, density, anchor == winner))

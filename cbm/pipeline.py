@@ -129,7 +129,7 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
     verdict = None
     if estimated and params.refine:
         t = time.perf_counter()
-        verdict = verify(sets, chosen.anchor, lambda src, dst: estimate(src, dst, params),
+        verdict = verify(sets, chosen.anchor, fit, lambda src, dst: estimate(src, dst, params),
                          params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate)
         best = verdict.best
         pairs, correction = best.pairs, best.correction
