@@ -49,10 +49,12 @@ def metrics_markdown(outcome: Outcome) -> str:
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHODS[outcome.settings.method].label
-    ego, cav = agent_name("ego", outcome.ego_id, code=True), agent_name("CAV", outcome.cav_id, code=True)
+    ego = agent_name("ego", outcome.ego_id, code=True)
+    cav = agent_name("CAV 1" if outcome.others else "CAV", outcome.cav_id, code=True)
     agents = f"{ego} · {cav} ({outcome.cav_note})"
     lines = [
         f"**Frame {outcome.frame_index}** · {agents}",
+        *(["", "The table is CAV 1's (orange); every CAV has a row in the table after it."] if outcome.others else []),
         "",
         "| | |",
         "|---|---|",

@@ -20,19 +20,19 @@ def _metrics(abstained: bool) -> TrialMetrics:
 def test_an_abstention_lights_the_warning_with_its_reason():
     result = SimpleNamespace(abstained=True, reason="fewer than 3 objects could be paired",
                              evidence_margin=math.nan, hypotheses=1)
-    page = key_numbers_html(SimpleNamespace(metrics=_metrics(True), frame_index=4, result=result))
+    page = key_numbers_html(SimpleNamespace(metrics=_metrics(True), frame_index=4, others=(), result=result))
     assert WARNING_ID in page and "not enough evidence" in page and "fewer than 3 objects" in page
     assert evidence_rows(result) == ["| evidence | ⚠ not enough evidence: fewer than 3 objects could be paired |"]
 
 
 def test_a_verified_pose_shows_its_margin_and_other_methods_show_nothing():
     result = SimpleNamespace(abstained=False, reason="", evidence_margin=12.34, hypotheses=3)
-    page = key_numbers_html(SimpleNamespace(metrics=_metrics(False), frame_index=4, result=result))
+    page = key_numbers_html(SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=result))
     assert WARNING_ID not in page and "confidence: 12.3" in page
     assert evidence_rows(result) == ["| evidence | margin 12.3 over the runner-up pose (of 3 hypotheses) |"]
     icp = SimpleNamespace(pairs=None)
     assert evidence_rows(icp) == [] and "confidence" not in key_numbers_html(
-        SimpleNamespace(metrics=_metrics(False), frame_index=4, result=icp))
+        SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=icp))
 
 
 def test_the_shipped_scene_shows_cbms_confidence():
