@@ -25,7 +25,9 @@ are byte-identical between runs.
 Defaults are the app's: the shipped ``default`` preset's scenario (the range protocol, 0.2 m and
 2 degree detection noise, the CAV off by 3 m, 3 m and 5 degrees) and method parameters.
 ``--preset`` starts from another preset instead, a shipped one by name or a file the app saved or
-exported (``evaluation.presets``); ``--protocol``, ``--seed`` and ``--grid`` change it further.
+exported (``evaluation.presets``); ``--condition NAME`` takes the scenario of a named test condition
+(``evaluation.conditions``: mild, hard, range-50, heavy-noise, prior-error, clutter) in place of the
+preset's; ``--protocol``, ``--seed`` and ``--grid`` change it further.
 
 Trials come from the trial builder the app uses (``evaluation.trials``): the dataset's ego and the
 sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a
@@ -59,6 +61,7 @@ from evaluation.sweep import grid_defaults
 from . import calibration_check
 from .bounds import bounded_workers, cost_warnings, grid_too_large
 from .compare import CompareError, compare
+from .conditions import CONDITIONS
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
 from .stop import Stopped, StopSignals, Watchdog, descendants
@@ -86,6 +89,9 @@ def build_parser() -> Parser:
     parser.add_argument("--preset", default=None, metavar="NAME_OR_FILE",
                         help="start from a preset: a shipped one by name (" + ", ".join(shipped_names()) + ") or a "
                              "TOML file the app saved or exported (default: default, the app's defaults)")
+    parser.add_argument("--condition", choices=tuple(CONDITIONS), default=None,
+                        help="a named test condition's scenario in place of the preset's (evaluation.conditions: "
+                             + ", ".join(CONDITIONS) + ")")
     parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default=None,
                         help="scenario protocol (default: the preset's; range for the default preset)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS),
@@ -252,7 +258,8 @@ def prepare(args: argparse.Namespace) -> Plan:
         return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
                     detections=args.detections, fusion=args.fusion, agents=args.agents,
-                    scenario=preset.scenario, params=preset.params)
+                    scenario=preset.scenario if args.condition is None else CONDITIONS[args.condition],
+                    params=preset.params)
     except ValueError as error:
         raise CliError(str(error)) from None
 

@@ -71,6 +71,7 @@ def metrics_markdown(outcome: Outcome) -> str:
     if result.anchor is not None:
         margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
         lines.append(f"| consensus margin | {margin} |")
+    lines.extend(evidence_rows(result))
     lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:
@@ -81,3 +82,17 @@ def metrics_markdown(outcome: Outcome) -> str:
         lines.append(findings_heading(outcome))
         lines.extend(f"- {f.message}" for f in outcome.findings)
     return "\n".join(lines)
+
+
+def evidence_rows(result: object) -> list[str]:
+    """CBM's verdict on its own pose (step 7c, ``cbm.hypotheses``): a warning light with the reason
+    when it has not enough evidence, else how much better its pose explains the scene than the
+    runner-up pose; nothing for methods that do not verify."""
+    if getattr(result, "abstained", False):
+        return [f"| evidence | ⚠ not enough evidence: {getattr(result, 'reason', '')} |"]
+    margin = getattr(result, "evidence_margin", float("nan"))
+    if margin != margin:
+        return []
+    if margin == float("inf"):
+        return [f"| evidence | {result.hypotheses} hypotheses, every one lands on this pose |"]
+    return [f"| evidence | margin {margin:.1f} over the runner-up pose (of {result.hypotheses} hypotheses) |"]
