@@ -56,7 +56,7 @@ from evaluation.presets import PresetFileError, PresetParams, default_preset, fi
 from evaluation.sweep import grid_defaults
 
 from . import calibration_check
-from .compare import CompareError, compare
+from .compare import CompareError, compare, mismatches
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
 from .stop import Stopped, StopSignals
@@ -244,6 +244,8 @@ def main_compare(argv: Sequence[str], prog: str) -> int:
         print(compare(args.run_a, args.run_b, args.out), end="")
     except CompareError as error:
         parser.error(str(error))
+    for line in mismatches(args.run_a, args.run_b):
+        print(f"{parser.prog}: warning: {line}", file=sys.stderr)
     return 0
 
 
