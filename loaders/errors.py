@@ -46,8 +46,8 @@ def existing_path(path: str | Path, what: str = "dataset path") -> Path:
 
 
 def special_kind(mode: int) -> str:
-    """What a file that is neither regular nor a folder is, from its ``st_mode``."""
-    kinds = ((stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+    """What a file that is not a regular file is (a folder, a device, ...), from its ``st_mode``."""
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
              (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"))
     return next((name for test, name in kinds if test(mode)), "a special file")
 

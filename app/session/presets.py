@@ -23,6 +23,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
+from evaluation.presets import NotRegularFile, read_regular
 from presets import SHIPPED_DIR
 
 from .settings import Settings, from_preset, to_preset
@@ -76,8 +77,12 @@ def nesting_depth(text: str) -> int:
 
 
 def _text(path: Path) -> str:
-    with path.open("rb") as handle:
-        data = handle.read(MAX_BYTES + 1)
+    """The text of the preset file ``path``: a regular file only (never blocking on a FIFO), of at most
+    ``MAX_BYTES``, UTF-8, nested at most ``MAX_DEPTH`` deep; ``PresetError`` naming the file otherwise."""
+    try:
+        data = read_regular(path, MAX_BYTES)
+    except NotRegularFile as error:
+        raise PresetError(f"{path.name}: {error}; not read") from None
     if len(data) > MAX_BYTES:
         raise PresetError(f"{path.name}: larger than {MAX_BYTES // 1024} KB; not read")
     try:
@@ -159,10 +164,19 @@ def discover(shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> tupl
 
 
 def _listing(folder: Path, problems: list[str]) -> list[Path]:
+    """The ``*.toml`` files of the presets folder ``folder`` (none when it does not exist); a folder
+    that cannot be listed, or is not a folder, is reported in ``problems`` rather than taken as empty."""
     try:
-        return sorted(folder.glob("*.toml")) if folder.is_dir() else []
+        if not folder.exists():
+            return []
+        if not folder.is_dir():
+            problems.append(f"{folder}: the presets folder is not a folder; its presets are not offered")
+            return []
+        with os.scandir(folder) as entries:
+            return sorted(Path(entry.path) for entry in entries if entry.name.endswith(".toml"))
     except OSError as error:
-        problems.append(f"{folder}: {error}")
+        problems.append(f"{folder}: the presets folder cannot be listed ({error.strerror or error}); "
+                        "its presets are not offered")
         return []
 
 

@@ -35,7 +35,7 @@ def test_every_kind_of_bad_file_is_skipped_with_its_reason(tmp_path: Path) -> No
     assert skipped == set(BAD_FILES) | {"folder.toml"}
     text = "\n".join(problems)
     assert "nested deeper than" in text and "larger than 256 KB" in text and "UnicodeDecodeError" in text
-    assert "IsADirectoryError" in text
+    assert "folder.toml: a folder, not a regular file; not read" in text
     markdown = skipped_markdown(problems)
     assert markdown.startswith("**Preset files skipped:**") and markdown.count("\n- ") == len(problems)
     assert skipped_markdown([]) == ""

@@ -1,0 +1,59 @@
+"""``serve.py`` inputs that used to hang it or print a traceback (issue 27, rows 11 and 12): a FIFO
+among the preset files, a presets folder it may not list, an address it cannot bind."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
+from tests.support.privileges import obeying_permissions
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+def serve(*args: str, presets: Path, preexec=None) -> subprocess.Popen:
+    """``serve.py`` started with its user presets in ``presets``."""
+    return subprocess.Popen([sys.executable, "serve.py", *args], cwd=REPO, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, preexec_fn=preexec,
+                            env={**os.environ, "CBM_EXPLORER_PRESETS": str(presets)})
+
+
+def presets_with_a_fifo(tmp_path: Path) -> Path:
+    folder = tmp_path / "presets"
+    folder.mkdir()
+    os.mkfifo(folder / "blocking.toml")
+    (folder / "mine.toml").write_text('description = "mine"\n[cbm]\nsigma2 = 2\n')
+    return folder
+
+
+def test_a_fifo_among_the_presets_is_skipped_with_a_warning_not_opened(tmp_path: Path) -> None:
+    folder = presets_with_a_fifo(tmp_path)
+    listing = serve("--list-presets", presets=folder)
+    out, err = listing.communicate(timeout=300)
+    assert listing.returncode == 0 and "mine" in out and "Traceback" not in err
+    assert "warning: preset skipped: blocking.toml: a FIFO (named pipe), not a regular file; not read" in err
+    server = serve("--dataset", "synthetic:5", "--port", "0", "--preset", "mine", presets=folder)
+    try:
+        started = next((line for line in server.stdout if "open http" in line), None)
+        assert started is not None, server.stderr.read()
+        server.send_signal(signal.SIGTERM)
+        assert server.wait(timeout=60) == 0
+        assert "blocking.toml: a FIFO (named pipe)" in server.stderr.read()
+    finally:
+        server.kill()
+        server.wait(timeout=60)
+
+
+def test_a_presets_folder_that_cannot_be_listed_is_a_warning(tmp_path: Path) -> None:
+    preexec = obeying_permissions()
+    folder = tmp_path / "presets"
+    folder.mkdir()
+    (folder / "mine.toml").write_text("[cbm]\nsigma2 = 2\n")
+    folder.chmod(0)
+    listing = serve("--list-presets", presets=folder, preexec=preexec)
+    out, err = listing.communicate(timeout=300)
+    folder.chmod(0o755)
+    assert listing.returncode == 0 and "default" in out and "Traceback" not in err, err
+    assert f"warning: preset skipped: {folder}: the presets folder cannot be listed (Permission denied)" in err
