@@ -13,7 +13,7 @@ import threading
 
 import loaders
 
-from .server import AddressError, ExplorerServer, check_free, is_loopback
+from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
 from .session.offers import offers_of
@@ -107,7 +107,7 @@ def main(argv: list[str] | None = None) -> int:
         check_free(args.host, args.port)
         local = is_loopback(args.host)
     except AddressError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     kernels.prepare()
     try:
         sequence = loaders.open(args.dataset, detections=args.detections)
@@ -137,7 +137,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
     except OSError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     if not local:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")

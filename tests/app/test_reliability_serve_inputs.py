@@ -6,8 +6,12 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 from pathlib import Path
 
+import pytest
+
+from app import server as module
 from tests.support.privileges import obeying_permissions
 
 REPO = Path(__file__).resolve().parents[2]
@@ -57,3 +61,38 @@ def test_a_presets_folder_that_cannot_be_listed_is_a_warning(tmp_path: Path) -> 
     folder.chmod(0o755)
     assert listing.returncode == 0 and "default" in out and "Traceback" not in err, err
     assert f"warning: preset skipped: {folder}: the presets folder cannot be listed (Permission denied)" in err
+
+
+def test_an_address_that_cannot_be_bound_is_one_line_not_a_hang(tmp_path: Path) -> None:
+    server = serve("--host", "::ffff:127.0.0.1", "--port", "0", "--dataset", "synthetic:5", presets=tmp_path)
+    try:
+        out, err = server.communicate(timeout=300)
+    finally:
+        server.kill()
+    lines = err.strip().splitlines()
+    assert server.returncode == 2 and len(lines) == 1 and "Traceback" not in err, err
+    assert lines[0] == ("serve.py: error: cannot listen on [::ffff:127.0.0.1]:0: the address ::ffff:127.0.0.1 "
+                        "cannot be bound (Invalid argument); use --host 127.0.0.1 instead")
+
+
+def test_viser_not_listening_in_time_is_an_error_not_a_hang(monkeypatch: pytest.MonkeyPatch) -> None:
+    release = threading.Event()
+    monkeypatch.setattr(module.viser, "ViserServer", lambda **_: release.wait())
+    try:
+        with pytest.raises(module.AddressError, match=r"did not start listening on \[::1\]:8080 within 0 s"):
+            module.start_viser("::1", 8080, verbose=False, timeout=0.2)
+    finally:
+        release.set()
+
+
+@pytest.mark.parametrize("host", ["::1", "::"])
+def test_an_ipv6_host_is_printed_in_brackets(host: str, tmp_path: Path) -> None:
+    server = serve("--host", host, "--port", "0", "--dataset", "synthetic:5", presets=tmp_path)
+    try:
+        line = next((line for line in server.stdout if "open http" in line), "")
+        assert line.rsplit(" ", 1)[-1].strip().startswith(f"http://[{host}]:"), (line, server.stderr.read())
+        server.send_signal(signal.SIGTERM)
+        assert server.wait(timeout=60) == 0
+    finally:
+        server.kill()
+        server.wait(timeout=60)
