@@ -11,11 +11,13 @@ while their modification time and size stay the same.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import sys
 import tempfile
 import threading
+import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -187,13 +189,32 @@ def skipped_markdown(problems: list[str]) -> str:
     return "**Preset files skipped:**\n\n" + "\n".join(f"- `{p[:300]}`" for p in problems)
 
 
+MAX_STEM_BYTES = 200
+"""Longest file stem, in UTF-8 bytes (file systems allow 255 bytes per name; 80 characters of a
+non-Latin script can take 320)."""
+
+
 def slug(name: str) -> str:
-    """The file stem of a preset name."""
-    return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-")
+    """The file stem of a preset name: in any script, case folded, with each run of characters that
+    are not letters, marks or digits (spaces, punctuation, path separators) made one hyphen; one
+    longer than ``MAX_STEM_BYTES`` is cut at a character and ends with a digest of the whole name."""
+    folded = unicodedata.normalize("NFC", name).casefold()
+    kept = "".join(c if unicodedata.category(c)[0] in "LMN" else " " for c in folded)
+    stem = "-".join(kept.split())
+    if len(stem.encode("utf-8")) <= MAX_STEM_BYTES:
+        return stem
+    digest = hashlib.sha256(folded.encode("utf-8")).hexdigest()[:10]
+    cut = stem.encode("utf-8")[:MAX_STEM_BYTES - len(digest) - 1].decode("utf-8", errors="ignore")
+    return f"{cut.rstrip('-')}-{digest}"
 
 
 def _same_name(a: str, b: str) -> bool:
-    return " ".join(a.split()).casefold() == " ".join(b.split()).casefold()
+    return all_words(a) == all_words(b)
+
+
+def all_words(name: str) -> str:
+    """``name`` compared for sameness: Unicode-normalised, case folded, spaces collapsed."""
+    return " ".join(unicodedata.normalize("NFC", name).split()).casefold()
 
 
 def checked_stem(name: str, folder: Path, shipped_dir: Path = SHIPPED_DIR) -> str:
