@@ -18,6 +18,8 @@ import polars as pl
 
 from loaders.errors import READ_ERRORS
 
+from .presets import NotRegularFile, read_regular
+
 MAX_FILE_BYTES = 16 * 2**20
 """A run's metrics.json and success_curve.csv are a few kilobytes; a larger one is not a run's."""
 CURVE_KEYS = ("rte_max_m", "rre_max_deg")
@@ -29,12 +31,12 @@ class RunFileError(ValueError):
 
 
 def read_bounded(path: Path) -> bytes:
-    """The bytes of the regular file ``path``, refused when larger than :data:`MAX_FILE_BYTES`."""
-    if not path.is_file():
-        raise RunFileError(f"{path}: not a regular file")
+    """The bytes of the regular file ``path`` (opened without blocking: a FIFO is refused, never
+    waited on), refused when larger than :data:`MAX_FILE_BYTES`."""
     try:
-        with path.open("rb") as file:
-            data = file.read(MAX_FILE_BYTES + 1)
+        data = read_regular(path, MAX_FILE_BYTES)
+    except NotRegularFile as error:
+        raise RunFileError(f"{path}: {error}") from None
     except OSError as error:
         raise RunFileError(f"{path}: cannot read it ({error.strerror or error})") from None
     if len(data) > MAX_FILE_BYTES:

@@ -57,7 +57,7 @@ CASES = {
                           "success_curve.csv: column 'cbm' holds String values"),
     "curve without thresholds": (curve_case("cbm,icp\n0.5,0.5\n"),
                                  "success_curve.csv: the first columns are cbm, icp; expected rte_max_m"),
-    "FIFO as the curve": (fifo_curve, "success_curve.csv: not a regular file"),
+    "FIFO as the curve": (fifo_curve, "success_curve.csv: a FIFO (named pipe), not a regular file"),
     "unreadable curve": (lambda b: (b / "success_curve.csv").chmod(0), "success_curve.csv: cannot read it"),
     "--out under a file": (lambda b: (b.parent / "a-file").write_text("x"), "a-file is a file, so"),
     "read-only run B": (lambda b: b.chmod(0o555), "the default output folder (give --out FOLDER elsewhere)"),
