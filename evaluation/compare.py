@@ -39,7 +39,11 @@ def load_metrics(run: Path) -> dict[str, dict[str, Any]]:
     if not run.is_dir():
         raise CompareError(f"{run}: not a folder")
     path = run / "metrics.json"
-    if not path.exists():
+    try:
+        found = path.exists()
+    except OSError as error:
+        raise CompareError(f"{run}: cannot open the folder ({error.strerror or error})") from None
+    if not found:
         raise CompareError(f"{run} has no metrics.json: not an evaluation run, or one from before metrics.json")
     try:
         return run_files.load_metrics(path)

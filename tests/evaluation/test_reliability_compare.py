@@ -61,8 +61,9 @@ CASES = {
     "unreadable curve": (lambda b: (b / "success_curve.csv").chmod(0), "success_curve.csv: cannot read it"),
     "--out under a file": (lambda b: (b.parent / "a-file").write_text("x"), "a-file is a file, so"),
     "read-only run B": (lambda b: b.chmod(0o555), "the default output folder (give --out FOLDER elsewhere)"),
+    "unreadable run B": (lambda b: b.chmod(0), "/b: cannot open the folder (Permission denied)"),
 }
-NEED_PERMISSIONS = {"unreadable curve", "read-only run B"}
+NEED_PERMISSIONS = {"unreadable curve", "read-only run B", "unreadable run B"}
 
 
 def compare(args: list[str], permissions: bool) -> subprocess.CompletedProcess:
