@@ -16,6 +16,8 @@ from typing import Any
 
 import polars as pl
 
+from loaders.errors import unreadable
+
 from . import run_files
 from .aggregates import METRIC_KEYS
 from .outputs import write_atomic
@@ -135,7 +137,13 @@ def check_compare_out(out: Path, given: bool) -> None:
     """``CompareError`` unless ``out`` is a folder, or can be made one, in a writable place; ``given``:
     whether the user named it (``--out``) or it is the default inside run B."""
     what = "--out" if given else f"the default output folder (give --out FOLDER elsewhere): {out}"
-    out = out.absolute()
+    try:
+        _check_compare_out(out.absolute(), what)
+    except OSError as error:
+        raise CompareError(f"{what}: {unreadable(error, out)}") from None
+
+
+def _check_compare_out(out: Path, what: str) -> None:
     if out.exists() and not out.is_dir():
         raise CompareError(f"{what}: {out} exists and is not a folder")
     parent = next(p for p in (out, *out.parents) if p.exists())

@@ -23,7 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from cbm.methods import METHODS
-from loaders.errors import special_kind
+from loaders.errors import special_kind, unreadable
 from presets import SHIPPED_DIR
 
 from .scenario import ScenarioParams
@@ -164,7 +164,11 @@ def find_preset(name_or_file: str) -> PresetParams:
     """The preset file at ``name_or_file``, else the shipped preset of that name, over the default
     preset; ``PresetFileError`` when it is neither, or cannot be read."""
     path = Path(name_or_file)
-    if not path.exists():
+    try:
+        found = path.exists()
+    except OSError as error:
+        raise PresetFileError(str(unreadable(error, path))) from None
+    if not found:
         shipped = shipped_path(name_or_file)
         if shipped is None:
             raise PresetFileError(f"{name_or_file!r} is neither a preset file nor a shipped preset "
