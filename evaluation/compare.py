@@ -9,7 +9,6 @@ the differences) into ``--out`` (default: ``RUN_B/compare_vs_<name of RUN_A>/``)
 from __future__ import annotations
 
 import math
-import tempfile
 from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
@@ -20,7 +19,7 @@ from loaders.errors import unreadable
 
 from . import run_files
 from .aggregates import METRIC_KEYS
-from .outputs import write_atomic
+from .outputs import OutError, check_writable, write_atomic
 from .plots import plot_differences, plt
 
 PLOTTED = [key for key, _ in METRIC_KEYS[:5]]
@@ -146,13 +145,10 @@ def check_compare_out(out: Path, given: bool) -> None:
 def _check_compare_out(out: Path, what: str) -> None:
     if out.exists() and not out.is_dir():
         raise CompareError(f"{what}: {out} exists and is not a folder")
-    parent = next(p for p in (out, *out.parents) if p.exists())
-    if not parent.is_dir():
-        raise CompareError(f"{what}: {parent} is a file, so {out} cannot be created")
     try:
-        tempfile.TemporaryFile(dir=parent).close()
-    except OSError as error:
-        raise CompareError(f"{what}: cannot write in {parent} ({error.strerror or error})") from None
+        check_writable(out, out, what)
+    except OutError as error:
+        raise CompareError(str(error)) from None
 
 
 def compare(run_a: Path, run_b: Path, out: Path | None = None) -> str:

@@ -73,16 +73,17 @@ def _check_out(out: Path) -> None:
     check_writable(out.parent, out)
 
 
-def check_writable(folder: Path, out: Path) -> None:
+def check_writable(folder: Path, out: Path, what: str = "--out") -> None:
     """:class:`OutError` unless the nearest existing one of ``folder`` and its parents is a folder this
-    process can create a file in (``out``: what will be created there, for the message)."""
+    process can create a file in (``out``: what will be created there; ``what``: the option, both
+    for the message)."""
     parent = next(p for p in (folder, *folder.parents) if p.exists())
     if not parent.is_dir():
-        raise OutError(f"--out: {parent} is a file, so {out} cannot be created")
+        raise OutError(f"{what}: {parent} is a file, so {out} cannot be created")
     try:
         tempfile.TemporaryFile(dir=parent).close()
     except OSError as error:
-        raise OutError(f"--out: cannot write in {parent} ({error.strerror or error})") from None
+        raise OutError(f"{what}: cannot write in {parent} ({error.strerror or error})") from None
 
 
 @dataclass(frozen=True)
