@@ -3,6 +3,7 @@ among the preset files, a presets folder it may not list, an address it cannot b
 from __future__ import annotations
 
 import os
+import queue
 import signal
 import subprocess
 import sys
@@ -24,6 +25,34 @@ def serve(*args: str, presets: Path, preexec=None) -> subprocess.Popen:
                             env={**os.environ, "CBM_EXPLORER_PRESETS": str(presets)})
 
 
+def finished(process: subprocess.Popen, limit: float = 300.0) -> tuple[str, str]:
+    """Stdout and stderr of ``process`` once it exits; killed, and the test failed, if it is still
+    running after ``limit`` seconds (the hang these tests guard against)."""
+    try:
+        return process.communicate(timeout=limit)
+    except subprocess.TimeoutExpired:
+        process.kill()
+        err = process.communicate()[1]
+        raise AssertionError(f"still running after {limit:.0f} s (killed): {err[-2000:]}") from None
+
+
+def url_line(process: subprocess.Popen, limit: float = 300.0) -> str:
+    """The line a server prints once it listens ("" when it exits first or ``limit`` seconds pass)."""
+    found: queue.Queue[str] = queue.Queue()
+    threading.Thread(target=lambda: found.put(next((line for line in process.stdout if "open http" in line), "")),
+                     daemon=True).start()
+    try:
+        return found.get(timeout=limit)
+    except queue.Empty:
+        return ""
+
+
+def ended(process: subprocess.Popen) -> str:
+    """Stderr of ``process`` after killing it if it still runs."""
+    process.kill()
+    return process.communicate()[1]
+
+
 def presets_with_a_fifo(tmp_path: Path) -> Path:
     folder = tmp_path / "presets"
     folder.mkdir()
@@ -35,19 +64,17 @@ def presets_with_a_fifo(tmp_path: Path) -> Path:
 def test_a_fifo_among_the_presets_is_skipped_with_a_warning_not_opened(tmp_path: Path) -> None:
     folder = presets_with_a_fifo(tmp_path)
     listing = serve("--list-presets", presets=folder)
-    out, err = listing.communicate(timeout=300)
+    out, err = finished(listing)
     assert listing.returncode == 0 and "mine" in out and "Traceback" not in err
     assert "warning: preset skipped: blocking.toml: a FIFO (named pipe), not a regular file; not read" in err
     server = serve("--dataset", "synthetic:5", "--port", "0", "--preset", "mine", presets=folder)
     try:
-        started = next((line for line in server.stdout if "open http" in line), None)
-        assert started is not None, server.stderr.read()
+        assert url_line(server), ended(server)
         server.send_signal(signal.SIGTERM)
-        assert server.wait(timeout=60) == 0
-        assert "blocking.toml: a FIFO (named pipe)" in server.stderr.read()
+        _, err = finished(server)
+        assert server.returncode == 0 and "blocking.toml: a FIFO (named pipe)" in err, err
     finally:
-        server.kill()
-        server.wait(timeout=60)
+        ended(server)
 
 
 def test_a_presets_folder_that_cannot_be_listed_is_a_warning(tmp_path: Path) -> None:
@@ -57,18 +84,17 @@ def test_a_presets_folder_that_cannot_be_listed_is_a_warning(tmp_path: Path) -> 
     (folder / "mine.toml").write_text("[cbm]\nsigma2 = 2\n")
     folder.chmod(0)
     listing = serve("--list-presets", presets=folder, preexec=preexec)
-    out, err = listing.communicate(timeout=300)
-    folder.chmod(0o755)
+    try:
+        out, err = finished(listing)
+    finally:
+        folder.chmod(0o755)
     assert listing.returncode == 0 and "default" in out and "Traceback" not in err, err
     assert f"warning: preset skipped: {folder}: the presets folder cannot be listed (Permission denied)" in err
 
 
 def test_an_address_that_cannot_be_bound_is_one_line_not_a_hang(tmp_path: Path) -> None:
     server = serve("--host", "::ffff:127.0.0.1", "--port", "0", "--dataset", "synthetic:5", presets=tmp_path)
-    try:
-        out, err = server.communicate(timeout=300)
-    finally:
-        server.kill()
+    _, err = finished(server)
     lines = err.strip().splitlines()
     assert server.returncode == 2 and len(lines) == 1 and "Traceback" not in err, err
     assert lines[0] == ("serve.py: error: cannot listen on [::ffff:127.0.0.1]:0: the address ::ffff:127.0.0.1 "
@@ -89,10 +115,10 @@ def test_viser_not_listening_in_time_is_an_error_not_a_hang(monkeypatch: pytest.
 def test_an_ipv6_host_is_printed_in_brackets(host: str, tmp_path: Path) -> None:
     server = serve("--host", host, "--port", "0", "--dataset", "synthetic:5", presets=tmp_path)
     try:
-        line = next((line for line in server.stdout if "open http" in line), "")
-        assert line.rsplit(" ", 1)[-1].strip().startswith(f"http://[{host}]:"), (line, server.stderr.read())
+        line = url_line(server)
+        assert line.rsplit(" ", 1)[-1].strip().startswith(f"http://[{host}]:"), (line, ended(server))
         server.send_signal(signal.SIGTERM)
-        assert server.wait(timeout=60) == 0
+        finished(server)
+        assert server.returncode == 0
     finally:
-        server.kill()
-        server.wait(timeout=60)
+        ended(server)
