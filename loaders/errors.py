@@ -39,7 +39,7 @@ def existing_path(path: str | Path, what: str = "dataset path") -> Path:
     except (FileNotFoundError, NotADirectoryError):
         raise LoaderError(f"{what} {str(resolved)!r} does not exist") from None
     except OSError as exc:
-        raise LoaderError(f"{what} {str(resolved)!r}: cannot read it ({exc.strerror or exc})") from None
+        raise LoaderError(f"{what} {str(resolved)!r}: {unreadable(exc, resolved)}") from None
     if not (stat.S_ISDIR(mode) or stat.S_ISREG(mode)):
         raise LoaderError(f"{what} {str(resolved)!r} is {special_kind(mode)}, not a file or folder")
     return resolved

@@ -33,6 +33,12 @@ def closed_folder(tmp: Path) -> str:
     return str(tmp / "sind")
 
 
+def inside_a_closed_folder(tmp: Path) -> str:
+    shutil.copytree(FIXTURES / "sind" / "Xian_412_m1", tmp / "closed" / "sind")
+    (tmp / "closed").chmod(0)
+    return str(tmp / "closed" / "sind")
+
+
 def closed_subfolder(tmp: Path) -> str:
     shutil.copytree(FIXTURES / "opv2v" / "scenario", tmp / "scenario")
     (tmp / "scenario" / "641").chmod(0)
@@ -49,20 +55,23 @@ CASES = {
     "/dev/null": (lambda tmp: "/dev/null", "dataset path '/dev/null' is a character device, not a file or folder"),
     "a FIFO": (fifo, "boxes.csv' is a FIFO (named pipe), not a file or folder"),
     "an unreadable folder": (closed_folder, "/sind: cannot open the folder (Permission denied)"),
+    "a dataset inside an unreadable folder": (
+        inside_a_closed_folder, "{tmp}/closed/sind': {tmp}/closed: cannot open the folder (Permission denied)"),
     "an unreadable subfolder": (closed_subfolder, "/scenario/641: cannot open the folder (Permission denied)"),
     "an unreadable file": (closed_file, "/sind/Ped_smoothed_tracks.csv: cannot read the file"),
     "a negative seed": (lambda tmp: "synthetic:5:seed=-1",
                         "synthetic:5:seed=-1: seed must be a non-negative integer, got -1"),
     "too many objects": (lambda tmp: "synthetic:2001", "synthetic:2001: count must be from 0 to 2000, got 2001"),
 }
-NEED_PERMISSIONS = {"an unreadable folder", "an unreadable subfolder", "an unreadable file"}
+NEED_PERMISSIONS = {"an unreadable folder", "a dataset inside an unreadable folder", "an unreadable subfolder",
+                    "an unreadable file"}
 
 
 @pytest.mark.parametrize("command", list(COMMANDS))
 @pytest.mark.parametrize("case", list(CASES))
 def test_a_dataset_that_cannot_be_read_is_one_line_naming_it(case: str, command: str, tmp_path: Path) -> None:
     make, message = CASES[case]
-    dataset = make(tmp_path)
+    dataset, message = make(tmp_path), message.format(tmp=tmp_path)
     last = str(tmp_path / "results") if command == "evaluate.py" else "default"
     preexec = obeying_permissions() if case in NEED_PERMISSIONS else None
     done = subprocess.run([sys.executable, *COMMANDS[command], last, "--dataset", dataset], cwd=REPO,
