@@ -14,7 +14,7 @@ import threading
 import loaders
 from evaluation.stop import Watchdog, force_exit
 
-from .server import AddressError, ExplorerServer, check_free, is_loopback
+from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
 from .session.offers import offers_of
@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
         check_free(args.host, args.port)
         local = is_loopback(args.host)
     except AddressError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     kernels.prepare()
     try:
         sequence = loaders.open(args.dataset, detections=args.detections)
@@ -151,7 +151,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
     except OSError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     if starting:
         starting.disarm()
     if not local:

@@ -60,7 +60,7 @@ from evaluation.sweep import grid_defaults
 
 from . import calibration_check
 from .bounds import bounded_workers, cost_warnings, grid_too_large
-from .compare import CompareError, compare
+from .compare import CompareError, compare, mismatches
 from .conditions import CONDITIONS
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
@@ -272,6 +272,8 @@ def main_compare(argv: Sequence[str], prog: str) -> int:
         print(compare(args.run_a, args.run_b, args.out), end="")
     except CompareError as error:
         parser.error(str(error))
+    for line in mismatches(args.run_a, args.run_b):
+        print(f"{parser.prog}: warning: {line}", file=sys.stderr)
     return 0
 
 
