@@ -8,7 +8,7 @@ evaluate.py --help`` lists the options.
 """
 import sys
 
-from evaluation.cli import main
+from app.commands import evaluate as main
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -4,7 +4,7 @@
 """
 import sys
 
-from app.cli import main
+from app.commands import serve as main
 
 if __name__ == "__main__":
     sys.exit(main())

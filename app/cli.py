@@ -12,8 +12,9 @@ import sys
 import threading
 
 import loaders
+from evaluation.stop import Watchdog, force_exit
 
-from .server import AddressError, ExplorerServer, check_free, is_loopback
+from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
 from .session.offers import offers_of
@@ -77,6 +78,19 @@ def usable_frame(explorer: Explorer, settings: Settings) -> int | None:
     return None
 
 
+def _stop_while_starting() -> Watchdog:
+    """Until the server runs, SIGTERM and SIGINT end the command at once (the kernels' compiling
+    subprocesses killed, one line, status 128 + the signal); the watchdog acts for them when the main
+    thread is stuck in a long call (reading a large dataset, or a server that never gets ready).
+    Once the server is built the watchdog stands down and a signal stops the server cleanly."""
+    def line(name: str) -> str:
+        return f"{os.path.basename(sys.argv[0])}: stopped by {name} while starting"
+
+    for number in (signal.SIGTERM, signal.SIGINT):
+        signal.signal(number, lambda signum, _: force_exit(line(signal.Signals(signum).name), signum))
+    return Watchdog(line)
+
+
 def _stop_on_signals() -> threading.Event:
     """An event set by SIGTERM or SIGINT (Ctrl-C), so that the server stops cleanly on either."""
     stopping = threading.Event()
@@ -98,16 +112,17 @@ def list_presets() -> int:
 
 
 def main(argv: list[str] | None = None) -> int:
-    """Serve the dataset until SIGTERM or Ctrl-C (then 0); 2 on bad input."""
+    """Serve the dataset until SIGTERM or Ctrl-C (then 0); 2 on bad input; 128 + the signal when
+    one comes before the server runs (the command only: ``argv`` None)."""
     args = parse(sys.argv[1:] if argv is None else argv)
     if args.list_presets:
         return list_presets()
-    stopping = _stop_on_signals()
+    starting = _stop_while_starting() if argv is None else None
     try:
         check_free(args.host, args.port)
         local = is_loopback(args.host)
     except AddressError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     kernels.prepare()
     try:
         sequence = loaders.open(args.dataset, detections=args.detections)
@@ -132,12 +147,13 @@ def main(argv: list[str] | None = None) -> int:
         _warn(f"no frame has a usable pair of agents (ego and CAV) under the {settings.scenario.protocol} protocol "
               f"among {len(sampled_frames(len(sequence)))} frames tried: CBM cannot run; the page says what is "
               f"missing")
-    if stopping.is_set():
-        return 0
+    stopping = _stop_on_signals()
     try:
         server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
     except OSError as error:
-        return _fail(f"cannot listen on {args.host}:{args.port}: {error}")
+        return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
+    if starting:
+        starting.disarm()
     if not local:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import concurrent.futures
+import errno
 import ipaddress
 import socket
 import threading
@@ -16,6 +17,9 @@ from .tab import ClientSession
 
 RESOLVE_SECONDS = 5.0
 """How long a host name may take to resolve before the server gives up on it."""
+START_SECONDS = 15.0
+"""How long viser may take to start listening before the server gives up (it waits forever on an
+address it cannot bind, trying the next 1000 ports)."""
 CLOSE_SECONDS = 1.0
 """How long ``stop`` waits for the tabs' workers to finish what they compute."""
 TITLE = "CBM Explorer"
@@ -43,16 +47,54 @@ def resolve(host: str, port: int, timeout: float = RESOLVE_SECONDS) -> list[tupl
 
 
 def check_free(host: str, port: int) -> None:
-    """``AddressError`` unless every address of ``host`` can be bound at ``port`` (0: any port)."""
+    """``AddressError`` unless every address of ``host`` can be bound at ``port`` (0: any port), the way
+    the server binds it (an IPv6 socket only for IPv6, as asyncio does: so an IPv4-mapped address
+    such as ``::ffff:127.0.0.1`` cannot be bound)."""
     for family, address in resolve(host, port):
         with socket.socket(family, socket.SOCK_STREAM) as probe:
             probe.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            if family == socket.AF_INET6:
+                probe.setsockopt(socket.IPPROTO_IPV6, socket.IPV6_V6ONLY, 1)
             try:
                 probe.bind(address)
             except OSError as error:
-                taken = "is taken" if error.errno == 98 else f"cannot be used ({error.strerror})"
-                raise AddressError(f"port {port} on {address[0]} {taken}; choose another --port, "
-                                   f"or --port 0 for any free one") from None
+                raise AddressError(bind_problem(address[0], port, error)) from None
+
+
+def bind_problem(address: str, port: int, error: OSError) -> str:
+    """Why ``address:port`` cannot be bound, in words, with what to try instead."""
+    if error.errno == errno.EADDRINUSE:
+        return f"port {port} on {address} is taken; choose another --port, or --port 0 for any free one"
+    mapped = ipaddress.ip_address(address.split("%")[0])
+    hint = f"; use --host {mapped.ipv4_mapped} instead" if getattr(mapped, "ipv4_mapped", None) else ""
+    return f"the address {address} cannot be bound ({error.strerror or error}){hint}"
+
+
+def host_port(host: str, port: int) -> str:
+    """``host:port``, an IPv6 host in brackets (``[::1]:8080``) so that the port stays apart."""
+    return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
+
+
+def start_viser(host: str, port: int, verbose: bool, timeout: float = START_SECONDS) -> viser.ViserServer:
+    """A viser server listening on ``host:port``, started in a helper thread: ``AddressError`` when it
+    is not listening within ``timeout`` seconds (viser itself would wait forever)."""
+    started: list[viser.ViserServer] = []
+    failed: list[BaseException] = []
+
+    def start() -> None:
+        try:
+            started.append(viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose))
+        except BaseException as error:  # handed to the waiting thread below
+            failed.append(error)
+
+    thread = threading.Thread(target=start, name="viser-start", daemon=True)
+    thread.start()
+    thread.join(timeout)
+    if failed:
+        raise failed[0]
+    if not started:
+        raise AddressError(f"the server did not start listening on {host_port(host, port)} within {timeout:.0f} s")
+    return started[0]
 
 
 def is_loopback(host: str) -> bool:
@@ -77,7 +119,7 @@ class ExplorerServer:
         self._gone: set[int] = set()
         """Tabs that closed while their session was still being built."""
         self._lock = threading.Lock()
-        self.server = viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose)
+        self.server = start_viser(host, port, verbose)
         if port and self.server.get_port() != port:
             self.server.stop()
             raise AddressError(f"port {port} was taken while the server started; choose another --port")
@@ -92,7 +134,8 @@ class ExplorerServer:
 
     @property
     def url(self) -> str:
-        return f"http://{self.server.get_host()}:{self.server.get_port()}"
+        """The address to open, an IPv6 host in brackets (``http://[::1]:8080``)."""
+        return f"http://{host_port(self.server.get_host(), self.server.get_port())}"
 
     def _connected(self, client: viser.ClientHandle) -> None:
         client.gui.add_html(TITLE_HTML, order=-1.0)

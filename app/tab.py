@@ -149,10 +149,11 @@ class ClientSession:
         self.controls.presets.skipped.content = skipped_markdown(problems)
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
-    def reset_camera(self) -> None:
-        """Back to the top-down view of the current layout (presentation mode: over the two agents)."""
+    def reset_camera(self, oblique: bool = False) -> None:
+        """Back to the top-down view of the current layout (presentation mode: over the two agents);
+        ``oblique``: the 3D view, from behind and above the ego."""
         view = self._settings.view if self.last is None else self.last.settings.view
-        presentation.aim(self.view, view, self.last_drawing)
+        presentation.aim(self.view, view, self.last_drawing, oblique)
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""

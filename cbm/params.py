@@ -49,7 +49,9 @@ class CBMParams:
     """Metres. Smallest Welsch scale nu of the robust pose estimate: the least detection noise assumed."""
     refine: bool = True
     """Guided re-association after CBM (beyond the paper, ``cbm.reassociate``): pair all boxes
-    one-to-one under the estimate, refit, repeat until the pairs stop changing."""
+    one-to-one under the estimate, refit, repeat until the pairs stop changing; and the verified
+    hypotheses with the noise-aware gate (``cbm.hypotheses``), which also say when CBM has not
+    enough evidence. ``False`` is the paper's method."""
     refine_gate: float = 3.0
     """Gate of the re-association in std-devs of the pairs' noise (read from the residuals, at
     least welsch_floor / 2.1): a true pair falls outside 3 sigma with probability 1.1 %; a wider

@@ -2,18 +2,20 @@
 guided re-association beyond it (step 7b, ``cbm.reassociate``)."""
 from __future__ import annotations
 
+import math
 import time
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from .consensus import PairSets, voted_by_member
 from .context import Context
-from .estimate import Fit, least_squares_fit, residuals, robust_fit
+from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
+from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
 from .local_matching import CandidateSets, count_candidates
 from .params import CBMParams
-from .reassociate import reassociate
 from .result import MatchResult
 from .reuse import Reuse, prepare
 from .selection import select
@@ -120,31 +122,48 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
     context_pairs = pairs = chosen.pairs.astype(np.intp)
     estimated = len(pairs) >= 2
     fit = estimate(sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]], params) if estimated else None
+    correction = fit.transform if estimated else np.eye(3)
     timings["estimate"] = time.perf_counter() - t
 
+    verdict = None
     if estimated and params.refine:
         t = time.perf_counter()
-        refined = reassociate(sets.ego_boxes, sets.cav_boxes, pairs, fit, params.refine_gate,
-                              lambda src, dst: estimate(src, dst, params))
-        pairs, fit = refined.pairs, refined.fit
+        verdict = verify(sets, chosen.anchor, fit, lambda src, dst: estimate(src, dst, params),
+                         params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate)
+        best = verdict.best
+        pairs, correction = best.pairs, best.correction
         timings["reassociate"] = time.perf_counter() - t
-    correction = fit.transform if estimated else np.eye(3)
     timings["total"] = time.perf_counter() - started
 
-    anchor = None if chosen.anchor is None else (chosen.anchor // n_cav, chosen.anchor % n_cav)
     return MatchResult(
         pairs=pairs,
         transform=correction @ init,
         init=init,
         estimated=estimated,
-        anchor=anchor,
+        anchor=None if chosen.anchor is None else (chosen.anchor // n_cav, chosen.anchor % n_cav),
         candidate_count=chosen.candidate_count,
         consensus_count=len(context_pairs),
         runner_up_count=chosen.runner_up_count,
         residuals=residuals(correction, sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]]),
         timings=timings,
         context_pairs=context_pairs,
+        **verdict_fields(verdict, len(pairs), n_cav, init),
     )
+
+
+def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int, init: np.ndarray) -> dict[str, Any]:
+    """The result's evidence fields (step 7c): whether CBM abstains and why, the answer's and the
+    runner-up's evidence, the runner-up's transform, how many hypotheses were verified and the
+    answer's anchor. Without a verdict (no re-association, or fewer than 2 pairs) only the count of
+    pairs can make it abstain."""
+    if verdict is None:
+        reason = f"fewer than {MIN_SHARED} objects could be paired" if n_pairs < MIN_SHARED else ""
+        return dict(abstained=bool(reason), reason=reason)
+    best, rival = verdict.best, verdict.runner_up
+    return dict(abstained=bool(verdict.reason), reason=verdict.reason, evidence=best.score,
+                runner_up_evidence=-math.inf if rival is None else rival.score, hypotheses=verdict.tried,
+                runner_up_transform=None if rival is None else rival.correction @ init,
+                answer_anchor=(best.anchor // n_cav, best.anchor % n_cav))
 
 
 def estimate(src: np.ndarray, dst: np.ndarray, params: CBMParams) -> Fit:

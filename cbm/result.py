@@ -1,6 +1,7 @@
 """What ``cbm.match`` returns."""
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,11 +36,34 @@ class MatchResult:
     context_pairs: np.ndarray | None = None
     """(K0, 2) CBM's own pairs, the winning set of eq. 13, before the guided re-association that
     may add to them (``cbm.reassociate``); None for methods that are not CBM."""
+    abstained: bool = False
+    """"Not enough evidence": fewer than 3 pairs, or a different pose explains the scene almost as
+    well (``cbm.hypotheses.Verdict.reason``). ``transform`` is still the best estimate found."""
+    reason: str = ""
+    """Why CBM abstained ("" when it did not)."""
+    evidence: float = math.nan
+    """Log-likelihood ratio with which the answer explains the scene (``cbm.hypotheses``); NaN
+    without verified hypotheses."""
+    runner_up_evidence: float = math.nan
+    """The same for the best hypothesis with a different pose; -inf when every hypothesis agreed."""
+    runner_up_transform: np.ndarray | None = None
+    """(3, 3) the runner-up's CAV->ego transform (the best different answer), None without one."""
+    hypotheses: int = 0
+    """Hypotheses refined and verified (0 without the guided re-association)."""
+    answer_anchor: tuple[int, int] | None = None
+    """The anchor whose refined answer explained the scene best (``cbm.hypotheses``): ``anchor``
+    unless another anchor's hypothesis won the verification."""
 
     @property
     def margin(self) -> int:
         """Consensus margin: how many more pairs the winner holds than its strongest rival."""
         return self.consensus_count - self.runner_up_count
+
+    @property
+    def evidence_margin(self) -> float:
+        """How much better the answer explains the scene than the runner-up pose (natural-log
+        likelihood ratio: 8 is 3000 times better); inf when no other answer was found, NaN when not verified."""
+        return self.evidence - self.runner_up_evidence
 
     @property
     def correction(self) -> np.ndarray:

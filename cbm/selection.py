@@ -230,3 +230,30 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)
+
+
+def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
+    """(K, 2) pairs of one anchor's filtered set L^(2) (eq. 12), sorted by ego index."""
+    _, _, _, members, _ = _largest_sets(np.array([anchor], np.int64), L.count, L.width, *common)
+    pairs = _as_pairs(members, common[6])
+    return pairs[np.argsort(pairs[:, 0], kind="stable")]
+
+
+def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
+                distance_limit: float, winner: int, k: int, pool: int) -> list[tuple[int, np.ndarray]]:
+    """(anchor, filtered set) of the eq. 13 ``winner`` and of the next ``k - 1`` anchors with the
+    largest filtered sets among the ``pool`` largest candidate sets, each set once, largest first
+    (ties by candidate-set order: ``by_count_descending``)."""
+    common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
+    order = by_count_descending(L.count)[:pool]
+    sizes = filtered_sizes(order, L, voted_by, rule, ego_xy, cav_xy, distance_limit)
+    found = [(winner, set_of(winner, L, common))]
+    seen = {found[0][1].tobytes()}
+    for index in np.argsort(-sizes, kind="stable"):
+        if len(found) == k or sizes[index] == 0:
+            break
+        pairs = set_of(int(order[index]), L, common)
+        if pairs.tobytes() not in seen:
+            seen.add(pairs.tobytes())
+            found.append((int(order[index]), pairs))
+    return found

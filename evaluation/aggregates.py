@@ -31,6 +31,10 @@ METRIC_KEYS = (
     ("mean_rte", "rte_mean"),
     ("mean_rre", "rre_mean"),
     ("ad", "ad"),
+    ("success_rate_2", "success_rate_2"),
+    ("success_rate_3", "success_rate_3"),
+    ("abstain_rate", "abstain_rate"),
+    ("returned_success", "returned_success"),
 )
 """``metrics.json`` key and the ``evaluation.metrics.aggregate`` key it holds."""
 RUNTIME_KEY = ("median_runtime_s", "runtime_median_s")

@@ -34,6 +34,7 @@ import numpy as np
 from cbm import CBMParams, match, se2
 from cbm.estimate import robust_fit
 from loaders import Frame, Sequence
+from loaders.errors import unreadable
 
 from .agents import agent_ids, choose_ego
 from .metrics import rre, rte
@@ -198,12 +199,20 @@ def parse_thresholds(text: str) -> Thresholds:
 
 
 def check_out_folder(out: Path) -> None:
-    """``ValueError`` unless ``out`` is new, empty or holds only a previous check's files."""
-    if out.exists() and not out.is_dir():
-        raise ValueError(f"--out: {out} exists and is not a folder")
-    foreign = sorted(p.name for p in out.iterdir() if p.name not in CHECK_FILES) if out.is_dir() else []
-    if foreign:
-        raise ValueError(f"--out: {out} holds other files ({', '.join(foreign[:3])}); name a new or empty folder")
+    """``ValueError`` unless ``out`` is new, empty or holds only a previous check's files, in a place
+    this process can write; a folder on the way that cannot be opened is named."""
+    from .outputs import check_writable
+
+    out = out.resolve()
+    try:
+        if out.exists() and not out.is_dir():
+            raise ValueError(f"--out: {out} exists and is not a folder")
+        foreign = sorted(p.name for p in out.iterdir() if p.name not in CHECK_FILES) if out.is_dir() else []
+        if foreign:
+            raise ValueError(f"--out: {out} holds other files ({', '.join(foreign[:3])}); name a new or empty folder")
+        check_writable(out, out)
+    except OSError as error:
+        raise ValueError(f"--out: {unreadable(error, out)}") from None
 
 
 def write_check(rows: list[FrameCheck], thresholds: Thresholds, out: Path) -> str:

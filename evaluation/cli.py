@@ -25,7 +25,9 @@ are byte-identical between runs.
 Defaults are the app's: the shipped ``default`` preset's scenario (the range protocol, 0.2 m and
 2 degree detection noise, the CAV off by 3 m, 3 m and 5 degrees) and method parameters.
 ``--preset`` starts from another preset instead, a shipped one by name or a file the app saved or
-exported (``evaluation.presets``); ``--protocol``, ``--seed`` and ``--grid`` change it further.
+exported (``evaluation.presets``); ``--condition NAME`` takes the scenario of a named test condition
+(``evaluation.conditions``: mild, hard, range-50, heavy-noise, prior-error, clutter) in place of the
+preset's; ``--protocol``, ``--seed`` and ``--grid`` change it further.
 
 Trials come from the trial builder the app uses (``evaluation.trials``): the dataset's ego and the
 sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a
@@ -36,6 +38,7 @@ For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg 
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import multiprocessing.util
 import os
@@ -50,16 +53,18 @@ from tqdm import tqdm
 import loaders
 from cbm.methods import METHODS
 from evaluation.agents import TARGET_DISTANCE
-from evaluation.executors import ExecutorError, TaskError
+from evaluation.executors import ExecutorError, TaskError, check_reachable
 from evaluation.fusion import FUSIONS
 from evaluation.presets import PresetFileError, PresetParams, default_preset, find_preset, shipped_names
 from evaluation.sweep import grid_defaults
 
 from . import calibration_check
-from .compare import CompareError, compare
+from .bounds import bounded_workers, cost_warnings, grid_too_large
+from .compare import CompareError, compare, mismatches
+from .conditions import CONDITIONS
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
-from .stop import Stopped, StopSignals
+from .stop import Stopped, StopSignals, Watchdog, descendants
 
 
 class CliError(ValueError):
@@ -84,6 +89,9 @@ def build_parser() -> Parser:
     parser.add_argument("--preset", default=None, metavar="NAME_OR_FILE",
                         help="start from a preset: a shipped one by name (" + ", ".join(shipped_names()) + ") or a "
                              "TOML file the app saved or exported (default: default, the app's defaults)")
+    parser.add_argument("--condition", choices=tuple(CONDITIONS), default=None,
+                        help="a named test condition's scenario in place of the preset's (evaluation.conditions: "
+                             + ", ".join(CONDITIONS) + ")")
     parser.add_argument("--protocol", choices=("sind", "range", "opv2v"), default=None,
                         help="scenario protocol (default: the preset's; range for the default preset)")
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS),
@@ -131,25 +139,36 @@ def build_compare_parser(prog: str) -> Parser:
 
 
 def parse_frames(text: str, n_frames: int) -> list[int]:
-    """Sorted distinct frame indices from ``all`` or a comma list of ``N`` and ``A:B[:STEP]``."""
+    """Sorted distinct frame indices from ``all`` or a comma list of ``N`` and ``A:B[:STEP]``. Each
+    range is checked against ``n_frames`` before it is expanded, so memory stays within the dataset's length."""
     if text.strip() == "all":
         return list(range(n_frames))
-    frames: set[int] = set()
-    for part in text.split(","):
-        try:
-            numbers = [int(p) for p in part.split(":")]
-        except ValueError:
-            raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with integers") from None
-        if len(numbers) > 3 or min(numbers) < 0 or (len(numbers) == 3 and numbers[2] < 1):
-            raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with non-negative integers and STEP >= 1")
-        frames.update(numbers if len(numbers) == 1 else range(*numbers))
-    outside = sorted(f for f in frames if f >= n_frames)
+    ranges = [_frame_range(part) for part in text.split(",")]
+    outside = [_first_at_or_after(r, n_frames) for r in ranges if r and r[-1] >= n_frames]
     if outside:
-        raise CliError(f"--frames: frame {outside[0]} is out of range: "
+        raise CliError(f"--frames: frame {min(outside)} is out of range: "
                        f"the dataset has {n_frames} frames (0 to {n_frames - 1})")
+    frames = sorted(set().union(*ranges))
     if not frames:
         raise CliError(f"--frames: {text!r} selects no frame")
-    return sorted(frames)
+    return frames
+
+
+def _frame_range(part: str) -> range:
+    """``N`` or ``A:B[:STEP]`` as a range (not expanded)."""
+    try:
+        numbers = [int(p) for p in part.split(":")]
+    except ValueError:
+        raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with integers") from None
+    if len(numbers) > 3 or min(numbers) < 0 or (len(numbers) == 3 and numbers[2] < 1):
+        raise CliError(f"--frames: {part!r} is not N or A:B[:STEP] with non-negative integers and STEP >= 1")
+    return range(numbers[0], numbers[0] + 1) if len(numbers) == 1 else range(*numbers)
+
+
+def _first_at_or_after(frames: range, n: int) -> int:
+    """The smallest index of ``frames`` (increasing, its last one >= ``n``) that is at least ``n``."""
+    steps = max(0, -(-(n - frames.start) // frames.step))
+    return frames.start + steps * frames.step
 
 
 def parse_methods(text: str) -> tuple[str, ...]:
@@ -223,15 +242,24 @@ def prepare(args: argparse.Namespace) -> Plan:
         raise CliError(str(error)) from None
     if len(set(args.dataset)) != len(args.dataset):
         raise CliError("--dataset: a dataset is named twice")
+    if args.ray not in (None, "local", "auto"):
+        try:
+            check_reachable(args.ray)
+        except ExecutorError as error:
+            raise CliError(str(error)) from None
     if args.detections is not None and len(args.dataset) != 1:
         raise CliError("--detections: give exactly one --dataset (the detections belong to one dataset)")
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
+    too_large = grid_too_large(grid)
+    if too_large:
+        raise CliError(too_large)
     try:
         return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
                     detections=args.detections, fusion=args.fusion, agents=args.agents,
-                    scenario=preset.scenario, params=preset.params)
+                    scenario=preset.scenario if args.condition is None else CONDITIONS[args.condition],
+                    params=preset.params)
     except ValueError as error:
         raise CliError(str(error)) from None
 
@@ -244,6 +272,8 @@ def main_compare(argv: Sequence[str], prog: str) -> int:
         print(compare(args.run_a, args.run_b, args.out), end="")
     except CompareError as error:
         parser.error(str(error))
+    for line in mismatches(args.run_a, args.run_b):
+        print(f"{parser.prog}: warning: {line}", file=sys.stderr)
     return 0
 
 
@@ -259,13 +289,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     if args.check_calibration is not None:
         return check_calibration(parser, args)
     with StopSignals() as signals:
+        watchdog = Watchdog(lambda name: f"{parser.prog}: stopped by {name}; nothing written",
+                            held=lambda: signals.holding) if command else None
         try:
-            return evaluate(parser, args, signals)
+            code = evaluate(parser, args, signals)
         except Stopped as stop:
+            if watchdog:
+                watchdog.disarm()
             print(f"{parser.prog}: stopped by {stop.name}; nothing written", file=sys.stderr)
             code = 128 + stop.signum
-    if command:
-        exit_now(code)
+            if command:
+                exit_now(code)
+        if watchdog:
+            watchdog.disarm()
     return code
 
 
@@ -290,8 +326,12 @@ def exit_now(code: int) -> NoReturn:
     """End the process at once after a stop, everything already released (the pool's workers ended,
     the staging folder removed): the interpreter's teardown of numpy, polars and matplotlib alone
     takes over a second on a busy machine, and a stop must take less than two. The pool's semaphores
-    are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about."""
+    are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about;
+    any process still descended from this one (a Ray instance cut in its start-up) is killed, none left orphaned."""
     multiprocessing.util._run_finalizers(0)
+    for pid in descendants():
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)
@@ -304,6 +344,9 @@ def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> 
         planned = prepare(args)
     except CliError as error:
         parser.error(str(error))
+    args.workers, too_many = bounded_workers(args.workers, args.ray)
+    for warning in ([too_many] if too_many else []) + cost_warnings(planned, args.agents):
+        print(f"{parser.prog}: warning: {warning}", file=sys.stderr, flush=True)
     with tqdm(total=planned.trial_count, unit="trial", disable=None) as bar:
         try:
             table = run_plan(planned, workers=args.workers, progress=bar.update, ray=args.ray)

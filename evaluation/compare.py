@@ -8,7 +8,6 @@ the differences) into ``--out`` (default: ``RUN_B/compare_vs_<name of RUN_A>/``)
 """
 from __future__ import annotations
 
-import json
 import math
 from collections.abc import Mapping
 from pathlib import Path
@@ -16,8 +15,11 @@ from typing import Any
 
 import polars as pl
 
+from loaders.errors import unreadable
+
+from . import run_files
 from .aggregates import METRIC_KEYS
-from .outputs import write_atomic
+from .outputs import OutError, check_writable, write_atomic
 from .plots import plot_differences, plt
 
 PLOTTED = [key for key, _ in METRIC_KEYS[:5]]
@@ -38,21 +40,24 @@ def load_metrics(run: Path) -> dict[str, dict[str, Any]]:
     if not run.is_dir():
         raise CompareError(f"{run}: not a folder")
     path = run / "metrics.json"
-    if not path.is_file():
+    try:
+        found = path.exists()
+    except OSError as error:
+        raise CompareError(f"{run}: cannot open the folder ({error.strerror or error})") from None
+    if not found:
         raise CompareError(f"{run} has no metrics.json: not an evaluation run, or one from before metrics.json")
     try:
-        metrics = json.loads(path.read_text())
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
-        raise CompareError(f"{path}: not readable as JSON ({error})") from None
-    if not isinstance(metrics, dict) or not all(isinstance(v, dict) for v in metrics.values()):
-        raise CompareError(f"{path}: not a metrics file (expected an object of methods, each an object of metrics)")
-    return metrics
+        return run_files.load_metrics(path)
+    except run_files.RunFileError as error:
+        raise CompareError(str(error)) from None
 
 
 def load_curve(run: Path) -> pl.DataFrame | None:
-    """The run's ``success_curve.csv``, or None when it has none."""
-    path = run / "success_curve.csv"
-    return pl.read_csv(path) if path.is_file() else None
+    """The run's ``success_curve.csv``, or None when it has none; ``CompareError`` when it is not one."""
+    try:
+        return run_files.load_curve(run / "success_curve.csv")
+    except run_files.RunFileError as error:
+        raise CompareError(str(error)) from None
 
 
 def _number(value: Any) -> float:
@@ -96,35 +101,71 @@ def curve_differences_markdown(a: pl.DataFrame, b: pl.DataFrame) -> str | None:
     return "\n".join(lines)
 
 
+def mismatches(run_a: Path, run_b: Path) -> list[str]:
+    """Why the two runs may not be comparable: one line per setting (dataset, protocol) whose values
+    differ between their ``trials.parquet``; empty when they agree or either run lacks the table."""
+    a, b = run_files.provenance(run_a), run_files.provenance(run_b)
+    if a is None or b is None:
+        return []
+    return [f"the runs differ in {key}: {', '.join(a[key]) or '-'} in {run_a}, {', '.join(b[key]) or '-'} in {run_b}"
+            for key in ("dataset", "protocol") if a[key] != b[key]]
+
+
 def compare_report(run_a: Path, run_b: Path) -> tuple[str, dict[str, dict[str, float]]]:
     """The printed comparison of two run folders, and the differences per method."""
     a, b = load_metrics(run_a), load_metrics(run_b)
+    curve_a, curve_b = load_curve(run_a), load_curve(run_b)
     found = differences(a, b)
-    parts = [f"# {run_b} minus {run_a}", "", "## Metrics (B - A)", ""]
+    parts = [f"# {run_b} minus {run_a}", ""]
+    parts += [f"**Warning:** {line}; the differences mix settings, not only methods."
+              for line in mismatches(run_a, run_b)]
+    parts += ["", "## Metrics (B - A)", ""] if parts[-1] else ["## Metrics (B - A)", ""]
     parts.append(differences_markdown(found) if found else "No method is in both runs.")
     only_a, only_b = [n for n in a if n not in b], [n for n in b if n not in a]
     if only_a or only_b:
         parts.append("")
     parts += [f"Only in {run_a}: {', '.join(only_a)}"] if only_a else []
     parts += [f"Only in {run_b}: {', '.join(only_b)}"] if only_b else []
-    curve_a, curve_b = load_curve(run_a), load_curve(run_b)
     table = curve_differences_markdown(curve_a, curve_b) if curve_a is not None and curve_b is not None else None
     if table:
         parts += ["", "## Success rate (percentage points, B - A) at RTE < t m and RRE < t deg", "", table]
     return "\n".join(parts) + "\n", found
 
 
+def check_compare_out(out: Path, given: bool) -> None:
+    """``CompareError`` unless ``out`` is a folder, or can be made one, in a writable place; ``given``:
+    whether the user named it (``--out``) or it is the default inside run B."""
+    what = "--out" if given else f"the default output folder (give --out FOLDER elsewhere): {out}"
+    try:
+        _check_compare_out(out.absolute(), what)
+    except OSError as error:
+        raise CompareError(f"{what}: {unreadable(error, out)}") from None
+
+
+def _check_compare_out(out: Path, what: str) -> None:
+    if out.exists() and not out.is_dir():
+        raise CompareError(f"{what}: {out} exists and is not a folder")
+    try:
+        check_writable(out, out, what)
+    except OutError as error:
+        raise CompareError(str(error)) from None
+
+
 def compare(run_a: Path, run_b: Path, out: Path | None = None) -> str:
     """Compare two run folders: write ``compare.md`` and ``compare.png`` into ``out`` (default
     ``RUN_B/compare_vs_<name of RUN_A>``) and return the report. ``CompareError`` for a run that
-    cannot be read or an ``out`` that is not a folder."""
+    cannot be read or an ``out`` that cannot take the files."""
     report, found = compare_report(run_a, run_b)
+    given = out is not None
     out = out if out is not None else run_b / f"compare_vs_{run_a.resolve().name}"
-    if out.exists() and not out.is_dir():
-        raise CompareError(f"--out: {out} exists and is not a folder")
-    out.mkdir(parents=True, exist_ok=True)
-    write_atomic(out / "compare.md", lambda p: p.write_text(report))
+    check_compare_out(out, given)
     fig = plot_differences(found, PLOTTED, LOWER_IS_BETTER, f"{run_b.name} minus {run_a.name}")
-    write_atomic(out / "compare.png", lambda p: fig.savefig(p, format="png", dpi=120))
-    plt.close(fig)
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        write_atomic(out / "compare.md", lambda p: p.write_text(report))
+        write_atomic(out / "compare.png", lambda p: fig.savefig(p, format="png", dpi=120))
+    except OSError as error:
+        raise CompareError(f"cannot write the comparison into {out} ({error.strerror or error})") from None
+    finally:
+        plt.close(fig)
     return report

@@ -22,6 +22,8 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
+from .stop import Stopped
+
 MAX_RETRIES = 2
 """Times Ray reruns a task whose worker process or node died (an exception the task raises is not retried)."""
 CONNECT_TIMEOUT_S = 10.0
@@ -202,23 +204,63 @@ def import_ray() -> Any:
 
 
 def _connect(ray: Any, address: str, workers: int) -> None:
+    """``ray.init`` for ``address``; a SIGTERM during it (Ray's own handler turns it into
+    ``SystemExit(15)``) is raised as :class:`evaluation.stop.Stopped`, the same stop as anywhere else."""
     quiet = {"log_to_driver": False, "logging_level": "ERROR"}
-    if address == "local":
-        ray.init(num_cpus=max(1, workers), include_dashboard=False, **quiet)
-        return
     try:
-        ray.init(address=address, **quiet)
+        if address == "local":
+            ray.init(num_cpus=max(1, workers), include_dashboard=False, **quiet)
+        else:
+            ray.init(address=address, **quiet)
+    except SystemExit as exit:
+        if exit.code == signal.SIGTERM:
+            raise Stopped(signal.SIGTERM) from None
+        raise
     except (ConnectionError, RuntimeError, ValueError) as error:
         first = str(error).strip().splitlines()[0] if str(error).strip() else type(error).__name__
         raise ExecutorError(f"--ray {address}: cannot join the Ray cluster: {first}") from None
 
 
+GRPC_PREFACE = b"PRI * HTTP/2.0\r\n\r\nSM\r\n\r\n" + bytes([0, 0, 0, 4, 0, 0, 0, 0, 0])
+"""An HTTP/2 client's first bytes (the connection preface, then an empty SETTINGS frame): a Ray
+cluster's GCS (and the Ray Client server of ``ray://``) is a gRPC server and answers with its own
+SETTINGS frame at once; ``ray.init`` itself waits for ever on something that does not."""
+
+
 def check_reachable(address: str, timeout: float = CONNECT_TIMEOUT_S) -> None:
-    """:class:`ExecutorError` unless ``HOST:PORT`` (``ray://`` allowed) accepts a connection within ``timeout``."""
+    """:class:`ExecutorError` unless ``HOST:PORT`` (``ray://`` allowed, port 1 to 65535) accepts a
+    connection and answers as a gRPC server within ``timeout`` seconds."""
     host, sep, port = address.removeprefix("ray://").rpartition(":")
     if not sep or not host or not port.isdigit():
         raise ExecutorError(f"--ray {address}: expected local, auto or HOST:PORT")
+    if not 1 <= int(port) <= 65535:
+        raise ExecutorError(f"--ray {address}: the port must be between 1 and 65535, got {int(port)}")
+    deadline = time.monotonic() + timeout
     try:
-        socket.create_connection((host, int(port)), timeout=timeout).close()
+        with socket.create_connection((host.strip("[]"), int(port)), timeout=timeout) as connection:
+            reply = _first_frame(connection, deadline)
     except OSError as error:
         raise ExecutorError(f"--ray {address}: the Ray cluster is unreachable ({error.strerror or error})") from None
+    if reply is None:
+        raise ExecutorError(f"--ray {address}: something listens there but does not answer as a Ray cluster "
+                            f"(no gRPC reply within {timeout:g} s); give the head's GCS address (6379 by default)")
+    if len(reply) < 9 or reply[3] != 4:
+        raise ExecutorError(f"--ray {address}: something listens there but it is not a Ray cluster (its reply "
+                            f"{reply!r} is not gRPC); give the head's GCS address (6379 by default)")
+
+
+def _first_frame(connection: socket.socket, deadline: float) -> bytes | None:
+    """The first 9 bytes (an HTTP/2 frame header) the server sends after :data:`GRPC_PREFACE`;
+    fewer when it closes, None when it says nothing before ``deadline``."""
+    connection.sendall(GRPC_PREFACE)
+    reply = b""
+    while len(reply) < 9:
+        connection.settimeout(max(0.01, deadline - time.monotonic()))
+        try:
+            chunk = connection.recv(9 - len(reply))
+        except TimeoutError:
+            return None
+        if not chunk:
+            break
+        reply += chunk
+    return reply

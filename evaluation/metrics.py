@@ -89,6 +89,14 @@ class TrialMetrics:
     margin: float
     """Consensus margin of CBM; NaN for results without one."""
     estimated: bool
+    abstained: bool = False
+    """The method said its pose has not enough evidence (``cbm.MatchResult.abstained``); its pose
+    is still scored, and counted apart (``aggregate``)."""
+
+
+SUCCESS_LEVELS = (1.0, 2.0, 3.0)
+"""Thresholds t of the success rates reported: RTE < t m and RRE < t deg (V2X-Reg++ and the
+calibration literature report 1, 2 and 3)."""
 
 
 def evaluate(result: Any, trial: Trial) -> TrialMetrics:
@@ -113,6 +121,7 @@ def evaluate(result: Any, trial: Trial) -> TrialMetrics:
         runtime_s=float(getattr(result, "timings", {}).get("total", math.nan)),
         margin=float(getattr(result, "margin", math.nan)),
         estimated=estimated,
+        abstained=bool(getattr(result, "abstained", False)),
     )
 
 
@@ -126,8 +135,10 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
 
     precision = sum n_correct / sum n_matched; recall = sum n_correct / sum n_true;
     ad = sum(ad * n_matched) / sum n_matched; rre/rte mean and median over the trials with an
-    estimate; success_rate = share of all trials that pass ``is_success``; median runtime.
-    Ratios with a zero denominator are NaN.
+    estimate; success_rate = share of all trials that pass ``is_success``; success_rate_2 and
+    success_rate_3 the same at 2 and 3 m / deg; abstain_rate = share of trials the method abstained
+    on; returned_success = success rate over the trials it did not abstain on (how far its answers
+    can be trusted); median runtime. Ratios with a zero denominator are NaN.
     """
     matched = sum(m.n_matched for m in metrics)
     correct = sum(m.n_correct for m in metrics)
@@ -137,6 +148,7 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
     rres = np.array([m.rre for m in estimated])
     rtes = np.array([m.rte for m in estimated])
     runtimes = np.array([m.runtime_s for m in metrics if not math.isnan(m.runtime_s)])
+    returned = [m for m in metrics if not m.abstained]
     return {
         "n_trials": float(len(metrics)),
         "n_estimated": float(len(estimated)),
@@ -148,6 +160,11 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
         "rte_mean": _mean(rtes),
         "rte_median": _median(rtes),
         "success_rate": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in metrics), len(metrics)),
+        **{f"success_rate_{t:g}": _ratio(sum(is_success(m, rte_max=t, rre_max=t) for m in metrics), len(metrics))
+           for t in SUCCESS_LEVELS[1:]},
+        "abstain_rate": _ratio(sum(m.abstained for m in metrics), len(metrics)),
+        "returned_success": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in returned),
+                                   len(returned)),
         "runtime_median_s": _median(runtimes),
     }
 

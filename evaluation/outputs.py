@@ -20,6 +20,8 @@ from pathlib import Path
 
 import polars as pl
 
+from loaders.errors import unreadable
+
 from .aggregates import curve_csv, method_metrics, metrics_json, success_curve
 from .latex import summary_latex
 from .plots import plot_precision_vs_eta, plot_rre_rte, plot_success_curve, plt
@@ -49,8 +51,16 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
 def check_out(out: Path) -> None:
     """:class:`OutError` unless ``out`` can take a run: a new folder whose nearest existing parent
     is a writable folder, or an existing folder (empty or a previous run's) whose parent is
-    writable (the staging folder goes there). Writability is tried by creating a temporary file."""
+    writable (the staging folder goes there). Writability is tried by creating a temporary file; a
+    folder on the way that cannot be opened is named."""
     out = out.resolve()
+    try:
+        _check_out(out)
+    except OSError as error:
+        raise OutError(f"--out: {unreadable(error, out)}") from None
+
+
+def _check_out(out: Path) -> None:
     if not out.name:
         raise OutError(f"--out: {out} cannot be replaced by a run's folder; name a folder inside it")
     if out.exists() and not out.is_dir():
@@ -60,13 +70,20 @@ def check_out(out: Path) -> None:
         if foreign:
             raise OutError(f"--out: {out} holds {foreign[0]!r}{' and more' if len(foreign) > 1 else ''}, "
                            "which evaluate.py did not write; choose a new or empty folder or a previous run's")
-    parent = next(p for p in out.parents if p.exists())
+    check_writable(out.parent, out)
+
+
+def check_writable(folder: Path, out: Path, what: str = "--out") -> None:
+    """:class:`OutError` unless the nearest existing one of ``folder`` and its parents is a folder this
+    process can create a file in (``out``: what will be created there; ``what``: the option, both
+    for the message)."""
+    parent = next(p for p in (folder, *folder.parents) if p.exists())
     if not parent.is_dir():
-        raise OutError(f"--out: {parent} is a file, so {out} cannot be created")
+        raise OutError(f"{what}: {parent} is a file, so {out} cannot be created")
     try:
         tempfile.TemporaryFile(dir=parent).close()
     except OSError as error:
-        raise OutError(f"--out: cannot write in {parent} ({error.strerror or error})") from None
+        raise OutError(f"{what}: cannot write in {parent} ({error.strerror or error})") from None
 
 
 @dataclass(frozen=True)

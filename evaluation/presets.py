@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import os
 import stat
 import sys
 from collections.abc import Iterable, Mapping
@@ -22,6 +23,7 @@ from pathlib import Path
 from typing import Any
 
 from cbm.methods import METHODS
+from loaders.errors import special_kind, unreadable
 from presets import SHIPPED_DIR
 
 from .scenario import ScenarioParams
@@ -41,6 +43,26 @@ ABOUT_KEYS = ("description", "name")
 
 class PresetFileError(ValueError):
     """A preset that cannot be read; the message names the file and, where one is at fault, the key."""
+
+
+class NotRegularFile(OSError):
+    """A path that is a folder, device, FIFO or socket where a regular file was expected."""
+
+
+def read_regular(path: Path, limit: int) -> bytes:
+    """Up to ``limit + 1`` bytes of ``path``, refused with :class:`NotRegularFile` (saying what it is)
+    unless it is a regular file. The file is opened without blocking and checked on the open file
+    itself, so a FIFO or a device never blocks the reader, even one put in place after a listing."""
+    descriptor = os.open(path, os.O_RDONLY | os.O_NONBLOCK)
+    try:
+        mode = os.fstat(descriptor).st_mode
+        if not stat.S_ISREG(mode):
+            raise NotRegularFile(f"{special_kind(mode)}, not a regular file")
+        os.set_blocking(descriptor, True)
+        with os.fdopen(descriptor, "rb", closefd=False) as handle:
+            return handle.read(limit + 1)
+    finally:
+        os.close(descriptor)
 
 
 def code_defaults() -> dict[str, Any]:
@@ -102,10 +124,7 @@ def preset_tables(path: Path) -> dict[str, Any]:
     ``PresetFileError`` naming the file for one that is not a regular file, too large, not UTF-8
     or not TOML."""
     try:
-        if not stat.S_ISREG(path.stat().st_mode):
-            raise PresetFileError(f"{path}: not a regular file")
-        with path.open("rb") as handle:
-            data = handle.read(MAX_BYTES + 1)
+        data = read_regular(path, MAX_BYTES)
     except OSError as error:
         raise PresetFileError(f"{path}: cannot be read ({error.strerror or error})") from None
     if len(data) > MAX_BYTES:
@@ -145,7 +164,11 @@ def find_preset(name_or_file: str) -> PresetParams:
     """The preset file at ``name_or_file``, else the shipped preset of that name, over the default
     preset; ``PresetFileError`` when it is neither, or cannot be read."""
     path = Path(name_or_file)
-    if not path.exists():
+    try:
+        found = path.exists()
+    except OSError as error:
+        raise PresetFileError(str(unreadable(error, path))) from None
+    if not found:
         shipped = shipped_path(name_or_file)
         if shipped is None:
             raise PresetFileError(f"{name_or_file!r} is neither a preset file nor a shipped preset "

@@ -20,6 +20,10 @@ TABLE_ROWS = (
     ("median RRE (deg)", "rre_median", 1.0),
     ("median RTE (m)", "rte_median", 1.0),
     ("success (%)", "success_rate", 100.0),
+    ("success @ 2 m, 2 deg (%)", "success_rate_2", 100.0),
+    ("success @ 3 m, 3 deg (%)", "success_rate_3", 100.0),
+    ("abstained (%)", "abstain_rate", 100.0),
+    ("success where not abstained (%)", "returned_success", 100.0),
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
 GNSS = "GNSS (init)"
@@ -115,7 +119,9 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
               table_one(rows, variants, timing=timing), "",
               "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
               "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
-              "Success: RTE < 1 m and RRE < 1 deg. none / GNSS (init): the error before calibration; "
+              "Success: RTE < 1 m and RRE < 1 deg (at 2 and 3: RTE < 2 m and RRE < 2 deg, 3 and 3). "
+              "Abstained: trials where the method said it had not enough evidence (its pose is still scored); "
+              "success where not abstained: over the other trials. none / GNSS (init): the error before calibration; "
               "oracle: least squares on the true pairs, the limit of association-based calibration."]
     if sweep.fusion:
         parts += ["", FUSION_NOTE]

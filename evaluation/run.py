@@ -7,6 +7,7 @@ and a sweep of methods and parameters (``evaluation.sweep``) into one per-trial 
 from __future__ import annotations
 
 import dataclasses
+from collections import Counter
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -48,6 +49,12 @@ class Plan:
     def trial_count(self) -> int:
         """Rows the run gives."""
         return sum(self.sweep.trial_count(len(source.inputs)) for source in self.sources)
+
+    @property
+    def most_cavs(self) -> int:
+        """The most CAV trials one frame of the run gives (``--agents`` asks for up to ``agents - 1``)."""
+        return max((count for source in self.sources for count in Counter(i.index for i in source.inputs).values()),
+                   default=0)
 
 
 def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,

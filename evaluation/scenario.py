@@ -9,7 +9,11 @@ this order from one ``numpy.random.Generator``:
    ``localization="gaussian"`` (unused when ``"fixed"``);
 3. ``rng.standard_normal((N, 3))`` then ``rng.random(N)`` -- the ego's detection noise (x, y, yaw)
    and heading-flip draw, row ``n`` for input object ``n``;
-4. the same for the CAV.
+4. the same for the CAV;
+5. ``rng.random(N)`` twice -- the ego's then the CAV's missed-detection draw, row ``n`` for input
+   object ``n`` (a detection is missed where its draw is below ``miss_rate``);
+6. the false boxes, the ego's then the CAV's: ``rng.random((F, 5))`` each, ``F`` the agent's count
+   (``false_box_count``). They come last, so their number changes no draw before them.
 
 So the same (inputs, params, rng) give the same trial bit for bit, and moving one parameter (a
 noise level, ``eta``, the protocol) rescales or re-deals the same draws instead of drawing anew.
@@ -25,6 +29,7 @@ import numpy as np
 
 from cbm import se2
 
+from .clutter import missed, with_false_boxes
 from .detected import with_detections
 
 Protocol = Literal["sind", "opv2v", "range"]
@@ -56,6 +61,12 @@ class ScenarioParams:
     """Degrees. Offset (fixed) or std-dev (gaussian) of the CAV's world yaw."""
     sensor_range: float = 50.0
     """Metres (range protocol): an agent sees the objects whose centre is at most this far from it."""
+    miss_rate: float = 0.0
+    """Probability that an agent misses a detection it would make (each agent draws its own misses)."""
+    false_rate: float = 0.0
+    """False boxes added to each agent's detections: ``round(false_rate * n)`` for ``n`` real detections,
+    centres uniform over the agent's sensor disc (range protocol) or the bounding rectangle of its
+    detections (sind, opv2v), sizes copied from its real boxes, headings uniform; they pair with nothing."""
     seed: int = 0
     """Seed of the generator ``make_trial`` uses when it is given none."""
 
@@ -65,9 +76,9 @@ class ScenarioParams:
         if self.localization not in ("fixed", "gaussian", "dataset"):
             raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian' or 'dataset', "
                              f"got {self.localization!r}")
-        for name in ("eta", "flip_prob"):
+        for name in ("eta", "flip_prob", "miss_rate"):
             _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
-        for name in ("sigma_p", "sigma_theta"):
+        for name in ("sigma_p", "sigma_theta", "false_rate"):
             _require(name, _finite(self, name) >= 0.0, "a finite number >= 0")
         for name in ("loc_x", "loc_y", "loc_yaw"):
             is_valid = _finite(self, name) >= 0.0 or self.localization == "fixed"
@@ -152,8 +163,14 @@ class FrameInputs:
     frame): they replace that agent's simulated detections (``evaluation.detected.with_detections``)."""
     stream: int = 0
     """The CAV's rank among the frame's CAVs: its trial draws from ``trial_rng(seed, index, stream)``."""
-    peers: tuple[FrameInputs, ...] = ()
-    """The inputs of the frame's other CAVs (more than two agents), for the joint pose estimate."""
+    cohort: tuple[FrameInputs, ...] = ()
+    """The inputs of every CAV of the frame, this one among them (more than two agents): one tuple
+    shared by the frame's inputs, so a frame of K CAVs holds K references, not K squared."""
+
+    @property
+    def peers(self) -> tuple[FrameInputs, ...]:
+        """The inputs of the frame's other CAVs, for the joint pose estimate."""
+        return tuple(other for other in self.cohort if other.stream != self.stream)
 
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
@@ -200,18 +217,17 @@ def make_trial(
     loc_draw = rng.standard_normal(3)
     ego_noise = (rng.standard_normal((n, 3)), rng.random(n))
     cav_noise = (rng.standard_normal((n, 3)), rng.random(n))
+    ego_missed, cav_missed = missed(rng.random(n), params.miss_rate), missed(rng.random(n), params.miss_rate)
 
     ego_sees, cav_sees = _visibility(boxes, ids, params, order, ego_pose, cav_pose, visibility)
-    if ego_id is not None:
-        ego_sees &= ids != ego_id
-    if cav_id is not None:
-        cav_sees &= ids != cav_id
+    ego_sees &= ~ego_missed if ego_id is None else ~ego_missed & (ids != ego_id)
+    cav_sees &= ~cav_missed if cav_id is None else ~cav_missed & (ids != cav_id)
 
     T_true = se2.inverse(ego_pose) @ cav_pose
     init = se2.inverse(ego_pose) @ _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose)
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
     cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
-    return Trial(
+    trial = Trial(
         ego_boxes=_detect(ego_frame_boxes, ego_noise[0][ego_sees], ego_noise[1][ego_sees], params),
         cav_boxes=_detect(cav_frame_boxes, cav_noise[0][cav_sees], cav_noise[1][cav_sees], params),
         ego_ids=ids[ego_sees],
@@ -224,6 +240,9 @@ def make_trial(
         ego_pose=ego_pose,
         cav_pose=cav_pose,
     )
+    if params.false_rate == 0.0:
+        return trial
+    return with_false_boxes(trial, rng, params.false_rate, params.sensor_range if params.protocol == "range" else None)
 
 
 def _checked_objects(boxes: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -8,14 +8,21 @@
 
 ``Stopped`` is a ``BaseException`` so no ``except Exception`` swallows it; the process pool
 (``evaluation.executors.stop_pool``) and the staging folder (``evaluation.outputs``) clean up as it passes.
+:class:`Watchdog` is the last resort of a command: a signal the main thread cannot act on within
+``FORCE_AFTER_S`` ends the process anyway, its child processes with it (:func:`force_exit`).
 """
 from __future__ import annotations
 
 import contextlib
+import os
 import signal
-from collections.abc import Iterator
+import sys
+import threading
+import time
+from collections.abc import Callable, Iterator
+from pathlib import Path
 from types import FrameType
-from typing import Any
+from typing import Any, NoReturn
 
 STOP_SIGNALS = (signal.SIGINT, signal.SIGTERM)
 
@@ -51,6 +58,11 @@ class StopSignals(contextlib.AbstractContextManager):
             raise Stopped(signum)
         self.pending = self.pending or signum
 
+    @property
+    def holding(self) -> bool:
+        """Whether a stop signal is held now (inside :meth:`held`)."""
+        return self._held
+
     @contextlib.contextmanager
     def held(self) -> Iterator[None]:
         """Inside, a stop signal is recorded in ``pending`` instead of raised."""
@@ -59,3 +71,70 @@ class StopSignals(contextlib.AbstractContextManager):
             yield
         finally:
             self._held = False
+
+
+FORCE_AFTER_S = 1.5
+"""Seconds a stop signal may wait for the main thread before :class:`Watchdog` ends the process."""
+
+
+def descendants(pid: int | None = None) -> list[int]:
+    """Every process descended from ``pid`` (default: this one), read from /proc (none without it)."""
+    parents: dict[int, int] = {}
+    for entry in Path("/proc").iterdir() if Path("/proc").is_dir() else ():
+        if entry.name.isdigit():
+            try:
+                parents[int(entry.name)] = int((entry / "stat").read_text().rsplit(")", 1)[1].split()[1])
+            except (OSError, IndexError, ValueError):
+                continue
+    found, frontier = [], [os.getpid() if pid is None else pid]
+    while frontier:
+        parent = frontier.pop()
+        children = [child for child, of in parents.items() if of == parent]
+        found += children
+        frontier += children
+    return found
+
+
+def force_exit(line: str, signum: int) -> NoReturn:
+    """End the process now: every descendant process killed (none orphaned), ``line`` on stderr,
+    exit status 128 + ``signum``; for a stop the main thread cannot act on in time."""
+    for pid in descendants():
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+    with contextlib.suppress(OSError, ValueError):
+        sys.stdout.flush()
+        sys.stderr.write(line + "\n")
+        sys.stderr.flush()
+    os._exit(128 + signum)
+
+
+class Watchdog:
+    """A stop signal acts within about 2 s even when the main thread cannot run its handler (a long
+    C call, or a third-party start-up such as ``ray.init`` that replaced or delays it): the signal
+    also wakes a thread (``signal.set_wakeup_fd``) that, if the process still runs ``grace`` seconds
+    later and ``held()`` is false, calls :func:`force_exit` with ``line(signal name)``, unless
+    ``disarmed`` (the command finished on its own). Create it in the main thread."""
+
+    def __init__(self, line: Callable[[str], str], held: Callable[[], bool] = lambda: False,
+                 grace: float = FORCE_AFTER_S) -> None:
+        self.line, self.held, self.grace = line, held, grace
+        self.disarmed = False
+        read, write = os.pipe()
+        os.set_blocking(write, False)
+        signal.set_wakeup_fd(write, warn_on_full_buffer=False)
+        threading.Thread(target=self._watch, args=(read,), name="stop-watchdog", daemon=True).start()
+
+    def _watch(self, read: int) -> None:
+        """Wait for SIGINT or SIGTERM, then for ``grace`` seconds (longer while held), then end the process."""
+        signum = 0
+        while signum not in STOP_SIGNALS:
+            signum = os.read(read, 1)[0]
+        deadline = time.monotonic() + self.grace
+        while time.monotonic() < deadline or self.held():
+            time.sleep(0.05)
+        if not self.disarmed:
+            force_exit(self.line(signal.Signals(signum).name), signum)
+
+    def disarm(self) -> None:
+        """From now on a stop signal is left to the handlers alone."""
+        self.disarmed = True

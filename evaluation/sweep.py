@@ -35,7 +35,7 @@ SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
 """Scenario parameter columns, ``seed`` included (it is the sweep's seed)."""
 TRIAL_COLUMNS = ("ego_id", "cav_id")
 METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad",
-                  "rre", "rte", "margin", "estimated", "success", "init_rre", "init_rte")
+                  "rre", "rte", "margin", "estimated", "abstained", "success", "init_rre", "init_rte")
 """Per-trial metrics (``evaluation.metrics.TrialMetrics`` without the runtime, ``is_success``, and the
 RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
 TIMING_COLUMNS = ("runtime_s",)
@@ -131,7 +131,10 @@ def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
     """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
     (frame, scenario point) tasks in a process pool, ``ray`` (``local``, ``auto`` or an address) on
     Ray (``evaluation.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
-    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point."""
+    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point.
+    The frames' other CAVs travel with each task only when a method takes them (``cbm-graph``)."""
+    if not any(METHODS[m].takes_peers for m in sweep.methods):
+        frames = [dataclasses.replace(frame, cohort=()) for frame in frames]
     tasks = [(sweep, frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
     done = progress or (lambda n: None)
     results = run_tasks(run_task, tasks, workers=workers, ray=ray, done=lambda rows: done(len(rows)),
@@ -191,9 +194,10 @@ def _text(value: Any) -> str | None:
 
 def summarise(rows: Sequence[Mapping[str, Any]], by: Sequence[str]) -> list[tuple[tuple, dict[str, float]]]:
     """Micro-averaged aggregates (``evaluation.metrics.aggregate``) of the rows grouped by the columns
-    ``by``: ``(key, aggregate)`` per group, groups in order of first appearance."""
+    ``by``: ``(key, aggregate)`` per group, groups in order of first appearance. A column an older
+    run's table lacks (``abstained``) takes its default."""
     groups: dict[tuple, list[TrialMetrics]] = {}
     names = [f.name for f in dataclasses.fields(TrialMetrics)]
     for row in rows:
-        groups.setdefault(tuple(row[c] for c in by), []).append(TrialMetrics(**{n: row[n] for n in names}))
+        groups.setdefault(tuple(row[c] for c in by), []).append(TrialMetrics(**{n: row[n] for n in names if n in row}))
     return [(key, aggregate(metrics)) for key, metrics in groups.items()]

@@ -101,13 +101,15 @@ def frame_cav_inputs(frame: Frame, protocol: Protocol, agents: int = 2, cav: str
     are the remaining candidates nearest ``target_distance`` from the ego (ties to the smallest id),
     CAV ``r`` drawing from ``trial_rng(seed, frame, r)``. Under the sind protocol each CAV trial deals
     the objects out anew (independent visibility draws); a frame without two vehicles gives
-    ``agents - 1`` abstract CAVs. Each input carries the others as its ``peers``."""
+    ``agents - 1`` abstract CAVs, at most one per object of the frame (so a huge ``agents`` stays
+    bounded by the frame). Each input carries the others as its ``peers``."""
     if agents < 2:
         raise ValueError(f"agents must be at least 2 (the ego and one CAV), got {agents}")
     first = agents_of(frame, cav, target_distance)
     if first is None:
         abstract = _abstract_inputs(frame, protocol)
-        return _with_peers([dataclasses.replace(abstract, stream=rank) for rank in range(agents - 1)])
+        count = min(agents - 1, max(1, len(frame.track_ids)))
+        return _with_peers([dataclasses.replace(abstract, stream=rank) for rank in range(count)])
     ego, chosen, note = first
     cavs = [chosen, *other_cavs(frame, ego, chosen, target_distance)][:agents - 1]
     return _with_peers([_pair_inputs(frame, protocol, ego, track, note if rank == 0 else "auto", sensor_range, rank)
@@ -174,10 +176,12 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
 
 
 def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:
-    """Each of ``inputs`` with the others as its ``peers`` (none with one CAV)."""
+    """Each of ``inputs`` with all of them as its ``cohort``, one shared tuple (none with one CAV):
+    its ``peers`` are the others."""
     if len(inputs) < 2:
         return inputs
-    return [dataclasses.replace(item, peers=tuple(other for other in inputs if other is not item)) for item in inputs]
+    cohort = tuple(inputs)
+    return [dataclasses.replace(item, cohort=cohort) for item in inputs]
 
 
 def _detections(frame: Frame, ego: str, cav: str) -> dict[str, np.ndarray]:

@@ -162,7 +162,7 @@ def _read_map(log: Path) -> MapGeometry | None:
     path = nonempty_file(files[0])
     try:
         data = json.loads(path.read_bytes())
-    except READ_ERRORS as exc:
+    except (*READ_ERRORS, RecursionError) as exc:
         raise LoaderError(f"{path}: not valid JSON ({exc})") from exc
     if not isinstance(data, dict):
         raise LoaderError(f"{path}: expected a JSON object with lane_segments, "

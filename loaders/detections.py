@@ -19,7 +19,11 @@ OpenCOOD sample index (a string), each value ``null`` (no box) or an object with
 Sample indices count the frames of a whole split, so each sample is matched to a frame by pose:
 the sample's ego (``cav_id_list[0]``) must be an agent of the frame, at ``lidar_pose_clean_np[0]``
 within :data:`POSE_TOLERANCE` metres. Samples that match no frame are ignored; a file of which no
-sample matches is refused. DAIR-V2X agents ``0`` / ``1`` are ``vehicle`` / ``infrastructure``.
+sample matches is refused, and so is a sample whose CAVs are not agents of its frame. Of two samples
+matching one frame (an ego standing still) the first is kept and a warning names the others. The
+file is read one sample at a time (``loaders.structured.json_object_items``): files of hundreds of
+megabytes take the memory of their matched boxes, not gigabytes of parsed JSON.
+DAIR-V2X agents ``0`` / ``1`` are ``vehicle`` / ``infrastructure``.
 
 Boxes are fitted to the corners (centre = mean corner, length and yaw from the front and rear
 edge midpoints, width from the side midpoints, height from the faces) and expressed in the agent's
@@ -28,6 +32,7 @@ OPV2V loader does for the world.
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -35,12 +40,15 @@ import numpy as np
 
 from .errors import LoaderError
 from .scene import Sequence
-from .structured import field, numbers, read_json
+from .structured import field, json_object_items, numbers
 
 POSE_TOLERANCE = 0.05
 """Metres between a sample's ego pose and the frame's agent pose for them to be the same frame."""
 DAIR_AGENTS = {"0": "vehicle", "1": "infrastructure"}
 CORNERS = "N boxes of 8 corners of 3 numbers"
+MAX_COORDINATE = 1e5
+"""Metres: a corner farther than this from its agent's LiDAR is not a detection (finite values as
+large as 1e300 would overflow the box fit and fail a trial later, far from the file)."""
 
 
 @dataclass(frozen=True)
@@ -54,26 +62,52 @@ class DetectedBoxes:
 
 
 def attach(sequence: Sequence, path: Path) -> Sequence:
-    """Read ``path`` and set ``sequence.detections`` (frame index -> agent id -> boxes); returns it."""
-    samples = read_json(path)
-    if not isinstance(samples, dict):
-        raise LoaderError(f"{path}: expected a JSON object of sample index -> detections")
+    """Read ``path`` (streamed: one sample in memory at a time) and set ``sequence.detections``
+    (frame index -> agent id -> boxes); returns it. A sample whose agents are not all in its frame
+    is refused; of two samples matching one frame the first is kept, with a warning."""
     left_handed = sequence.name.startswith("opv2v/")
     poses = _agent_positions(sequence)
     found: dict[int, dict[str, DetectedBoxes]] = {}
-    for key, sample in samples.items():
+    kept: dict[int, str] = {}
+    repeated: list[str] = []
+    for key, sample in json_object_items(path, "a JSON object of sample index -> detections"):
         if sample is None:
             continue
         agents = _agent_ids(path, key, sample, sequence)
         pose = numbers(path, _nth(path, key, sample, "lidar_pose_clean_np", 0), f"{key}.lidar_pose_clean_np[0]", 6)
         frame = _frame_at(poses.get(agents[0]), pose[0], -pose[1] if left_handed else pose[1])
-        if frame is not None:
-            found[frame] = _sample_boxes(path, key, sample, agents, left_handed)
+        if frame is None:
+            continue
+        if frame in kept:
+            repeated.append(f"{key} (frame {frame}, kept {kept[frame]})")
+            continue
+        _check_agents_in_frame(path, key, agents, sequence, frame)
+        found[frame], kept[frame] = _sample_boxes(path, key, sample, agents, left_handed), key
     if not found:
         raise LoaderError(f"{path}: no sample matches a frame of {sequence.name} (each sample's "
                           f"lidar_pose_clean_np[0] against its ego's pose, within {POSE_TOLERANCE} m)")
+    if repeated:
+        _warn(sequence, f"{path}: {len(repeated)} sample(s) match a frame an earlier sample matched (the same ego "
+                        f"pose), and were left out: {', '.join(repeated[:3])}{' …' if len(repeated) > 3 else ''}")
     sequence.detections = found
     return sequence
+
+
+def _check_agents_in_frame(path: Path, key: str, agents: list[str], sequence: Sequence, frame: int) -> None:
+    """``LoaderError`` unless every agent of the sample is an agent of ``frame``: a missing CAV's
+    detected boxes would otherwise be mixed with simulated ones."""
+    present = set(sequence[frame].agents["agent_id"].cast(str).to_list())
+    missing = [agent for agent in agents if agent not in present]
+    if missing:
+        raise LoaderError(f"{path}: {key}.cav_id_list: agent {missing[0]!r} is not in frame {frame} of "
+                          f"{sequence.name} (its agents: {', '.join(sorted(present))}); the sample belongs to "
+                          f"another dataset or split")
+
+
+def _warn(sequence: Sequence, note: str) -> None:
+    """A warning in ``sequence.warnings`` (for the app) and as a ``UserWarning``."""
+    sequence.warnings.append(note)
+    warnings.warn(note, UserWarning, stacklevel=3)
 
 
 def fit_boxes(corners: np.ndarray) -> np.ndarray:
@@ -139,6 +173,9 @@ def _sample_boxes(path: Path, key: str, sample, agents: list[str], left_handed: 
         if corners.size and (corners.ndim != 3 or corners.shape[1:] != (8, 3)):
             raise LoaderError(f"{path}: {where}: expected {CORNERS}, got shape {corners.shape}")
         corners = corners.reshape(-1, 8, 3)
+        if corners.size and np.abs(corners).max() > MAX_COORDINATE:
+            raise LoaderError(f"{path}: {where}: a corner coordinate is {np.abs(corners).max():.3g} m from the agent; "
+                              f"expected box corners within {MAX_COORDINATE:.0e} m of its LiDAR")
         if left_handed:
             corners[:, :, 1] *= -1
         uncertainty = np.zeros((len(corners), 0))

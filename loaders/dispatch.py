@@ -6,7 +6,7 @@ from pathlib import Path
 
 from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, v2x_sim
 from . import detections as detection_files
-from .errors import LoaderError, existing_path
+from .errors import LoaderError, existing_path, unreadable
 from .scene import Sequence
 
 REPOSITORY_DATA = Path(__file__).resolve().parent / "data"
@@ -31,22 +31,36 @@ def load(path_or_name: str | Path) -> Sequence:
     """Load a dataset.
 
     ``"argoverse2"`` is the shipped default scene; ``"synthetic"``, ``"synthetic:<count>"`` and
-    ``"synthetic:<count>:seed=<seed>"`` generate a scene (count 0 to 1000); anything else is a
-    path to a dataset file or folder, whose loader is picked from the files found there.
-    Raises :class:`LoaderError` when the name or path cannot be loaded.
+    ``"synthetic:<count>:seed=<seed>"`` generate a scene (count 0 to ``synthetic.MAX_OBJECTS``,
+    2000; seed a non-negative integer); anything else is a path to a regular dataset file or a
+    folder, whose loader is picked from the files found there. Raises :class:`LoaderError` when the
+    name or path cannot be loaded, naming the part of the name, or the file or folder, at fault.
     """
     if isinstance(path_or_name, str):
         match = SYNTHETIC_NAME.match(path_or_name.strip())
         if match:
-            count = int(match["count"]) if match["count"] else 200
-            return synthetic.generate(n_objects=count, seed=int(match["seed"] or 0))
+            return _synthetic(path_or_name.strip(), match)
         if path_or_name.startswith("synthetic"):
             raise LoaderError(f"{path_or_name!r}: expected synthetic, synthetic:<count> or "
                               f"synthetic:<count>:seed=<seed>")
         if path_or_name == "argoverse2":
             return argoverse2.load(existing_path(repository_data("argoverse2"), "shipped scene"))
     path = existing_path(path_or_name)
-    return _loader_for(path)(path)
+    try:
+        return _loader_for(path)(path)
+    except OSError as error:
+        raise unreadable(error, path) from None
+
+
+def _synthetic(name: str, match: re.Match) -> Sequence:
+    """The synthetic scene a ``synthetic[:count][:seed=S]`` name asks for, its count and seed checked."""
+    count = int(match["count"]) if match["count"] else 200
+    seed = int(match["seed"] or 0)
+    if count > synthetic.MAX_OBJECTS:
+        raise LoaderError(f"{name}: count must be from 0 to {synthetic.MAX_OBJECTS}, got {count}")
+    if seed < 0:
+        raise LoaderError(f"{name}: seed must be a non-negative integer, got {seed}")
+    return synthetic.generate(n_objects=count, seed=seed)
 
 
 def _loader_for(path: Path):

@@ -1,6 +1,8 @@
 """The one exception every loader raises for input it cannot read."""
 from __future__ import annotations
 
+import os
+import stat
 from pathlib import Path
 
 import polars as pl
@@ -26,14 +28,40 @@ READ_ERRORS = (
 
 
 def existing_path(path: str | Path, what: str = "dataset path") -> Path:
-    """``path`` made absolute, with ``~`` expanded, after checking that it exists."""
+    """``path`` made absolute, with ``~`` expanded, after checking that it exists and is a regular
+    file or a folder: a device, FIFO or socket would block or never end when read, so it is refused."""
     try:
         resolved = Path(path).expanduser().resolve()
     except (OSError, RuntimeError, TypeError, ValueError) as exc:
         raise LoaderError(f"{what} {path!r}: cannot resolve it ({exc})") from exc
-    if not resolved.exists():
-        raise LoaderError(f"{what} {str(resolved)!r} does not exist")
+    try:
+        mode = resolved.stat().st_mode
+    except (FileNotFoundError, NotADirectoryError):
+        raise LoaderError(f"{what} {str(resolved)!r} does not exist") from None
+    except OSError as exc:
+        raise LoaderError(f"{what} {str(resolved)!r}: {unreadable(exc, resolved)}") from None
+    if not (stat.S_ISDIR(mode) or stat.S_ISREG(mode)):
+        raise LoaderError(f"{what} {str(resolved)!r} is {special_kind(mode)}, not a file or folder")
     return resolved
+
+
+def special_kind(mode: int) -> str:
+    """What a file that is not a regular file is (a folder, a device, ...), from its ``st_mode``."""
+    kinds = ((stat.S_ISDIR, "a folder"), (stat.S_ISCHR, "a character device"), (stat.S_ISBLK, "a block device"),
+             (stat.S_ISFIFO, "a FIFO (named pipe)"), (stat.S_ISSOCK, "a socket"))
+    return next((name for test, name in kinds if test(mode)), "a special file")
+
+
+def unreadable(error: OSError, fallback: Path) -> LoaderError:
+    """A :class:`LoaderError` for an ``OSError`` met while reading a dataset, in one line: the folder
+    that cannot be entered when that is the cause, else the file or folder the error names (else
+    ``fallback``), and the reason."""
+    path = Path(error.filename) if error.filename else fallback
+    closed = next((folder for folder in reversed(path.parents) if not os.access(folder, os.X_OK)), None)
+    if closed is not None:
+        return LoaderError(f"{closed}: cannot open the folder (Permission denied)")
+    what = "the folder" if path.is_dir() else "it"
+    return LoaderError(f"{path}: cannot read {what} ({error.strerror or error})")
 
 
 class LfsPointer(LoaderError):

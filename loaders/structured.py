@@ -1,10 +1,13 @@
 """Reading nested JSON / YAML annotation files with errors that name the file and the key."""
 from __future__ import annotations
 
+import codecs
 import json
 import math
 import re
+from collections.abc import Iterator
 from pathlib import Path
+from typing import Any, BinaryIO, NoReturn
 
 import yaml
 
@@ -84,3 +87,100 @@ def matrix(path: Path, value, where: str, rows: int, cols: int) -> list[list[flo
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0][:200] if text else type(exc).__name__
+
+
+STREAM_CHUNK = 1 << 20
+"""Characters read at a time by :func:`json_object_items` (more while one entry is longer)."""
+MAX_ENTRY_CHARS = 64 << 20
+"""Characters one entry of a streamed JSON object may take: beyond, the file is refused."""
+_SPACE = re.compile(r"[ \t\n\r]*")
+
+
+def json_object_items(path: Path, expected: str) -> Iterator[tuple[str, Any]]:
+    """The entries of a file holding one JSON object, parsed one at a time, so that memory holds one
+    entry rather than the whole file (a detector's 300 MB of boxes would take over 4 GB as Python
+    objects). Duplicate keys are all yielded. ``LoaderError`` names the file and what is wrong;
+    ``expected`` says what the object should be."""
+    nonempty_file(path)
+    try:
+        with path.open("rb") as file:
+            yield from _ObjectStream(path, file, expected).items()
+    except (OSError, UnicodeDecodeError, RecursionError) as exc:
+        raise LoaderError(f"{path}: not valid JSON ({_first_line(exc)})") from exc
+
+
+class _ObjectStream:
+    """A JSON object read from a binary file chunk by chunk (``json.JSONDecoder.raw_decode`` per value)."""
+
+    def __init__(self, path: Path, file: BinaryIO, expected: str) -> None:
+        self.path, self.file, self.expected = path, file, expected
+        self.decode = codecs.getincrementaldecoder("utf-8-sig")().decode
+        self.decoder = json.JSONDecoder()
+        self.text, self.at, self.consumed, self.ended = "", 0, 0, False
+
+    def items(self) -> Iterator[tuple[str, Any]]:
+        """Every ``key, value`` of the object, in file order."""
+        if self._next_char() != "{":
+            raise LoaderError(f"{self.path}: expected {self.expected}")
+        self.at += 1
+        if self._next_char() == "}":
+            self.at += 1
+            return self._end()
+        while True:
+            key = self._value()
+            if not isinstance(key, str) or self._next_char() != ":":
+                self._invalid("expected a string key and ':'")
+            self.at += 1
+            yield key, self._value()
+            separator = self._next_char()
+            self.at += 1
+            if separator == "}":
+                return self._end()
+            if separator != ",":
+                self._invalid("expected ',' or '}' after a value")
+
+    def _end(self) -> None:
+        """After the closing brace (consumed): nothing but white space may follow."""
+        if self._next_char():
+            self._invalid("extra data after the object")
+
+    def _fill(self) -> bool:
+        """Read more of the file (at least as much as is pending); False at its end."""
+        if self.ended:
+            return False
+        pending = self.text[self.at:]
+        if len(pending) > MAX_ENTRY_CHARS:
+            raise LoaderError(f"{self.path}: an entry near character {self.consumed + self.at} is over "
+                              f"{MAX_ENTRY_CHARS >> 20} M characters; expected {self.expected}")
+        chunk = self.file.read(max(STREAM_CHUNK, len(pending)))
+        if not chunk:
+            self.ended = True
+            self.decode(b"", final=True)
+            return False
+        self.consumed += self.at
+        self.text, self.at = pending + self.decode(chunk), 0
+        return True
+
+    def _next_char(self) -> str:
+        """The next character that is not white space ("" at the end of the file), not consumed."""
+        while True:
+            self.at = _SPACE.match(self.text, self.at).end()
+            if self.at < len(self.text) or not self._fill():
+                return self.text[self.at:self.at + 1]
+
+    def _value(self) -> Any:
+        """The JSON value at the cursor, reading on until it is complete."""
+        self._next_char()
+        while True:
+            try:
+                value, end = self.decoder.raw_decode(self.text, self.at)
+            except json.JSONDecodeError as exc:
+                if self._fill():
+                    continue
+                self._invalid(exc.msg)
+            if end < len(self.text) or not self._fill():
+                self.at = end
+                return value
+
+    def _invalid(self, reason: str) -> NoReturn:
+        raise LoaderError(f"{self.path}: not valid JSON ({reason} near character {self.consumed + self.at})")

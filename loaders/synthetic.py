@@ -14,8 +14,8 @@ pedestrian crossing on every arm. The signal is green for road A:
 Every object moves along a fixed path at a fixed speed (the same speed for every object on a
 lane), and the paths only meet where the turning cars join an emptied departing lane, so objects
 placed apart in the first frame stay apart in every frame (the tests check this). The road arms
-grow with the object count (and the lanes per direction, from 1 to 4), so up to 1000 objects fit
-without overlap.
+grow with the object count (and the lanes per direction, from 1 to 4), so up to ``MAX_OBJECTS``
+(2000) objects fit without overlap.
 Every random draw comes from ``numpy.random.default_rng(seed)``.
 """
 from __future__ import annotations
@@ -75,11 +75,13 @@ def _split(rng: np.random.Generator, n: int, parts: int) -> np.ndarray:
 
 def generate(n_objects: int = 200, n_frames: int = 50, seed: int = 0) -> Sequence:
     """A synthetic intersection scene with ``n_objects`` objects (0 to 2000) in every one of
-    ``n_frames`` frames at 10 Hz; same ``seed``, same scene."""
+    ``n_frames`` frames at 10 Hz; same ``seed`` (a non-negative integer), same scene."""
     if not isinstance(n_objects, (int, np.integer)) or not 0 <= n_objects <= MAX_OBJECTS:
         raise LoaderError(f"synthetic: n_objects must be an integer from 0 to {MAX_OBJECTS}, got {n_objects!r}")
     if not isinstance(n_frames, (int, np.integer)) or n_frames < 1:
         raise LoaderError(f"synthetic: n_frames must be a positive integer, got {n_frames!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise LoaderError(f"synthetic: seed must be a non-negative integer, got {seed!r}")
     rng = np.random.default_rng(seed)
     k = _lanes_per_direction(n_objects)
     n_pedestrians = round(0.12 * n_objects)

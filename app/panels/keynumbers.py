@@ -5,18 +5,24 @@ carries the lasting message of a frame CBM cannot run on (``unusable_markdown``)
 from __future__ import annotations
 
 import html
+import math
 
 import numpy as np
 import viser
 
-from evaluation.metrics import is_success
+from evaluation.metrics import TrialMetrics, is_success
 from loaders import is_vehicle
 
+from ..scene import cavs
+from ..scene.colours import Palette, palette
 from ..scene.text import number
 from ..session.explorer import Explorer, Outcome
 from ..session.settings import Settings
 
 ELEMENT_ID = "cbm-key-numbers"
+WARNING_ID = "cbm-not-enough-evidence"
+WARNING_COLOUR = "#c77700"
+"""The warning light of a pose CBM has not enough evidence for (amber: shown, but not to be trusted)."""
 PANEL_SPAN = 384 + 16 + 24
 """CSS pixels from the page's right edge to just left of the control panel (viser's "large" width)."""
 STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
@@ -25,12 +31,47 @@ STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:mi
 
 
 def key_numbers_html(outcome: Outcome) -> str:
-    """One line per fact: the frame and its verdict, precision / recall, the pose errors."""
+    """One line per fact: the frame and its verdict, precision / recall, the pose errors, and CBM's
+    confidence (``evidence_lines``); with several CAVs, how many succeed and a line per CAV
+    (``per_cav_line``)."""
     m = outcome.metrics
-    verdict = "success" if is_success(m) else "failed"
-    return _box([f"<b>Frame {outcome.frame_index}</b> · {verdict}",
-                 f"precision / recall {number(m.precision)} / {number(m.recall)}",
-                 f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}"])
+    if not outcome.others:
+        return _box([f"<b>Frame {outcome.frame_index}</b> · {_verdict(m)}",
+                     f"precision / recall {number(m.precision)} / {number(m.recall)}",
+                     f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}",
+                     *evidence_lines(outcome.result)])
+    shown = cavs.every_cav(outcome)
+    wins = sum(is_success(cav.metrics) for cav in shown)
+    return _box([f"<b>Frame {outcome.frame_index}</b> · {wins} of {len(shown)} CAVs succeed",
+                 *(per_cav_line(cav, palette(outcome.settings.view)) for cav in shown)])
+
+
+def evidence_lines(result: object) -> list[str]:
+    """A warning light and the reason when CBM says it has not enough evidence
+    (``MatchResult.abstained``), else how much better its pose explains the scene than the
+    runner-up pose (nothing for methods that do not verify)."""
+    if getattr(result, "abstained", False):
+        reason = html.escape(getattr(result, "reason", ""))
+        return [f'<span id="{WARNING_ID}" style="color:{WARNING_COLOUR}">&#9679;</span> '
+                f"<b>not enough evidence</b>: {reason}"]
+    margin = getattr(result, "evidence_margin", math.nan)
+    if math.isnan(margin):
+        return []
+    if math.isinf(margin):
+        return ["confidence: no other pose explains the scene"]
+    return [f"confidence: {margin:.1f} (the pose explains the scene e^{margin:.0f} times better than the runner-up)"]
+
+
+def per_cav_line(cav: cavs.ShownCav, colours: Palette) -> str:
+    """One CAV's verdict, precision / recall and pose errors, after a square of its colour."""
+    m, (r, g, b) = cav.metrics, cavs.box_colour(cav.rank, colours)
+    return (f'<span style="color:rgb({r},{g},{b})">■</span> CAV {cav.rank} · {_verdict(m)} · '
+            f"P / R {number(m.precision)} / {number(m.recall)} · "
+            f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}")
+
+
+def _verdict(m: TrialMetrics) -> str:
+    return "success" if is_success(m) else "failed"
 
 
 def problem_html(title: str) -> str:

@@ -9,6 +9,7 @@ import viser
 
 from cbm.methods import METHODS
 
+from ..scene.cavs import legend as cavs_legend
 from ..scene.colours import palette
 from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
@@ -29,6 +30,7 @@ class ViewControls:
     labels: viser.GuiCheckboxHandle
     pinned_lines: viser.GuiCheckboxHandle
     reset_camera: viser.GuiButtonHandle
+    view_3d: viser.GuiButtonHandle
     presentation: viser.GuiCheckboxHandle
     dark: viser.GuiCheckboxHandle
     points: viser.GuiCheckboxHandle
@@ -52,7 +54,7 @@ class ViewControls:
         self.points.disabled = why is not None
         self.points.hint = POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}"
         self.points_every.disabled = not settings.view.points or why is not None
-        self.legend.content = palette(settings.view).legend
+        self.legend.content = palette(settings.view).legend + cavs_legend(settings.cavs)
 
 
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls:
@@ -67,7 +69,8 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         labels=gui.add_checkbox("label clicked objects", view.labels),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
-        reset_camera=gui.add_button("reset camera"),
+        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene: footprints show as compared"),
+        view_3d=gui.add_button("3D view", hint="From behind and above the ego (reset camera: back to top-down)"),
         presentation=gui.add_checkbox("presentation mode", view.presentation,
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),
@@ -76,7 +79,7 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
                                     hint="Draw every Nth LiDAR point (1: all of them)"),
         note=gui.add_markdown(f"*Disabled ({offers.points}): LiDAR points.*", visible=offers.points is not None),
-        legend=gui.add_markdown(palette(view).legend),
+        legend=gui.add_markdown(palette(view).legend + cavs_legend(settings.cavs)),
         fused=gui.add_checkbox("fused boxes (late fusion)", view.fused,
                                hint="The ego's and the CAV's boxes merged by NMS at this pose: outlines green for "
                                     "a true positive, red for a false one (BEV IoU 0.7 against the ground truth)"),
@@ -89,4 +92,5 @@ def bind(c: ViewControls, tab: TabActions) -> None:
         on_user(control, lambda n=name, h=control: tab.apply(lambda s: s.with_view(**{n: h.value})))
     on_user(c.line_pairs, lambda: tab.apply(lambda s: s.with_view(line_pairs=LINE_PAIR_KEYS[c.line_pairs.value])))
     c.reset_camera.on_click(lambda e: tab.reset_camera())
+    c.view_3d.on_click(lambda e: tab.reset_camera(oblique=True))
     on_user(c.points_every, lambda: tab.apply(lambda s: s.with_view(points_every=int(c.points_every.value))))

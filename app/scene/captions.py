@@ -28,9 +28,11 @@ def label_px(view: ViewOptions) -> float:
 
 
 def caption_lines(outcome: Outcome) -> list[str]:
-    """The frame and its verdict, precision and recall, the pose errors: one line each."""
+    """The frame and its verdict, precision and recall, the pose errors: one line each (with
+    several CAVs, the first CAV's, and the caption says so)."""
     m = outcome.metrics
-    return [f"Frame {outcome.frame_index} · {'success' if is_success(m) else 'failed'}",
+    which = f"CAV 1 of {len(outcome.others) + 1} · " if outcome.others else ""
+    return [f"Frame {outcome.frame_index} · {which}{'success' if is_success(m) else 'failed'}",
             f"precision {number(m.precision)} · recall {number(m.recall)}",
             f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}"]
 

@@ -62,7 +62,8 @@ STANDARD = Palette(
     right=Stroke(RIGHT, 3.0), wrong=Stroke(WRONG, 3.0), missed=Stroke(MISSED, 2.0, 0.8),
     ghost=GHOST, map=MAP, map_other=MAP_OTHER,
     legend="Boxes: **ego** blue, **CAV** orange (faint: before calibration). Lines: green right pair, red wrong "
-           "pair, grey dashed a true pair missed.")
+           "pair, grey dashed a true pair missed; the boxes of a wrong pair are outlined red, of a missed one grey, "
+           "each pair labelled with its ids.")
 
 OKABE_ITO = Palette(
     ego_boxes=(0, 114, 178), cav_boxes=(230, 159, 0), cav_before=(240, 205, 130),
@@ -71,7 +72,8 @@ OKABE_ITO = Palette(
     ghost=GHOST, map=MAP, map_other=MAP_OTHER,
     legend="Colour-blind-safe palette (Okabe-Ito). Boxes: **ego** blue, **CAV** orange (faint: before "
            "calibration). Lines: **right** pair bluish green, solid; **wrong** pair vermillion, thick and dashed; "
-           "a true pair **missed** thin grey dots.")
+           "a true pair **missed** thin grey dots; the boxes of a wrong pair are outlined vermillion, of a missed "
+           "one grey, each pair labelled with its ids.")
 
 DARK_SCENE = {"ghost": (90, 90, 90), "cav_before": (150, 100, 40), "map_other": (46, 46, 52),
               "map": {"lane_boundary": (52, 52, 58), "crossing": (75, 62, 30), "drivable_area": (40, 40, 46)}}

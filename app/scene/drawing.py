@@ -5,6 +5,7 @@ be tested without a browser and the viser layer (``view``) only copies arrays in
 """
 from __future__ import annotations
 
+from collections import defaultdict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -12,18 +13,15 @@ import numpy as np
 from cbm import se2
 from loaders import Frame
 
-from ..session.explorer import Outcome, classified_pairs
-from . import captions, cavs, colours, geometry
+from ..session.explorer import Outcome
+from ..session.settings import MAX_CAVS
+from . import captions, cavs, colours, geometry, pairs, planes
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .points import PointCloud, clouds, problems_markdown
 from .text import metrics_markdown
 
-LINE_HEIGHT = 1.7
-"""Metres above the ground at which match lines run (above most boxes)."""
 MOST_PANELS = 2
 """The most copies of the scene a layout draws (side by side): each copy has its own map nodes."""
-FUSED_Z = 0.3
-"""Metres above the ground of the fused boxes' outlines (above the boxes' tiles)."""
 
 
 @dataclass(frozen=True)
@@ -69,14 +67,17 @@ class _Parts:
 
     ego: list[np.ndarray] = field(default_factory=list)
     cav: list[np.ndarray] = field(default_factory=list)
+    """The first CAV's boxes, placed, full size (what a click picks)."""
+    tiles: dict[int, list[np.ndarray]] = field(default_factory=lambda: defaultdict(list))
+    """Each CAV's boxes as drawn, by rank."""
     before: list[np.ndarray] = field(default_factory=list)
     ghosts: list[np.ndarray] = field(default_factory=list)
     ego_poses: list[np.ndarray] = field(default_factory=list)
-    cav_poses: list[np.ndarray] = field(default_factory=list)
+    cav_poses: dict[int, list[np.ndarray]] = field(default_factory=lambda: defaultdict(list))
+    """Each CAV's vehicle poses, by rank."""
     before_poses: list[np.ndarray] = field(default_factory=list)
-    right: list[np.ndarray] = field(default_factory=list)
-    wrong: list[np.ndarray] = field(default_factory=list)
-    missed: list[np.ndarray] = field(default_factory=list)
+    shapes: list[pairs.PairShapes] = field(default_factory=list)
+    labels: dict[str, tuple[str, tuple[float, float, float]]] = field(default_factory=dict)
     map_poses: list[np.ndarray] = field(default_factory=list)
     fused_tp: list[np.ndarray] = field(default_factory=list)
     fused_fp: list[np.ndarray] = field(default_factory=list)
@@ -86,49 +87,49 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
     """The scene of ``outcome`` under its view options (``frame``: the dataset frame, for its LiDAR points)."""
     layout = LAYOUTS[outcome.settings.view.layout]
     panels = layout.panels(outcome)
+    view = outcome.settings.view
+    palette = colours.palette(view)
     parts = _Parts()
     for panel in panels:
-        _add_panel(parts, outcome, panel, layout.before_ghosts)
+        _add_panel(parts, outcome, panel, layout.before_ghosts, palette)
     ego, cav = np.concatenate(parts.ego), np.concatenate(parts.cav)
     trial, copies = outcome.trial, len(panels)
     objects = {"ego": (ego, np.tile(np.arange(len(trial.ego_boxes)), copies)),
                "cav": (cav, np.tile(np.arange(len(trial.cav_boxes)), copies))}
-    view = outcome.settings.view
-    palette = colours.palette(view)
     lines = {**_lines(parts, palette), **_map_lines(map_segments, parts.map_poses, palette)}
-    agents = tuple(tuple(map(float, se2.translation_of(pose))) for pose in (*parts.ego_poses, *parts.cav_poses))
-    labels = _labels(parts, panels)
-    meshes = {**_meshes(parts, ego, cav, palette),
-              **{name: Mesh(*mesh) for name, mesh in cavs.other_cav_boxes(outcome, panels).items()}}
+    agents = tuple(tuple(map(float, se2.translation_of(pose)))
+                   for pose in (*parts.ego_poses, *(p for poses in parts.cav_poses.values() for p in poses)))
     points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
-                    (parts.ego_poses, parts.cav_poses), view.points_every, (palette.ego_boxes, palette.cav_boxes))
-    return Drawing(meshes=meshes, lines=lines, labels=labels,
+                    (parts.ego_poses, parts.cav_poses[1]), view.points_every, (palette.ego_boxes, palette.cav_boxes))
+    labels = {**parts.labels, **pairs.spread({k: v for shapes in parts.shapes for k, v in shapes.labels.items()})}
+    return Drawing(meshes=_meshes(parts, ego, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
                    agents=agents, label_px=captions.label_px(view), points=points)
 
 
-def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool) -> None:
-    """One copy of the scene: boxes, vehicles, ghosts, match lines and where the map goes, shifted
-    by its offset."""
+def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool, palette: colours.Palette) -> None:
+    """One copy of the scene: boxes, vehicles, ghosts, every CAV's boxes, vehicle, label and match
+    lines, and where the map goes, shifted by its offset."""
     view, trial, offset = outcome.settings.view, outcome.trial, panel.offset
     where = outcome.placements
     shift = se2.make(offset[0], offset[1], 0.0)
-    cav = se2.apply_boxes(shift @ where[panel.placement], trial.cav_boxes)
-    parts.ego.append(_shifted(trial.ego_boxes, offset))
-    parts.cav.append(cav)
+    ego = pairs.Drawn(_shifted(trial.ego_boxes, offset), trial.ego_ids)
+    parts.ego.append(ego.boxes)
+    parts.cav.append(se2.apply_boxes(shift @ where[panel.placement], trial.cav_boxes))
     parts.ego_poses.append(shift)
-    parts.cav_poses.append(shift @ where[panel.placement])
+    parts.labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(shift), planes.LABELS))
+    if panel.title:
+        parts.labels[panel.placement] = (panel.title, (TITLE_AT[0], float(panel.offset[1]), TITLE_AT[1]))
+    shown = cavs.every_cav(outcome)
+    for cav in shown:
+        _add_cav(parts, cav, len(shown), panel, ego, view.lines, palette)
     if before_ghosts:
         parts.before.append(se2.apply_boxes(where["before"], trial.cav_boxes))
         parts.before_poses.append(where["before"])
     if view.ghosts:
         seen = np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))
         parts.ghosts.append(_shifted(outcome.world_boxes[seen], offset))
-    if view.lines:
-        right, wrong, missed = _match_lines(trial, outcome.shown_pairs, trial.ego_boxes[:, :2] + offset, cav[:, :2],
-                                            colours.palette(view))
-        parts.right.append(right), parts.wrong.append(wrong), parts.missed.append(missed)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
     if view.fused:
         fused = outcome.fused(panel.placement)
@@ -136,27 +137,52 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
         parts.fused_fp.append(_shifted(fused.boxes[~fused.hits], offset))
 
 
-def _meshes(parts: _Parts, ego: np.ndarray, cav: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
-    """Boxes as top-down tiles (``geometry.footprint_mesh``), vehicles as small bodies."""
-    return {
-        "ego_boxes": Mesh(*geometry.footprint_mesh(ego), palette.ego_boxes),
-        "cav_boxes": Mesh(*geometry.footprint_mesh(_slim(cav)), palette.cav_boxes),
-        "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
-        "cav_vehicle": Mesh(*geometry.vehicle_mesh(parts.cav_poses), palette.cav_vehicle),
-        "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), palette.cav_vehicle, opacity=0.3),
-    }
+def _add_cav(parts: _Parts, cav: cavs.ShownCav, count: int, panel: Panel, ego: pairs.Drawn, lines: bool,
+             palette: colours.Palette) -> None:
+    """One CAV in one copy of the scene: its boxes as drawn, its vehicle and label, and (``lines``)
+    its pairs between the boxes drawn (``pairs.pair_shapes``)."""
+    drawn = cavs.drawn_cav(cav, panel.placement, panel.offset)
+    pose = se2.make(panel.offset[0], panel.offset[1], 0.0) @ cav.placements[panel.placement]
+    name = cavs.name(cav.rank, count)
+    parts.tiles[cav.rank].append(drawn.boxes)
+    parts.cav_poses[cav.rank].append(pose)
+    parts.labels[f"{cavs.node('cav', cav.rank)}_{panel.placement}"] = (name, (*se2.translation_of(pose), planes.LABELS))
+    if lines:
+        partners = cavs.drawn_partners(cav, ego, panel.offset) if cav.rank > 1 else ego
+        shapes = pairs.pair_shapes(cav.pairs, cav.trial.gt_pairs, partners, drawn, palette, name,
+                                   f"{cavs.node('pairs', cav.rank)}_{panel.placement}")
+        parts.shapes.append(shapes)
+
+
+def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
+    """Boxes as their footprints, flat in the plane of comparison (``planes``), each CAV's in its
+    colour; vehicles as small bodies (empty nodes for the CAVs the outcome lacks: hidden)."""
+    meshes = {"ego_boxes": Mesh(*geometry.footprint_mesh(ego, planes.EGO), palette.ego_boxes),
+              "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
+              "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), palette.cav_vehicle,
+                                         opacity=0.3)}
+    for rank in range(1, MAX_CAVS + 1):
+        tiles = np.concatenate(parts.tiles[rank]) if parts.tiles[rank] else np.zeros((0, 7))
+        meshes[cavs.node("cav_boxes", rank)] = Mesh(*geometry.footprint_mesh(tiles, planes.cav(rank)),
+                                                    cavs.box_colour(rank, palette))
+        meshes[cavs.node("cav_vehicle", rank)] = Mesh(*geometry.vehicle_mesh(parts.cav_poses[rank]),
+                                                      cavs.vehicle_colour(rank, palette))
+    return meshes
 
 
 def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
-    """Match lines; outlines of the CAV's boxes where ``init`` put them and of the ground truth."""
-    ghosts = geometry.outline_segments(np.concatenate(parts.ghosts)) if parts.ghosts else no_lines()
-    before = geometry.outline_segments(np.concatenate(parts.before), 0.1) if parts.before else no_lines()
+    """Match lines and the marks of wrong and missed pairs (every CAV's); outlines of the CAV's
+    boxes where ``init`` put them and of the ground truth."""
     strokes = {"right": palette.right, "wrong": palette.wrong, "missed": palette.missed}
-    return {**{name: Lines(_joined(getattr(parts, name)), s.color, s.thickness) for name, s in strokes.items()},
-            "cav_before": Lines(before, palette.cav_before, 1.5),
-            "ghosts": Lines(ghosts, palette.ghost, 1.5),
-            "fused_tp": Lines(_outlines(parts.fused_tp, FUSED_Z), palette.right.color, 3.0),
-            "fused_fp": Lines(_outlines(parts.fused_fp, FUSED_Z), palette.wrong.color, 3.0)}
+    marks = {"wrong_marks": (palette.wrong.color, 3.0), "missed_marks": (palette.missed.color, 2.0)}
+    return {**{name: Lines(_joined([getattr(p, name) for p in parts.shapes]), s.color, s.thickness)
+               for name, s in strokes.items()},
+            **{name: Lines(_joined([getattr(p, name) for p in parts.shapes]), colour, width)
+               for name, (colour, width) in marks.items()},
+            "cav_before": Lines(_outlines(parts.before, planes.OUTLINES), palette.cav_before, 1.5),
+            "ghosts": Lines(_outlines(parts.ghosts, planes.OUTLINES), palette.ghost, 1.5),
+            "fused_tp": Lines(_outlines(parts.fused_tp, planes.FUSED), palette.right.color, 3.0),
+            "fused_fp": Lines(_outlines(parts.fused_fp, planes.FUSED), palette.wrong.color, 3.0)}
 
 
 def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
@@ -176,35 +202,6 @@ def _map_lines(map_segments: dict[str, np.ndarray], poses: list[np.ndarray],
             nodes[name] = Lines(local if shown else no_lines(), colour, 1.0,
                                 pose=poses[k] @ se2.make(origin[0], origin[1], 0.0) if shown else None)
     return nodes
-
-
-def _labels(parts: _Parts, panels: list[Panel]) -> dict[str, tuple[str, tuple[float, float, float]]]:
-    labels = {}
-    for panel, ego_pose, cav_pose in zip(panels, parts.ego_poses, parts.cav_poses):
-        labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(ego_pose), 2.5))
-        labels[f"cav_{panel.placement}"] = ("CAV", (*se2.translation_of(cav_pose), 2.5))
-        if panel.title:
-            labels[panel.placement] = (panel.title, (TITLE_AT[0], float(panel.offset[1]), TITLE_AT[1]))
-    return labels
-
-
-def _match_lines(trial, pairs: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray,
-                 palette: colours.Palette) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Segments of right pairs, wrong pairs, and true pairs the method missed, each solid or
-    dashed as the palette's stroke says."""
-    right, wrong, missed = classified_pairs(pairs, trial.gt_pairs)
-    drawn = [(ego_xy[p[:, 0]], cav_xy[p[:, 1]], stroke.dash)
-             for p, stroke in ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
-    return tuple(geometry.segments(a, b, LINE_HEIGHT) if dash is None else geometry.dashed(a, b, LINE_HEIGHT, dash)
-                 for a, b, dash in drawn)
-
-
-def _slim(boxes: np.ndarray) -> np.ndarray:
-    """CAV boxes drawn narrower and taller than the ego's, so a matched pair shows both colours."""
-    out = boxes.copy()
-    out[:, 3:5] *= 0.7
-    out[:, 5] *= 1.3
-    return out
 
 
 def _shifted(boxes: np.ndarray, offset: np.ndarray) -> np.ndarray:

@@ -43,14 +43,15 @@ def box_mesh(boxes: np.ndarray, lift: float = 0.0) -> tuple[np.ndarray, np.ndarr
     return vertices.astype(np.float32), faces
 
 
-def footprint_mesh(boxes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (4N, 3) and faces (2N, 3) of each box's top face, at its height (a top-down tile,
-    facing up). A sixth of ``box_mesh``'s triangles and one layer of pixels per box: the scene
-    stays cheap to render in software WebGL. Empty input gives empty arrays."""
+def footprint_mesh(boxes: np.ndarray, z: float | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (4N, 3) and faces (2N, 3) of each box's footprint, a tile facing up at height ``z``
+    (None: at each box's own height, its top face). A sixth of ``box_mesh``'s triangles and one
+    layer of pixels per box: the scene stays cheap to render in software WebGL. Empty input gives
+    empty arrays."""
     n = len(boxes)
     if n == 0:
         return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32)
-    heights = np.repeat(boxes[:, 5, None, None], 4, axis=1)
+    heights = np.repeat((boxes[:, 5] if z is None else np.full(n, z))[:, None, None], 4, axis=1)
     vertices = np.concatenate([footprints(boxes), heights], axis=2).reshape(-1, 3)
     faces = (_TOP_FACES[None] + 4 * np.arange(n, dtype=np.uint32)[:, None, None]).reshape(-1, 3)
     return vertices.astype(np.float32), faces

@@ -9,9 +9,9 @@ import numpy as np
 from cbm import se2
 
 from ..session.explorer import Outcome
-from . import geometry
+from . import geometry, planes
 from .differences import differences, now_words
-from .drawing import LINE_HEIGHT, Drawing, Lines, no_lines
+from .drawing import Drawing, Lines, no_lines
 from .layouts import LAYOUTS
 from .linecolours import as_shown
 from .text import number
@@ -20,7 +20,6 @@ PINNED_LINES = (125, 80, 190)
 """The pinned run's match lines: a thin violet, lower than the current run's, apart from every
 palette's colours (missed true pairs are grey and dashed or dotted)."""
 PINNED_WORDS = "thin violet lines"
-PINNED_HEIGHT = LINE_HEIGHT - 0.4
 
 
 def pinned_segments(outcome: Outcome, pinned: Outcome) -> np.ndarray:
@@ -33,7 +32,7 @@ def pinned_segments(outcome: Outcome, pinned: Outcome) -> np.ndarray:
     cav_xy = se2.apply_boxes(pinned.result.transform, trial.cav_boxes)[pairs[:, 1], :2]
     panels = LAYOUTS[outcome.settings.view.layout].panels(outcome)
     shown = [p for p in panels if p.placement == "after"] or panels[:1]
-    return np.concatenate([geometry.segments(ego_xy + p.offset, cav_xy + p.offset, PINNED_HEIGHT) for p in shown])
+    return np.concatenate([geometry.segments(ego_xy + p.offset, cav_xy + p.offset, planes.PINNED) for p in shown])
 
 
 def _row(name: str, current: float, pinned: float, unit: str, digits: int) -> str:

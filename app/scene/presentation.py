@@ -45,15 +45,16 @@ def camera_over(agents: Sequence[tuple[float, float]], fov: float) -> tuple[tupl
     return (float(centre[0] - TILT * height), float(centre[1]), height), (float(centre[0]), float(centre[1]), 0.0)
 
 
-def aim(scene: SceneView, view: ViewOptions, drawing: Drawing | None) -> None:
-    """The tab's default camera: over the agents in presentation mode, else the layout's view."""
+def aim(scene: SceneView, view: ViewOptions, drawing: Drawing | None, oblique: bool = False) -> None:
+    """The tab's default camera: over the agents in presentation mode, else the layout's view from
+    straight above (``oblique``: the 3D view, from behind and above)."""
     if drawing is None:
-        scene.reset_camera()
-    elif view.presentation and drawing.agents:
+        scene.reset_camera(oblique=oblique)
+    elif view.presentation and drawing.agents and not oblique:
         camera = scene.client.camera
         camera.position, camera.look_at = camera_over(drawing.agents, camera.fov)
     else:
-        scene.reset_camera(drawing.centre_y)
+        scene.reset_camera(drawing.centre_y, oblique)
 
 
 def restage(client: viser.ClientHandle, before: ViewOptions | None, after: ViewOptions) -> bool:

@@ -49,10 +49,12 @@ def metrics_markdown(outcome: Outcome) -> str:
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
     method = METHODS[outcome.settings.method].label
-    ego, cav = agent_name("ego", outcome.ego_id, code=True), agent_name("CAV", outcome.cav_id, code=True)
+    ego = agent_name("ego", outcome.ego_id, code=True)
+    cav = agent_name("CAV 1" if outcome.others else "CAV", outcome.cav_id, code=True)
     agents = f"{ego} · {cav} ({outcome.cav_note})"
     lines = [
         f"**Frame {outcome.frame_index}** · {agents}",
+        *(["", "The table is CAV 1's (orange); every CAV has a row in the table after it."] if outcome.others else []),
         "",
         "| | |",
         "|---|---|",
@@ -69,6 +71,7 @@ def metrics_markdown(outcome: Outcome) -> str:
     if result.anchor is not None:
         margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
         lines.append(f"| consensus margin | {margin} |")
+    lines.extend(evidence_rows(result))
     lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:
@@ -79,3 +82,17 @@ def metrics_markdown(outcome: Outcome) -> str:
         lines.append(findings_heading(outcome))
         lines.extend(f"- {f.message}" for f in outcome.findings)
     return "\n".join(lines)
+
+
+def evidence_rows(result: object) -> list[str]:
+    """CBM's verdict on its own pose (step 7c, ``cbm.hypotheses``): a warning light with the reason
+    when it has not enough evidence, else how much better its pose explains the scene than the
+    runner-up pose; nothing for methods that do not verify."""
+    if getattr(result, "abstained", False):
+        return [f"| evidence | ⚠ not enough evidence: {getattr(result, 'reason', '')} |"]
+    margin = getattr(result, "evidence_margin", float("nan"))
+    if margin != margin:
+        return []
+    if margin == float("inf"):
+        return [f"| evidence | {result.hypotheses} hypotheses, every one lands on this pose |"]
+    return [f"| evidence | margin {margin:.1f} over the runner-up pose (of {result.hypotheses} hypotheses) |"]

@@ -20,8 +20,14 @@ from .points import POINT_SIZE, PointCloud
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
 _DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
-TOP_DOWN = {"position": (-10.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
-"""Default camera: high above the ego, looking down and a little forward (x points up the screen)."""
+TOP_DOWN = {"position": (5.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
+"""Default camera: straight above the scene ahead of the ego (standing back a twentieth of its height,
+so that x points up the screen): the footprints show as they are compared."""
+OBLIQUE = {"position": (-30.0, 0.0, 35.0), "look_at": (8.0, 0.0, 0.0)}
+"""The 3D view: behind and above the ego, looking forward and down (about 43 degrees)."""
+NEAR = 0.5
+"""Metres to the camera's near clipping plane: depth precision enough to stack the footprints'
+layers (``planes.STEP`` apart) seen from 100 m."""
 VISER_LABEL_PX = 12.0
 """Height in CSS pixels of viser's screen-space label text at ``font_screen_scale`` 1."""
 
@@ -64,11 +70,13 @@ class SceneView:
         return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values(),
                                  *self.clouds.values())}
 
-    def reset_camera(self, centre_y: float = 0.0) -> None:
-        """Look down on the ego from behind, centred sideways on ``centre_y`` (higher when the
-        layout shows two panels side by side), in the part of the page the control panel leaves free."""
-        camera = self.client.camera
-        camera.position, camera.look_at = clear_of_panel(TOP_DOWN["position"], TOP_DOWN["look_at"], centre_y,
+    def reset_camera(self, centre_y: float = 0.0, oblique: bool = False) -> None:
+        """Look straight down on the scene ahead of the ego (``oblique``: the 3D view, from behind
+        and above), centred sideways on ``centre_y`` (higher when the layout shows two panels side
+        by side), in the part of the page the control panel leaves free."""
+        camera, start = self.client.camera, OBLIQUE if oblique else TOP_DOWN
+        camera.near = NEAR
+        camera.position, camera.look_at = clear_of_panel(start["position"], start["look_at"], centre_y,
                                                          screen_of(camera))
 
     def show(self, drawing: Drawing) -> None:

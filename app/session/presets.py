@@ -11,11 +11,13 @@ while their modification time and size stay the same.
 """
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 import sys
 import tempfile
 import threading
+import unicodedata
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -23,6 +25,7 @@ from typing import Any
 import numpy as np
 import tomli_w
 
+from evaluation.presets import NotRegularFile, read_regular
 from presets import SHIPPED_DIR
 
 from .settings import Settings, from_preset, to_preset
@@ -76,8 +79,12 @@ def nesting_depth(text: str) -> int:
 
 
 def _text(path: Path) -> str:
-    with path.open("rb") as handle:
-        data = handle.read(MAX_BYTES + 1)
+    """The text of the preset file ``path``: a regular file only (never blocking on a FIFO), of at most
+    ``MAX_BYTES``, UTF-8, nested at most ``MAX_DEPTH`` deep; ``PresetError`` naming the file otherwise."""
+    try:
+        data = read_regular(path, MAX_BYTES)
+    except NotRegularFile as error:
+        raise PresetError(f"{path.name}: {error}; not read") from None
     if len(data) > MAX_BYTES:
         raise PresetError(f"{path.name}: larger than {MAX_BYTES // 1024} KB; not read")
     try:
@@ -159,10 +166,19 @@ def discover(shipped_dir: Path = SHIPPED_DIR, users: Path | None = None) -> tupl
 
 
 def _listing(folder: Path, problems: list[str]) -> list[Path]:
+    """The ``*.toml`` files of the presets folder ``folder`` (none when it does not exist); a folder
+    that cannot be listed, or is not a folder, is reported in ``problems`` rather than taken as empty."""
     try:
-        return sorted(folder.glob("*.toml")) if folder.is_dir() else []
+        if not folder.exists():
+            return []
+        if not folder.is_dir():
+            problems.append(f"{folder}: the presets folder is not a folder; its presets are not offered")
+            return []
+        with os.scandir(folder) as entries:
+            return sorted(Path(entry.path) for entry in entries if entry.name.endswith(".toml"))
     except OSError as error:
-        problems.append(f"{folder}: {error}")
+        problems.append(f"{folder}: the presets folder cannot be listed ({error.strerror or error}); "
+                        "its presets are not offered")
         return []
 
 
@@ -173,13 +189,32 @@ def skipped_markdown(problems: list[str]) -> str:
     return "**Preset files skipped:**\n\n" + "\n".join(f"- `{p[:300]}`" for p in problems)
 
 
+MAX_STEM_BYTES = 200
+"""Longest file stem, in UTF-8 bytes (file systems allow 255 bytes per name; 80 characters of a
+non-Latin script can take 320)."""
+
+
 def slug(name: str) -> str:
-    """The file stem of a preset name."""
-    return re.sub(r"[^a-z0-9]+", "-", name.lower()).strip("-")
+    """The file stem of a preset name: in any script, case folded, with each run of characters that
+    are not letters, marks or digits (spaces, punctuation, path separators) made one hyphen; one
+    longer than ``MAX_STEM_BYTES`` is cut at a character and ends with a digest of the whole name."""
+    folded = unicodedata.normalize("NFC", name).casefold()
+    kept = "".join(c if unicodedata.category(c)[0] in "LMN" else " " for c in folded)
+    stem = "-".join(kept.split())
+    if len(stem.encode("utf-8")) <= MAX_STEM_BYTES:
+        return stem
+    digest = hashlib.sha256(folded.encode("utf-8")).hexdigest()[:10]
+    cut = stem.encode("utf-8")[:MAX_STEM_BYTES - len(digest) - 1].decode("utf-8", errors="ignore")
+    return f"{cut.rstrip('-')}-{digest}"
 
 
 def _same_name(a: str, b: str) -> bool:
-    return " ".join(a.split()).casefold() == " ".join(b.split()).casefold()
+    return all_words(a) == all_words(b)
+
+
+def all_words(name: str) -> str:
+    """``name`` compared for sameness: Unicode-normalised, case folded, spaces collapsed."""
+    return " ".join(unicodedata.normalize("NFC", name).split()).casefold()
 
 
 def checked_stem(name: str, folder: Path, shipped_dir: Path = SHIPPED_DIR) -> str:

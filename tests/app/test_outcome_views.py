@@ -9,7 +9,8 @@ import pytest
 
 import app.session.explorer as explorer_module
 from app.scene import geometry
-from app.scene.drawing import FUSED_Z, draw
+from app.scene.drawing import draw
+from app.scene.planes import FUSED
 from app.session.explorer import Explorer, Outcome
 from app.session.settings import Settings
 from evaluation.fusion import fused_against_truth
@@ -51,8 +52,8 @@ def test_the_drawn_fused_boxes_are_the_outcomes(small_explorer: Explorer) -> Non
                                       outcome.world_ids, outcome.settings.scenario.seed, outcome.frame_index)
     assert np.array_equal(fused.boxes, truth.boxes) and np.array_equal(fused.hits, hits)
     picture = draw(outcome, small_explorer.map_segments)
-    assert np.allclose(picture.lines["fused_tp"].segments, geometry.outline_segments(fused.boxes[fused.hits], FUSED_Z))
-    assert np.allclose(picture.lines["fused_fp"].segments, geometry.outline_segments(fused.boxes[~fused.hits], FUSED_Z))
+    assert np.allclose(picture.lines["fused_tp"].segments, geometry.outline_segments(fused.boxes[fused.hits], FUSED))
+    assert np.allclose(picture.lines["fused_fp"].segments, geometry.outline_segments(fused.boxes[~fused.hits], FUSED))
 
 
 def test_cbm_sets_are_the_ones_the_method_built(small_explorer: Explorer) -> None:

@@ -1,6 +1,6 @@
 """Issue 16 in a real browser: a dataset CBM cannot run on gets a lasting message (started through
 the command line), and the Presets tab lists the preset files it skipped and refuses a name that
-would overwrite another preset's file."""
+would overwrite another preset's file; issue 27: a name in another script keeps its letters."""
 from __future__ import annotations
 
 import signal
@@ -69,4 +69,24 @@ def test_presets_tab_lists_skipped_files_and_refuses_a_colliding_name(browser, t
         page.get_by_text("which holds the preset '../x'").first.wait_for(timeout=30_000)
         assert [p.name for p in presets.glob("x*.toml")] == ["x.toml"]
         assert 'name = "../x"' in (presets / "x.toml").read_text()
+        page.close()
+
+
+def test_a_preset_named_in_another_script_is_saved_under_its_own_letters(browser, tmp_path: Path) -> None:
+    """Issue 27, row 13: "配置 2" is saved as 配置-2.toml (was: 2.toml) and offered under that name."""
+    presets = tmp_path / "presets"
+    presets.mkdir()
+    with ui.scenario_server(Explorer(loaders.open("synthetic:8")), presets) as server:
+        page = ui.open_page(browser, server)
+        tab = ui.session(server, 1)
+        page.get_by_role("tab", name="Presets").click()
+        row = ui.label(page, "save as").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+        name = row.locator("input").first
+        name.fill("配置 2")
+        name.blur()
+        ui.wait_until(lambda: tab.controls.presets.name.value == "配置 2")
+        page.get_by_role("button", name="save current settings").click()
+        page.get_by_text("配置 2 -> 配置-2.toml").first.wait_for(timeout=30_000)
+        assert [p.name for p in presets.iterdir()] == ["配置-2.toml"]
+        assert "配置-2" in tab.presets and 'name = "配置 2"' in (presets / "配置-2.toml").read_text()
         page.close()

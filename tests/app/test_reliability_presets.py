@@ -35,7 +35,7 @@ def test_every_kind_of_bad_file_is_skipped_with_its_reason(tmp_path: Path) -> No
     assert skipped == set(BAD_FILES) | {"folder.toml"}
     text = "\n".join(problems)
     assert "nested deeper than" in text and "larger than 256 KB" in text and "UnicodeDecodeError" in text
-    assert "IsADirectoryError" in text
+    assert "folder.toml: a folder, not a regular file; not read" in text
     markdown = skipped_markdown(problems)
     assert markdown.startswith("**Preset files skipped:**") and markdown.count("\n- ") == len(problems)
     assert skipped_markdown([]) == ""
@@ -88,3 +88,18 @@ def test_a_long_name_gets_a_clear_message(tmp_path: Path) -> None:
     with pytest.raises(PresetError, match=f"at most {MAX_NAME} characters; this one has 300"):
         save_preset("a" * 300, Settings(), users=tmp_path)
     assert save_preset("b" * MAX_NAME, Settings(), users=tmp_path).name == "b" * MAX_NAME + ".toml"
+
+
+def test_names_in_any_script_keep_their_letters_and_never_collide(tmp_path: Path) -> None:
+    files = {"配置": "配置.toml", "配置 2": "配置-2.toml", "ünï": "ünï.toml", "हिन्दी": "हिन्दी.toml"}
+    for name, file in files.items():
+        assert save_preset(name, Settings(), users=tmp_path).name == file
+    presets, problems = discover(users=tmp_path)
+    assert problems == [] and {n: presets[Path(f).stem].saved_as for n, f in files.items()} == {n: n for n in files}
+    assert save_preset("ÜNÏ", Settings(), users=tmp_path).name == "ünï.toml", "the same name in other case replaces it"
+    with pytest.raises(PresetError, match="'配置!' would be saved as 配置.toml, which holds the preset '配置'"):
+        save_preset("配置!", Settings(), users=tmp_path)
+    longest = "配" * MAX_NAME
+    path = save_preset(longest, Settings(), users=tmp_path)
+    assert len(path.name.encode("utf-8")) <= 255 and read(path, shipped=False).saved_as == longest
+    assert save_preset(longest, Settings(), users=tmp_path) == path

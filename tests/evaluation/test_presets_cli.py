@@ -28,7 +28,7 @@ def _run(tmp_path: Path, name: str, *args: str) -> pl.DataFrame:
 
 def _scenario_row(table: pl.DataFrame) -> dict:
     return table.select("protocol", "eta", "sigma_p", "sigma_theta", "flip_prob", "localization", "loc_x",
-                        "loc_y", "loc_yaw", "sensor_range", "seed").row(0, named=True)
+                        "loc_y", "loc_yaw", "sensor_range", "miss_rate", "false_rate", "seed").row(0, named=True)
 
 
 def test_the_defaults_are_the_apps_default_preset(tmp_path: Path) -> None:

@@ -98,3 +98,14 @@ def test_random_bytes_in_a_dair_index(content):
         index.write_bytes(content)
         with pytest.raises(loaders.LoaderError):
             load_everything(Path(tmp))
+
+
+@pytest.mark.parametrize("case, path", [("argoverse2", CASES["argoverse2"][2][2]),
+                                        ("dair_v2x", "cooperative/data_info.json"), ("opv2v", "641/000068.yaml")])
+def test_deeply_nested_json_or_yaml_is_a_loader_error_naming_the_file(case, path, tmp_path):
+    folder, entry, _ = CASES[case]
+    root = tmp_path / Path(folder).name
+    shutil.copytree(FIXTURES / folder, root)
+    (root / path).write_text("[" * 100_000 + "]" * 100_000)
+    with pytest.raises(loaders.LoaderError, match=f"{Path(path).name}: not valid"):
+        load_everything(root / entry)

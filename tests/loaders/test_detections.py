@@ -99,3 +99,54 @@ def test_missing_key_and_no_matching_sample(tmp_path, fixtures):
         loaders.open(fixtures / SCENARIO, detections=path)
     with pytest.raises(loaders.LoaderError, match="detections file .* does not exist"):
         loaders.open(fixtures / SCENARIO, detections=tmp_path / "absent.json")
+
+
+@pytest.mark.parametrize("value", [1e300, -1e7])
+def test_finite_but_huge_corners_are_refused_at_load_naming_the_file_and_field(tmp_path, fixtures, value) -> None:
+    def huge(samples):
+        samples["13"]["pred_corner3d_np_list"][0][0][3][1] = value
+    path = _rewritten(tmp_path, fixtures, huge)
+    with pytest.raises(loaders.LoaderError) as raised:
+        loaders.open(fixtures / SCENARIO, detections=path)
+    assert str(raised.value) == (f"{path}: 13.pred_corner3d_np_list[0]: a corner coordinate is {abs(value):.3g} m from "
+                                 "the agent; expected box corners within 1e+05 m of its LiDAR")
+
+
+def test_a_second_sample_for_the_same_frame_is_left_out_with_a_warning(tmp_path, fixtures):
+    def repeat(samples):
+        samples["14"] = json.loads(json.dumps(samples["13"]))
+        samples["14"]["pred_corner3d_np_list"][0] = samples["14"]["pred_corner3d_np_list"][0][:1]
+    path = _rewritten(tmp_path, fixtures, repeat)
+    with pytest.warns(UserWarning, match=r"1 sample\(s\) match a frame an earlier sample matched"):
+        sequence = loaders.open(fixtures / SCENARIO, detections=path)
+    first = loaders.open(fixtures / SCENARIO, detections=fixtures / STAGE1)
+    assert np.array_equal(sequence.detections[0]["641"].boxes, first.detections[0]["641"].boxes)
+    assert sequence.warnings == [f"{path}: 1 sample(s) match a frame an earlier sample matched (the same ego pose), "
+                                 "and were left out: 14 (frame 0, kept 13)"]
+
+
+def test_a_sample_whose_cav_is_not_in_its_frame_is_refused(tmp_path, fixtures):
+    path = _rewritten(tmp_path, fixtures, lambda samples: samples["13"]["cav_id_list"].__setitem__(1, "777"))
+    with pytest.raises(loaders.LoaderError) as raised:
+        loaders.open(fixtures / SCENARIO, detections=path)
+    assert str(raised.value) == (f"{path}: 13.cav_id_list: agent '777' is not in frame 0 of opv2v/scenario (its "
+                                 "agents: -1, 641, 650); the sample belongs to another dataset or split")
+
+
+def test_the_file_is_read_one_sample_at_a_time_and_must_be_one_whole_object(tmp_path, fixtures, monkeypatch):
+    monkeypatch.setattr("loaders.structured.STREAM_CHUNK", 64)
+    streamed = loaders.open(fixtures / SCENARIO, detections=fixtures / STAGE1)
+    assert list(streamed.detections) == [0] and len(streamed.detections[0]["641"].boxes)
+    for text, reason in (('{"13": null', "expected ',' or '}' after a value"),
+                         ('{"13": null} {}', "extra data after the object"), ("[1]", None)):
+        path = tmp_path / "bad.json"
+        path.write_text(text)
+        with pytest.raises(loaders.LoaderError, match="expected a JSON object of sample index" if reason is None
+                           else f"not valid JSON \\({reason}"):
+            loaders.open(fixtures / SCENARIO, detections=path)
+
+
+def test_a_file_with_a_byte_order_mark_is_read_as_json_loads_reads_it(tmp_path, fixtures):
+    path = tmp_path / "stage1_boxes.json"
+    path.write_bytes(b"\xef\xbb\xbf" + (fixtures / STAGE1).read_bytes())
+    assert list(loaders.open(fixtures / SCENARIO, detections=path).detections) == [0]

@@ -6,6 +6,7 @@ from hypothesis import strategies as st
 
 import loaders
 from loaders import synthetic
+from loaders.errors import LoaderError
 
 
 def _footprints(boxes):
@@ -35,7 +36,7 @@ def test_any_count_without_overlap_in_any_frame(n, seed):
         assert _overlapping_pairs(frame.boxes()) == 0
 
 
-@pytest.mark.parametrize("n", [0, 1, 1000])
+@pytest.mark.parametrize("n", [0, 1, 1000, synthetic.MAX_OBJECTS])
 def test_edge_counts(n):
     seq = synthetic.generate(n_objects=n, n_frames=2, seed=3)
     assert [len(f) for f in seq] == [n, n]
@@ -98,3 +99,9 @@ def test_bad_arguments():
         synthetic.generate(n_objects=2001)
     with pytest.raises(loaders.LoaderError, match="n_frames"):
         synthetic.generate(n_objects=5, n_frames=0)
+
+
+@pytest.mark.parametrize("seed", [-1, 1.5, True])
+def test_a_seed_that_is_not_a_non_negative_integer_is_named(seed):
+    with pytest.raises(LoaderError, match=f"synthetic: seed must be a non-negative integer, got {seed!r}"):
+        synthetic.generate(5, n_frames=2, seed=seed)

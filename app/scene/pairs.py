@@ -1,0 +1,102 @@
+"""What the scene draws for one CAV's pairs: match lines from the centre of the ego footprint drawn
+to the centre of the CAV footprint drawn (the very boxes the tiles show, so lines and boxes agree),
+and the boxes of wrong and missed pairs marked themselves: outlined in the pair's colour and
+labelled with both ids, so that a wrong pair whose boxes overlap (its line has no length) shows."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from evaluation.diagnosis import short_id
+
+from ..session.explorer import classified_pairs
+from . import colours, geometry, planes
+
+Labels = dict[str, tuple[str, tuple[float, float, float]]]
+"""Text and (x, y, z) of each label, by name."""
+LABEL_LINE_M = 1.3
+"""Metres a label's line of text covers up the screen under the default camera (``LABEL_PX`` at its height)."""
+LABEL_CHAR_M = 0.6
+"""Metres a character of a label covers across the screen under the default camera."""
+
+
+@dataclass(frozen=True)
+class Drawn:
+    """Boxes as the scene draws them (their footprints, in the scene's frame) and their object ids."""
+
+    boxes: np.ndarray
+    """(N, 7)."""
+    ids: np.ndarray
+    """(N,)."""
+
+
+@dataclass(frozen=True)
+class PairShapes:
+    """Segments of one CAV's pairs in one copy of the scene, and the labels of its wrong and missed ones."""
+
+    right: np.ndarray
+    wrong: np.ndarray
+    missed: np.ndarray
+    wrong_marks: np.ndarray
+    """Outlines of the two boxes of every wrong pair."""
+    missed_marks: np.ndarray
+    """Outlines of the two boxes of every true pair the method missed."""
+    labels: Labels
+
+
+def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, palette: colours.Palette,
+                cav_name: str, key: str) -> PairShapes:
+    """The lines and marks of ``pairs`` (ego index, CAV index) against the true ``truth``, between
+    the drawn boxes ``ego`` and ``cav``; labels named ``key`` and the pair, the CAV called ``cav_name``."""
+    right, wrong, missed = classified_pairs(pairs, truth)
+    lines = [_segments(ego, cav, p, stroke.dash) for p, stroke in
+             ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
+    labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗", cav_name, on_cav=True),
+              **_labels(unexplained(missed, wrong), ego, cav, f"{key}_missed", "missed", cav_name, on_cav=False)}
+    return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), labels)
+
+
+def unexplained(missed: np.ndarray, wrong: np.ndarray) -> np.ndarray:
+    """The missed pairs whose boxes are not both in wrong pairs (a swap's missed pairs are named by
+    its wrong pairs' labels already, and their outlines stay)."""
+    both = np.isin(missed[:, 0], wrong[:, 0]) & np.isin(missed[:, 1], wrong[:, 1])
+    return missed[~both]
+
+
+def spread(labels: Labels) -> Labels:
+    """The labels moved down the screen (-x, the top-down camera's down), one line at a time, until
+    none overprints one placed before it (a label's text runs from its point to the screen's right, -y)."""
+    placed: list[tuple[float, float, float]] = []
+    out = {}
+    for name, (text, (x, y, z)) in sorted(labels.items(), key=lambda item: -item[1][1][0]):
+        width = LABEL_CHAR_M * len(text)
+        while any(abs(x - px) < LABEL_LINE_M and y - width < py and py - pw < y for px, py, pw in placed):
+            x -= LABEL_LINE_M
+        placed.append((x, y, width))
+        out[name] = (text, (x, y, z))
+    return out
+
+
+def _segments(ego: Drawn, cav: Drawn, pairs: np.ndarray, dash: float | None) -> np.ndarray:
+    """Lines from each pair's drawn ego centre to its drawn CAV centre, solid or in dashes ``dash`` long."""
+    a, b = ego.boxes[pairs[:, 0], :2], cav.boxes[pairs[:, 1], :2]
+    return geometry.segments(a, b, planes.LINES) if dash is None else geometry.dashed(a, b, planes.LINES, dash)
+
+
+def _marks(pairs: np.ndarray, ego: Drawn, cav: Drawn) -> np.ndarray:
+    """Outlines of both boxes of each pair, as drawn."""
+    return geometry.outline_segments(np.concatenate([ego.boxes[pairs[:, 0]], cav.boxes[pairs[:, 1]]]), planes.MARKS)
+
+
+def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str, cav_name: str,
+            on_cav: bool) -> Labels:
+    """A label per pair, on its CAV box (``on_cav``) or its ego box: what went wrong and both ids
+    (one id when both detections are of the same object, as a missed pair's are)."""
+    labels = {}
+    for i, j in pairs.tolist():
+        ego_id, cav_id = short_id(ego.ids[i]), short_id(cav.ids[j])
+        ids = ego_id if ego_id == cav_id else f"ego {ego_id} ↔ {cav_name} {cav_id}"
+        x, y = (cav.boxes[j] if on_cav else ego.boxes[i])[:2]
+        labels[f"{key}_{i}_{j}"] = (f"{kind} {ids}", (float(x), float(y), planes.LINES))
+    return labels

@@ -1,0 +1,68 @@
+"""A stop signal while ``serve.py`` starts (issue 27, row 15): it acts within 2 s, not after the
+dataset is loaded, with one line, status 128 + the signal and no process left behind."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import polars as pl
+import pytest
+
+from support.processes import alive, descendants, has_loaded, wait_for
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def slow_dataset(tmp_path_factory) -> Path:
+    """A table of 5000 frames of 200 vehicles (40 MB): a few seconds to load."""
+    frames, objects = 5000, 200
+    rng = np.random.default_rng(0)
+    table = pl.DataFrame({
+        "frame": np.repeat(np.arange(frames), objects),
+        "track_id": np.tile([f"v{k}" for k in range(objects)], frames),
+        "category": "vehicle",
+        "x": rng.uniform(-50, 50, frames * objects).round(2),
+        "y": rng.uniform(-50, 50, frames * objects).round(2),
+        "length": 4.5, "width": 1.9, "yaw": 0.0,
+    })
+    path = tmp_path_factory.mktemp("slow") / "slow.csv"
+    table.write_csv(path)
+    return path
+
+
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signal_while_the_dataset_loads_stops_within_2_s(slow_dataset, tmp_path, signum: int) -> None:
+    process = subprocess.Popen([sys.executable, "serve.py", "--dataset", str(slow_dataset), "--port", "0"],
+                               cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "CBM_EXPLORER_PRESETS": str(tmp_path)})
+    wait_for(lambda: descendants(process.pid) or process.poll() is not None, 120,
+             "the kernels' compiling subprocesses, started just before the dataset loads")
+    children = descendants(process.pid)
+    started = time.monotonic()
+    process.send_signal(signum)
+    stdout, stderr = process.communicate(timeout=120)
+    took = time.monotonic() - started
+    assert process.returncode == 128 + signum, stderr
+    assert stdout == "" and stderr.strip() == f"serve.py: stopped by {signal.Signals(signum).name} while starting"
+    assert took < 2.0
+    assert children and not any(alive(child) for child in children)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_a_stop_signal_while_serve_py_imports_is_one_line(tmp_path, signum: int) -> None:
+    process = subprocess.Popen([sys.executable, "serve.py", "--dataset", "synthetic:5", "--port", "0"], cwd=REPO,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "CBM_EXPLORER_PRESETS": str(tmp_path)})
+    wait_for(lambda: has_loaded(process.pid, "numpy") or process.poll() is not None, 120, "numpy being imported")
+    process.send_signal(signum)
+    stdout, stderr = process.communicate(timeout=120)
+    assert process.returncode == 128 + signum, stderr
+    lines = stderr.strip().splitlines()
+    assert stdout == "" and len(lines) == 1
+    assert lines[0].startswith(f"serve.py: stopped by {signal.Signals(signum).name}")

@@ -1,0 +1,144 @@
+"""``--ray`` that cannot hang (issue 27, rows 1 and 2): an address where something that is not Ray
+listens is refused in one line, the port range is checked, and a stop signal during a local Ray
+instance's start-up ends the run with one line and no Ray process left behind."""
+from __future__ import annotations
+
+import os
+import shutil
+import signal
+import socket
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from pathlib import Path
+
+import pytest
+
+from evaluation.cli import main
+from evaluation.executors import ExecutorError, check_reachable
+from support.processes import alive, descendants, wait_for
+
+REPO = Path(__file__).resolve().parents[2]
+QUICK = ["--dataset", "synthetic:20", "--frames", "0:2", "--methods", "icp", "--workers", "1"]
+
+
+@contextmanager
+def listener(reply: bytes | None) -> Iterator[tuple[str, threading.Event]]:
+    """A TCP server on loopback that is not Ray: it accepts, then sends ``reply`` (None: nothing,
+    the connection held open); yields its address and an event set once it has accepted."""
+    server = socket.create_server(("127.0.0.1", 0))
+    accepted = threading.Event()
+    held: list[socket.socket] = []
+
+    def serve() -> None:
+        while True:
+            try:
+                connection, _ = server.accept()
+            except OSError:
+                return
+            held.append(connection)
+            if reply is not None:
+                connection.sendall(reply)
+            accepted.set()
+
+    threading.Thread(target=serve, daemon=True).start()
+    try:
+        yield f"127.0.0.1:{server.getsockname()[1]}", accepted
+    finally:
+        server.close()
+        for connection in held:
+            connection.close()
+
+
+def test_a_silent_listener_is_not_taken_for_a_ray_cluster() -> None:
+    with listener(None) as (address, _):
+        started = time.monotonic()
+        with pytest.raises(ExecutorError) as raised:
+            check_reachable(address, timeout=2.0)
+    assert time.monotonic() - started < 10
+    assert str(raised.value) == (f"--ray {address}: something listens there but does not answer as a Ray cluster "
+                                 "(no gRPC reply within 2 s); give the head's GCS address (6379 by default)")
+
+
+def test_a_web_server_is_not_taken_for_a_ray_cluster() -> None:
+    with listener(b"HTTP/1.1 400 Bad Request\r\n\r\n") as (address, _):
+        with pytest.raises(ExecutorError) as raised:
+            check_reachable(address, timeout=5.0)
+    assert str(raised.value) == (f"--ray {address}: something listens there but it is not a Ray cluster (its reply "
+                                 "b'HTTP/1.1 ' is not gRPC); give the head's GCS address (6379 by default)")
+
+
+@pytest.mark.parametrize("port", ["99999", "0", "65536"])
+def test_a_port_out_of_range_is_one_line_before_anything_is_loaded(port, capsys, tmp_path) -> None:
+    with pytest.raises(SystemExit) as stop:
+        main([*QUICK, "--ray", f"127.0.0.1:{port}", "--out", str(tmp_path / "out")])
+    assert stop.value.code == 2
+    assert capsys.readouterr().err == (f"evaluate.py: error: --ray 127.0.0.1:{port}: the port must be between 1 "
+                                       f"and 65535, got {int(port)}\n")
+
+
+def test_evaluate_py_refuses_a_listener_that_is_not_ray_within_15_s(tmp_path) -> None:
+    with listener(None) as (address, _):
+        started = time.monotonic()
+        done = subprocess.run([sys.executable, "evaluate.py", *QUICK, "--ray", address, "--out", str(tmp_path / "o")],
+                              cwd=REPO, capture_output=True, text=True, timeout=120)
+        took = time.monotonic() - started
+    assert done.returncode == 2
+    assert done.stderr.strip().splitlines() == [
+        f"evaluate.py: error: --ray {address}: something listens there but does not answer as a Ray cluster "
+        "(no gRPC reply within 10 s); give the head's GCS address (6379 by default)"]
+    assert took < 25, f"{took:.1f} s (10 s of waiting for the reply, the rest Python's start on a busy machine)"
+
+
+def test_sigterm_while_waiting_for_the_listener_stops_within_2_s(tmp_path) -> None:
+    with listener(None) as (address, accepted):
+        process = subprocess.Popen([sys.executable, "evaluate.py", *QUICK, "--ray", address,
+                                    "--out", str(tmp_path / "o")], cwd=REPO, stderr=subprocess.PIPE, text=True)
+        assert accepted.wait(120), "evaluate.py never connected"
+        started = time.monotonic()
+        process.send_signal(signal.SIGTERM)
+        stderr = process.communicate(timeout=60)[1]
+        took = time.monotonic() - started
+    assert process.returncode == 143 and stderr.strip() == "evaluate.py: stopped by SIGTERM; nothing written"
+    assert took < 2.0
+
+
+def ray_processes(marker: str) -> list[int]:
+    """Live processes whose command line names ``marker`` (the run's own Ray temporary folder)."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if entry.name.isdigit():
+            try:
+                if marker.encode() in (entry / "cmdline").read_bytes() and alive(int(entry.name)):
+                    found.append(int(entry.name))
+            except OSError:
+                continue
+    return found
+
+
+@pytest.mark.ray
+@pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
+def test_a_stop_signal_during_ray_local_start_up_leaves_no_process(signum: int) -> None:
+    temporary = tempfile.mkdtemp(prefix="r27", dir="/tmp")  # Ray's folder: a short path for its sockets
+    try:
+        out = Path(temporary) / "out"
+        process = subprocess.Popen([sys.executable, "evaluate.py", *QUICK, "--ray", "local", "--out", str(out)],
+                                   cwd=REPO, stderr=subprocess.PIPE, text=True,
+                                   env={**os.environ, "RAY_TMPDIR": temporary})
+        wait_for(lambda: any(b"raylet" in Path(f"/proc/{pid}/cmdline").read_bytes()
+                             for pid in descendants(process.pid) if alive(pid)) or process.poll() is not None,
+                 180, "Ray's raylet to start")
+        started = time.monotonic()
+        process.send_signal(signum)
+        stderr = process.communicate(timeout=120)[1]
+        took = time.monotonic() - started
+        assert process.returncode == 128 + signum, stderr
+        assert stderr.strip() == f"evaluate.py: stopped by {signal.Signals(signum).name}; nothing written"
+        assert took < 2.5
+        wait_for(lambda: not ray_processes(temporary), 10, "Ray's processes to be gone")
+    finally:
+        shutil.rmtree(temporary, ignore_errors=True)
