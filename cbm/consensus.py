@@ -35,7 +35,7 @@ class PairSets:
 
     @staticmethod
     def empty(n_pairs: int) -> PairSets:
-        return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int64))
+        return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int32))
 
 
 @numba.njit(cache=True)
@@ -53,7 +53,7 @@ def _group_by_member(anchor, member, n_pairs):
     for pair in range(n_pairs):
         start[pair + 1] += start[pair]
     fill = start[:-1].copy()
-    values = np.empty(start[n_pairs], np.int64)
+    values = np.empty(start[n_pairs], np.int32)
     for row in range(len(anchor)):
         values[fill[member[row]]] = anchor[row]
         fill[member[row]] += 1

@@ -14,6 +14,7 @@ from .consensus import PairSets
 from .params import CBMParams
 from .pipeline import Sets, build_sets, checked_inputs, match_sets
 from .result import MatchResult
+from .reuse import Reuse
 from .selection import filtered_sizes
 
 
@@ -68,11 +69,12 @@ class Inspection:
     """CBM's sets on one input, kept so that any anchor can be explained."""
 
     def __init__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
-                 params: CBMParams | None = None) -> None:
+                 params: CBMParams | None = None, reuse: Reuse | None = None) -> None:
+        """Steps 1-4 on the input; with ``reuse``, what an earlier inspection of it built is reused."""
         started = time.perf_counter()
         ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
         self._timings: dict[str, float] = {}
-        self.sets: Sets = build_sets(ego, cav, init, params, self._timings)
+        self.sets: Sets = build_sets(ego, cav, init, params, self._timings, reuse)
         self.init, self.n_cav, self._started = init, len(cav), started
         self._anchors: dict[tuple[int, int], AnchorDetail] = {}
         """Anchors explained so far: kept with this inspection and forgotten with it."""

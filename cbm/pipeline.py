@@ -9,15 +9,15 @@ from typing import Any
 
 import numpy as np
 
-from . import se2
 from .consensus import PairSets, voted_by_member
-from .context import Context, build_context, fold_heading, pair_signs
+from .context import Context
 from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
 from .local_matching import CandidateSets, count_candidates
 from .params import CBMParams
 from .result import MatchResult
+from .reuse import Reuse, prepare
 from .selection import select
 
 
@@ -59,21 +59,20 @@ class Sets:
 
 
 def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
-               timings: dict[str, float] | None = None) -> Sets:
-    """Steps 1-4 and the candidate and voting sets, for checked inputs."""
+               timings: dict[str, float] | None = None, reuse: Reuse | None = None) -> Sets:
+    """Steps 1-4 and the candidate and voting sets, for checked inputs; with ``reuse``, what an
+    earlier call on the same input built and no threshold changes is taken from it."""
     timings = {} if timings is None else timings
     started = time.perf_counter()
-    cav_in_ego = se2.apply_boxes(init, cav)
-    ego_xy, cav_xy = ego[:, :2], cav_in_ego[:, :2]
-    ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav_in_ego[:, 6])
-    signs = pair_signs(ego_heading, cav_heading, params.heading)
-    ego_context, cav_context = build_context(ego_xy, ego_heading), build_context(cav_xy, cav_heading)
+    ready = prepare(ego, cav, init, params.heading) if reuse is None else reuse.prepared(ego, cav, init, params.heading)
+    cav_in_ego, ego_heading, cav_heading, signs = ready.cav_boxes, ready.ego_heading, ready.cav_heading, ready.signs
+    ego_context, cav_context = ready.ego_context, ready.cav_context
     t = time.perf_counter()
     timings["context"] = t - started
 
     candidates, vote_anchor, vote_member = count_candidates(
         ego_context, cav_context, ego_heading, signs, params.sigma1_rad, params.sigma2,
-        params.sigma3 if params.consensus else None)
+        params.sigma3 if params.consensus else None, ready.kept)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
 

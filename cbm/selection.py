@@ -24,6 +24,9 @@ from .local_matching import POOL, THREADS, CandidateSets, members_into
 
 RIVAL_CHUNK = 128
 """Anchors handed to the threads at a time in the runner-up search."""
+RIVAL_THREADS_FROM = 250_000
+"""Candidate pairs (the chunk's card(L_ij) summed) from which a chunk's halves run on two threads;
+below, handing them over costs more than it saves, and the calling thread runs the chunk."""
 
 
 @dataclass(frozen=True)
@@ -116,8 +119,9 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
 
     Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
-    The anchors go in chunks whose halves run on two threads; a chunk's sizes are then read in
-    order, as one visit would (an anchor the visit would skip cannot beat the runner-up anyway)."""
+    The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
+    thread); a chunk's sizes are then read in order, as one visit would (an anchor the visit would
+    skip cannot beat the runner-up anyway)."""
     rule = common[4]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
@@ -126,9 +130,12 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
             break
         if rule != RULE_CODES["paper"]:
             anchors = anchors[~in_winner[anchors]]
-        parts = np.array_split(anchors, THREADS) if len(anchors) >= 2 * THREADS else [anchors]
-        jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common) for part in parts if len(part)]
-        sizes = np.concatenate([job.result() for job in jobs]) if jobs else np.zeros(0, np.int64)
+        if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
+            sizes = _filtered_sizes(anchors, L.width, in_winner, *common)
+        else:
+            jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common)
+                    for part in np.array_split(anchors, THREADS) if len(part)]
+            sizes = np.concatenate([job.result() for job in jobs])
         runner_up = max(runner_up, int(sizes.max(initial=0)))
     return runner_up
 

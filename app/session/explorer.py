@@ -16,6 +16,7 @@ from cbm.baselines import match_oracle
 from cbm.inspect import Inspection
 from cbm.methods import METHODS
 from cbm.result import MatchResult
+from cbm.reuse import Reuse
 from evaluation.agents import agent_pose, choose_ego
 from evaluation.diagnosis import Finding, diagnose
 from evaluation.fusion import fused_against_truth
@@ -137,6 +138,8 @@ class Explorer:
     def __init__(self, sequence: Sequence) -> None:
         self.sequence = sequence
         self.map_segments = _map_segments(sequence)
+        self.reuse = Reuse()
+        """What CBM built for the last few inputs that a threshold edit does not change (``cbm.reuse``)."""
 
     def __len__(self) -> int:
         return len(self.sequence)
@@ -167,7 +170,7 @@ class Explorer:
         inputs = self.trial_inputs(settings, index)
         trial = inputs.build(settings.scenario, settings.scenario.seed)
         others = self.other_cavs(settings, index) if settings.cavs > 1 else ()
-        result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others])
+        result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
         limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
@@ -194,14 +197,15 @@ class Explorer:
         return tuple(outcomes)
 
 
-def _run(settings: Settings, trial: Trial, frame: FrameInputs,
-         peers: list[Trial]) -> tuple[MatchResult, list[Finding], Inspection | None]:
+def _run(settings: Settings, trial: Trial, frame: FrameInputs, peers: list[Trial],
+         reuse: Reuse | None = None) -> tuple[MatchResult, list[Finding], Inspection | None]:
     """The selected method's result and, for the methods that build CBM's sets, why it failed: the
-    sets are built once and serve both the match and the diagnosis. ``peers``: the other CAVs' trials."""
+    sets are built once and serve both the match and the diagnosis. ``peers``: the other CAVs' trials;
+    ``reuse``: what earlier runs on the same input built that the thresholds do not change."""
     method = METHODS[settings.method]
     if not method.explains:
         return run_method(settings.method, trial, settings.params, frame, peers), [], None
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params))
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse)
     result = inspection.match()
     return result, diagnose(result, trial, inspection), inspection
 

@@ -3,8 +3,9 @@ to give the same pairs and transforms (``test_match_reference.py``).
 
     python tests/cbm/match_reference.py    # rewrite data/match_reference.npz (only on purpose)
 
-The cases cover synthetic intersections of 20 to 300 objects under mild and hard SIND noise, the
-shipped Argoverse 2 scene under the range protocol, and parameter variants that switch every
+The cases cover synthetic intersections of 20 to 300 objects under mild and hard SIND noise, a dense
+layout (a car park: ``support.scenes.dense_scene``) of 60 and 150 objects under both, the shipped
+Argoverse 2 scene under the range protocol, and parameter variants that switch every
 branch of the matcher (heading modes, both consensus rules and none, the estimators, the
 re-association, wide and narrow thresholds).
 """
@@ -48,11 +49,26 @@ def cases() -> Iterator[tuple[str, np.ndarray, np.ndarray, np.ndarray, str]]:
                         continue
                     name = f"synthetic{size}-f{k}-{noise_name}-{variant}"
                     yield name, trial.ego_boxes, trial.cav_boxes, trial.init, variant
+    yield from dense_cases()
     scene = loaders.open("argoverse2")
     for k in range(0, len(scene), 20):
         trial = build_trial(scene[k], ScenarioParams(protocol="range", sigma_p=0.3, sigma_theta=3.0), seed=k)
         for variant in VARIANTS:
             yield f"argoverse2-f{k}-range-{variant}", trial.ego_boxes, trial.cav_boxes, trial.init, variant
+
+
+def dense_cases() -> Iterator[tuple[str, np.ndarray, np.ndarray, np.ndarray, str]]:
+    """The dense layout's cases: two scenes, both noises, the defaults and the released code's variant."""
+    from evaluation.scenario import ScenarioParams, make_trial
+    from support.scenes import dense_scene
+
+    for size in (60, 150):
+        n_world = int(round(2 * size / 1.5))
+        boxes = dense_scene(n_world, np.random.default_rng(size))
+        for noise_name, noise in (("mild", MILD), ("hard", HARD)):
+            trial = make_trial(boxes, np.arange(n_world), ScenarioParams(**noise, seed=size))
+            for variant in ("default", "released-code"):
+                yield f"dense{size}-{noise_name}-{variant}", trial.ego_boxes, trial.cav_boxes, trial.init, variant
 
 
 def outcome(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, variant: str) -> dict[str, np.ndarray]:
@@ -76,5 +92,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT))
+    sys.path[:0] = [str(ROOT), str(ROOT / "tests")]
     main()

@@ -17,3 +17,16 @@ def street_scene(n: int, rng: np.random.Generator, extent: float = 60.0, spacing
     boxes[:, 3:6] = (4.5, 1.9, 1.6)
     boxes[:, 6] = rng.choice([0.0, np.pi / 2, np.pi, -np.pi / 2], n) + rng.normal(0, 0.1, n)
     return boxes
+
+
+def dense_scene(n: int, rng: np.random.Generator, spacing: float = 5.0) -> np.ndarray:
+    """(n, 7) car-sized boxes on a jittered square lattice ``spacing`` apart, any heading: a car park
+    rather than streets, where context vectors spread evenly and the join's cells fill up."""
+    side = int(np.ceil(np.sqrt(n)))
+    lattice = np.stack(np.meshgrid(np.arange(side), np.arange(side)), axis=-1).reshape(-1, 2) * spacing
+    chosen = lattice[rng.permutation(len(lattice))[:n]] + rng.uniform(-spacing / 4, spacing / 4, (n, 2))
+    boxes = np.zeros((n, 7))
+    boxes[:, :2] = chosen - chosen.mean(axis=0) if n else chosen
+    boxes[:, 3:6] = (4.5, 1.9, 1.6)
+    boxes[:, 6] = rng.uniform(-np.pi, np.pi, n)
+    return boxes

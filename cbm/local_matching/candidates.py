@@ -1,0 +1,116 @@
+"""Step 4c of local matching: the members of one candidate set L_ij on demand (paper eq. 8).
+
+The join only counts; when the selection asks for the members of one L_ij they are listed again
+by a window sliding over both anchors' vectors sorted by x + y, O(N) per anchor pair.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from ..context import Context
+from .grid import MARGIN, accepts
+
+
+@dataclass(frozen=True)
+class SortedBlocks:
+    """One agent's context vectors, each anchor's block of ``per_anchor`` rows sorted by the key
+    ``x + y``: two vectors within L1 distance r have keys within r, and the key spreads the
+    vectors along the streets of either axis, where x alone would pile them up."""
+
+    key: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    member: np.ndarray
+    per_anchor: int
+
+
+def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
+    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``)."""
+    per_anchor = max(n_objects - 1, 0)
+    shape = (len(context.vectors) // max(per_anchor, 1), per_anchor)
+    key = (context.vectors[:, 0] + context.vectors[:, 1]).reshape(shape)
+    order = np.argsort(key, axis=1, kind="stable")
+    key, x, y, member = (np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
+                         for values in (key, context.vectors[:, 0], context.vectors[:, 1], context.member))
+    return SortedBlocks(key, x, y, member, per_anchor)
+
+
+@numba.njit(cache=True, nogil=True)
+def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1,
+                 sigma2, out):
+    """The members of L_ij (eq. 8) into ``out``, the anchor pair last; returns how many.
+
+    Both anchors' blocks are sorted by ``x + y``, so the CAV vectors (turned by ``sign``) whose key
+    lies within sigma2 of an ego vector's form a window that only slides forward: O(N) per anchor
+    pair plus the vectors in the windows.
+    """
+    size = 0
+    lo_j, hi_j = j * per_cav, (j + 1) * per_cav
+    window = 0
+    for u in range(i * per_ego, (i + 1) * per_ego):
+        zx, zy, zk = ex[u], ey[u], e_key[u]
+        while window < per_cav and _turned(c_key, lo_j, hi_j, window, sign) < zk - sigma2 - MARGIN:
+            window += 1
+        k = window
+        while k < per_cav:
+            if _turned(c_key, lo_j, hi_j, k, sign) > zk + sigma2 + MARGIN:
+                break
+            v = lo_j + k if sign > 0 else hi_j - 1 - k
+            if accepts(zx, zy, sign * cx[v], sign * cy[v], cos2_sigma1, sigma2) >= 0.0:
+                out[size] = e_member[u] * n_cav + c_member[v]
+                size += 1
+            k += 1
+    if size:
+        out[size] = i * n_cav + j
+        size += 1
+    return size
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _turned(key, lo, hi, k, sign):
+    """The k-th smallest key of the block lo..hi-1 after turning its vectors by ``sign``."""
+    return key[lo + k] if sign > 0 else -key[hi - 1 - k]
+
+
+@dataclass(frozen=True)
+class CandidateSets:
+    """The candidate sets L_ij of every anchor (eq. 8): their sizes, and their members on demand."""
+
+    count: np.ndarray
+    """(Ne * Nc,) card(L_ij), the anchor pair included when the set is not empty."""
+    lookup: tuple
+    """``members_into``'s arguments after (i, j, sign) and before ``out``."""
+    signs: np.ndarray
+    """(Ne, Nc) how the CAV frame is turned against each ego frame (``cbm.context.pair_signs``)."""
+
+    @property
+    def width(self) -> int:
+        """The largest card(L_ij) (at least 1): the room a kernel needs for any one set."""
+        return max(1, int(self.count.max())) if len(self.count) else 1
+
+    def members(self, anchor: int) -> np.ndarray:
+        """Pair ids of L_ij for ``anchor = i * Nc + j``, in increasing order."""
+        n_cav = self.signs.shape[1]
+        i, j = divmod(int(anchor), n_cav)
+        out = np.empty(int(self.count[anchor]) + 1, np.int64)
+        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out)
+        return np.sort(out[:size])
+
+
+
+def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad: float, sigma2: float,
+                  kept: dict | None = None) -> tuple:
+    """What ``members_into`` needs after (i, j, sign) to list any anchor's candidate set; the sorted
+    blocks are taken from ``kept`` when an earlier call on the same contexts put them there."""
+    blocks = None if kept is None else kept.get("blocks")
+    if blocks is None:
+        blocks = (sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav))
+        if kept is not None:
+            kept["blocks"] = blocks
+    e, c = blocks
+    return (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
+            math.cos(sigma1_rad) ** 2, sigma2)

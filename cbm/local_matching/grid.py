@@ -1,0 +1,210 @@
+"""Step 4a of local matching: the grid the join searches (paper eq. 7).
+
+The ego objects go in ``HEADING_GROUPS`` groups of neighbouring headings; for each group the CAV
+context vectors lie in a grid (``VectorGrid``), already turned by the sign they have against it,
+over u = x + y and v = x - y, where the L1 diamond of eq. 7 around an ego vector z is an
+axis-aligned square: z meets only the vectors of the cells that square covers, one run of cells
+per column. ``accepts`` is eq. 7's test of one quadruple.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from ..context import Context
+
+CELLS_PER_RADIUS = 3
+"""Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
+MAX_CELLS = 1 << 21
+"""Most grid cells (16 MB of row offsets); a wider scene gets wider cells."""
+CELLS_PER_ROW = 4
+"""Most grid cells per vector: a sparse scene gets wider cells rather than many empty ones."""
+MARGIN = 1e-6
+"""Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
+each vector in the window is then tested exactly."""
+HEADING_GROUPS = 4
+"""Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
+
+
+@dataclass(frozen=True)
+class VectorGrid:
+    """CAV context vectors, each turned by the sign it has against a group of ego objects, in
+    square cells of side ``cell`` over u = x + y, v = x - y (where the L1 diamond of eq. 7 is an
+    axis-aligned square), column by column: cell (ku, kv) holds rows
+    ``start[ku * ny + kv]:start[ku * ny + kv + 1]``, so the cells kv0..kv1 of one column are one
+    run of rows; (u0, v0) is the grid's corner. ``check[r]`` is 0 where the sign holds
+    for the whole group, else the sign that row carries (the row's vector is there twice, once per
+    sign, to be checked per ego object)."""
+
+    u0: float
+    v0: float
+    cell: float
+    nx: int
+    ny: int
+    start: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    anchor: np.ndarray
+    member: np.ndarray
+    check: np.ndarray
+
+
+def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
+    """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
+    sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
+    Two passes over the vectors: their extent, then a counting sort that turns them as it places them."""
+    sign = cav_sign.astype(np.int64)
+    n, u0, v0, u1, v1 = _extent(cav.vectors, cav.anchor, sign)
+    if n == 0:
+        empty, ids = np.zeros(0), np.zeros(0, np.int64)
+        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), empty, empty.copy(), ids, ids.copy(), ids.copy())
+    width, height = u1 - u0, v1 - v0
+    most_cells = min(MAX_CELLS, CELLS_PER_ROW * n + 1)
+    cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
+    nx, ny = int(width // cell) + 1, int(height // cell) + 1
+    return VectorGrid(u0, v0, cell, nx, ny, *_place(cav.vectors, cav.anchor, cav.member, sign, n, u0, v0, cell, nx, ny))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _turned_signs(fixed):
+    """The signs a CAV object's vectors take in the grid (first, last, step): its fixed sign, or both."""
+    if fixed > 0:
+        return 1, 2, 2
+    if fixed < 0:
+        return -1, -2, -2
+    return 1, -2, -2
+
+
+@numba.njit(cache=True, nogil=True)
+def _extent(vectors, anchor, cav_sign):
+    """(rows, lowest u, lowest v, highest u, highest v) of the turned vectors in u = x + y, v = x - y:
+    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies."""
+    n, u0, v0, u1, v1 = 0, np.inf, np.inf, -np.inf, -np.inf
+    for r in range(len(vectors)):
+        first, last, step = _turned_signs(cav_sign[anchor[r]])
+        for sign in range(first, last, step):
+            x, y = sign * vectors[r, 0], sign * vectors[r, 1]
+            u, v = x + y, x - y
+            u0, v0, u1, v1 = min(u0, u), min(v0, v), max(u1, u), max(v1, v)
+            n += 1
+    return n, u0, v0, u1, v1
+
+
+@numba.njit(cache=True, nogil=True)
+def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
+    """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
+    of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
+    row's sign. Sorted by column, then each column by cell: both passes count into small arrays
+    that stay in the cache, where one pass over all the cells would miss it on every row.
+    Returns (start, x, y, anchor, member, check)."""
+    source, turn, kx, ky = np.empty(n, np.int32), np.empty(n, np.int8), np.empty(n, np.int32), np.empty(n, np.int32)
+    column_start = np.zeros(nx + 1, np.int64)
+    r = 0
+    for v in range(len(vectors)):
+        first, last, step = _turned_signs(cav_sign[anchor[v]])
+        for sign in range(first, last, step):
+            x, y = sign * vectors[v, 0], sign * vectors[v, 1]
+            source[r], turn[r] = v, sign
+            kx[r] = min(int(math.floor((x + y - u0) / cell)), nx - 1)
+            ky[r] = min(int(math.floor((x - y - v0) / cell)), ny - 1)
+            column_start[kx[r] + 1] += 1
+            r += 1
+    for k in range(nx):
+        column_start[k + 1] += column_start[k]
+    by_column, fill = np.empty(n, np.int32), column_start[:-1].copy()
+    for r in range(n):
+        by_column[fill[kx[r]]] = r
+        fill[kx[r]] += 1
+    start = np.empty(nx * ny + 1, np.int64)
+    start[nx * ny] = n
+    gx, gy = np.empty(n), np.empty(n)
+    g_anchor, g_member, g_check = np.empty(n, np.int64), np.empty(n, np.int64), np.empty(n, np.int64)
+    cell_start = np.empty(ny + 1, np.int64)
+    for k in range(nx):
+        rows = by_column[column_start[k]:column_start[k + 1]]
+        _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, column_start[k], cell_start, gx, gy,
+                      g_anchor, g_member, g_check)
+        start[k * ny:(k + 1) * ny] = cell_start[:ny]
+    return start, gx, gy, g_anchor, g_member, g_check
+
+
+@numba.njit(cache=True, nogil=True)
+def _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, first, cell_start, gx, gy, g_anchor,
+                  g_member, g_check):
+    """The ``rows`` of one column (in their order) into their cells from grid row ``first`` on;
+    ``cell_start`` receives where each cell of the column starts."""
+    cell_start[:] = 0
+    for r in rows:
+        cell_start[ky[r] + 1] += 1
+    cell_start[0] = first
+    for c in range(len(cell_start) - 1):
+        cell_start[c + 1] += cell_start[c]
+    for r in rows:
+        row = cell_start[ky[r]]
+        cell_start[ky[r]] += 1
+        v, sign = source[r], turn[r]
+        gx[row], gy[row] = sign * vectors[v, 0], sign * vectors[v, 1]
+        g_anchor[row], g_member[row] = anchor[v], member[v]
+        g_check[row] = 0 if cav_sign[anchor[v]] != 0 else sign
+    for c in range(len(cell_start) - 1, 0, -1):
+        cell_start[c] = cell_start[c - 1]
+    cell_start[0] = first
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def accepts(zx, zy, wx, wy, cos2_sigma1, radius):
+    """L1 distance of z and w when eq. 7 accepts them, else -1.
+
+    The angle test arccos(|z.w| / (|z| |w|)) <= sigma1 is evaluated as
+    (z.w)^2 >= cos^2(sigma1) |z|^2 |w|^2 (sigma1 <= 90 degrees), without square roots.
+    """
+    l1 = abs(zx - wx) + abs(zy - wy)
+    if l1 > radius:
+        return -1.0
+    squared_norms = (zx * zx + zy * zy) * (wx * wx + wy * wy)
+    dot = zx * wx + zy * wy
+    if squared_norms <= 0.0 or dot * dot < cos2_sigma1 * squared_norms:
+        return -1.0
+    return l1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def cells(zu, zv, radius, u0, v0, cell, nx, ny):
+    """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
+    the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y. No column
+    (k1 < k0) when the square misses the grid."""
+    k0 = max(int(math.floor((zu - radius - MARGIN - u0) / cell)), 0)
+    k1 = min(int(math.floor((zu + radius + MARGIN - u0) / cell)), nx - 1)
+    c0 = max(int(math.floor((zv - radius - MARGIN - v0) / cell)), 0)
+    c1 = min(int(math.floor((zv + radius + MARGIN - v0) / cell)), ny - 1)
+    if c1 < c0:
+        return 0, -1, 0, 0
+    return k0, k1, c0, c1
+
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def column(zu, u0, cell, nx):
+    """The grid column of u = ``zu``, clamped to the grid."""
+    return min(max(int(math.floor((zu - u0) / cell)), 0), nx - 1)
+
+
+
+def heading_groups(ego_heading: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:
+    """Ego objects in ``HEADING_GROUPS`` groups of neighbouring headings (one group when no sign
+    is -1): within a group most CAV objects have one sign against every member."""
+    if not np.any(signs < 0):
+        return [np.arange(len(ego_heading))] if len(ego_heading) else []
+    order = np.argsort(ego_heading, kind="stable")
+    return [group for group in np.array_split(order, HEADING_GROUPS) if len(group)]
+
+
+def group_signs(signs: np.ndarray, group: np.ndarray) -> np.ndarray:
+    """(Nc,) the sign of each CAV object against every ego object of ``group``, 0 where it varies."""
+    rows = signs[group]
+    low, high = rows.min(axis=0), rows.max(axis=0)
+    return np.where(low == high, low, 0.0)
+

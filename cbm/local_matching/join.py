@@ -1,0 +1,178 @@
+"""Step 4b of local matching: the join that counts card(L_ij) (paper eq. 7-8, Algorithm 1).
+
+Testing all (Ne Nc)^2 quadruples is what makes the released code dense. Here the join is
+output-sensitive and never holds the accepted quadruples of eq. 8: each ego context vector visits
+only the cells of the grid (``grid.VectorGrid``) its L1 square covers, and counts card(L_ij) for
+every anchor; it lists only the quadruples within sigma3, the voting sets of the consensus. It runs
+in parallel over parts of each heading group, each part owning its anchors' counters, and its lists
+are joined in a fixed order, so nothing depends on the threads.
+"""
+from __future__ import annotations
+
+import math
+from concurrent.futures import ThreadPoolExecutor
+
+import numba
+import numpy as np
+
+from ..context import Context
+from .grid import build_grid, cells, column, group_signs, heading_groups
+
+PARALLEL_FROM = 20_000
+"""Context vectors per agent from which the joins are split over threads."""
+THREADS = 2
+"""Threads of ``POOL``: the cores of the machine the targets are set on."""
+ANCHORS_PER_CHUNK = 64
+"""Ego objects whose context vectors are joined together, column by column of the grid (their
+counters, 64 rows of Nc, stay in a core's cache)."""
+REUSE_RADII = 2.0
+"""A kept grid serves radii up to this factor from the one it was built for; beyond it, the cells
+would make a window scan many more vectors (or visit many more cells) than a new grid's."""
+POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
+"""The threads the kernels (numba, without the interpreter lock) share."""
+
+
+@numba.njit(cache=True, nogil=True)
+def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order):
+    """The context vectors of the ego objects ``ego_ids[chunk:chunk + ANCHORS_PER_CHUNK]`` into
+    ``order`` by the grid column their u = x + y falls in (a counting sort); returns how many."""
+    last = min(chunk + ANCHORS_PER_CHUNK, len(ego_ids))
+    column_start[:] = 0
+    for n in range(chunk, last):
+        for u in range(ego_ids[n] * per_anchor, (ego_ids[n] + 1) * per_anchor):
+            column_start[column(ego_vectors[u, 0] + ego_vectors[u, 1], u0, cell, nx) + 1] += 1
+    for k in range(nx):
+        column_start[k + 1] += column_start[k]
+    for n in range(chunk, last):
+        for u in range(ego_ids[n] * per_anchor, (ego_ids[n] + 1) * per_anchor):
+            k = column(ego_vectors[u, 0] + ego_vectors[u, 1], u0, cell, nx)
+            order[column_start[k]] = u
+            column_start[k] += 1
+    return (last - chunk) * per_anchor
+
+
+
+@numba.njit(cache=True, nogil=True)
+def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
+          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2):
+    """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
+
+    Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
+    within sigma3 as (anchor, member) rows. A grid row with ``check``
+    s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
+    time are visited column by column of the grid, so consecutive queries read the same few
+    columns (from the cache) and the chunk's counters stay in it too. The counting loop combines
+    the tests of ``grid.accepts`` without branches (the data decide no jump in it, so it runs at
+    full speed); the votes are listed in a second, narrower pass over the cells within sigma3 (a
+    branch in the counting loop would slow it down more than the second pass costs), also without
+    branches: every row is written and the count moves on only for an accepted one, in lists grown
+    beforehand to hold the whole window. A negative sigma3 lists nothing.
+    """
+    n_cav = signs.shape[1]
+    vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
+    order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
+    column_start = np.empty(nx + 1, np.int64)
+    for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
+        for q in range(_by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order)):
+            u = order[q]
+            i = u // per_anchor
+            sign_row = signs[i]
+            row = i * n_cav
+            zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
+            z2 = zx * zx + zy * zy
+            zu, zv = zx + zy, zx - zy
+            k0, k1, c0, c1 = cells(zu, zv, radius, u0, v0, cell, nx, ny)
+            for k in range(k0, k1 + 1):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+                    b, wx, wy = g_anchor[v], gx[v], gy[v]
+                    l1 = abs(zx - wx) + abs(zy - wy)
+                    dot = zx * wx + zy * wy
+                    squared_norms = z2 * (wx * wx + wy * wy)
+                    ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
+                          & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
+                    count2[row + b] += ok & (l1 <= sigma2)
+            if sigma3 < 0.0:
+                continue
+            k0, k1, c0, c1 = cells(zu, zv, sigma3, u0, v0, cell, nx, ny)
+            most = n_votes
+            for k in range(k0, k1 + 1):
+                most += start[k * ny + c1 + 1] - start[k * ny + c0]
+            while most > len(vote_anchor):
+                vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
+            member_row = ego_member[u] * n_cav
+            for k in range(k0, k1 + 1):
+                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+                    b, wx, wy = g_anchor[v], gx[v], gy[v]
+                    dot = zx * wx + zy * wy
+                    squared_norms = z2 * (wx * wx + wy * wy)
+                    vote_anchor[n_votes] = row + b
+                    vote_member[n_votes] = member_row + g_member[v]
+                    n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
+                                & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
+                                & (dot * dot >= cos2_sigma1 * squared_norms))
+    return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
+
+
+@numba.njit(cache=True, nogil=True)
+def _grown(values, n):
+    """``values[:n]`` in an array twice as long."""
+    grown = np.empty(2 * len(values), values.dtype)
+    grown[:n] = values[:n]
+    return grown
+
+
+def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
+             radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
+             kept: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
+    at a time, then their ego objects are joined in parts; the votes come back in a fixed order.
+    ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
+    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
+    per_anchor = max(len(ego_heading) - 1, 0)
+    groups = heading_groups(ego_heading, signs)
+    parallel = len(ego.vectors) >= PARALLEL_FROM
+    run = POOL.submit if parallel else _at_once
+    votes = []
+    for first in range(0, len(groups), THREADS if parallel else 1):
+        batch = groups[first:first + (THREADS if parallel else 1)]
+        grids = _grids(batch, first, cav, signs, radius, run, kept)
+        jobs = []
+        for group, grid in zip(batch, grids):
+            common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
+                      grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
+                      radius, sigma2, sigma3, count2)
+            parts = np.array_split(group, THREADS) if parallel else [group]
+            jobs += [run(_join, part, *common) for part in parts if len(part)]
+        votes += [job.result() for job in jobs]
+    if not votes:
+        return np.zeros(0, np.int32), np.zeros(0, np.int32)
+    return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
+
+
+def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
+           kept: dict | None) -> list:
+    """The grids of the heading groups ``batch`` (numbered from ``first``): those in ``kept`` when
+    they were built for a radius within ``REUSE_RADII`` of this one, the others built by ``run`` (and
+    put there)."""
+    if kept is not None and not radius / REUSE_RADII <= kept.get("grid_radius", -1.0) <= radius * REUSE_RADII:
+        kept["grid_radius"], kept["grids"] = radius, {}
+    known = {} if kept is None else kept["grids"]
+    jobs = {first + k: run(build_grid, cav, group_signs(signs, g), radius)
+            for k, g in enumerate(batch) if first + k not in known}
+    known.update({k: job.result() for k, job in jobs.items()})
+    return [known.pop(first + k) if kept is None else known[first + k] for k in range(len(batch))]
+
+
+class _Done:
+    """A result already computed, read like a future's."""
+
+    def __init__(self, value) -> None:
+        self.value = value
+
+    def result(self):
+        return self.value
+
+
+def _at_once(function, *args) -> _Done:
+    return _Done(function(*args))
+
