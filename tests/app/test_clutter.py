@@ -68,6 +68,21 @@ def test_false_boxes_match_no_object_and_say_so(explorer: Explorer) -> None:
     assert "false box" not in describe(outcome, picture, "ego", int(np.flatnonzero(~false_ego[rows])[0]))
 
 
+def test_with_the_ghosts_each_false_box_is_crossed_out(explorer: Explorer) -> None:
+    settings = _clutter_settings()
+    outcome = explorer.compute(settings.with_view(ghosts=True))
+    picture = draw(outcome, explorer.map_segments, explorer.sequence[FRAME])
+    crosses = picture.lines["false_marks"].segments
+    (ego, ego_rows), (cav, cav_rows) = picture.objects["ego"], picture.objects["cav"]
+    trial = outcome.trial
+    false = np.concatenate([ego[is_false(trial.ego_ids[ego_rows])], cav[is_false(trial.cav_ids[cav_rows])]])
+    assert len(crosses) == 2 * len(false) > 0
+    centres = crosses[:, :, :2].mean(axis=1)
+    assert np.allclose(np.sort(centres[:, 0]), np.sort(np.repeat(false[:, 0], 2)), atol=1e-3)
+    hidden = draw(explorer.compute(settings), explorer.map_segments, explorer.sequence[FRAME])
+    assert len(hidden.lines["false_marks"].segments) == 0
+
+
 def test_without_clutter_the_metrics_have_no_clutter_rows(explorer: Explorer) -> None:
     text = metrics_markdown(explorer.compute(_clutter_settings(miss_rate=0.0, false_rate=0.0)))
     assert "false boxes" not in text and "missed detections" not in text
