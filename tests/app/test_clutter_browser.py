@@ -1,6 +1,7 @@
 """The clutter condition in a real browser: the shipped ``clutter`` preset sets the Scenario tab's
 missed-detection share and false-box rate, and the frame's metrics and key numbers follow; moving
-the false-box slider recomputes the frame with the new rate."""
+the false-box slider recomputes the frame with the new rate; with the ghosts on, each false box is
+crossed out."""
 from __future__ import annotations
 
 import pytest
@@ -53,4 +54,16 @@ def test_the_clutter_preset_sets_both_rates_and_the_frame_follows(browser, serve
     moved = tab.last
     counts = f"{int(is_false(moved.trial.ego_ids).sum())} / {int(is_false(moved.trial.cav_ids).sum())}"
     ui.wait_until(lambda: f"{counts} (they match no object)" in ui.metrics(page), 60)
+
+    page.get_by_role("tab", name="View").click()
+    ui.label(page, "ground-truth ghosts").click()
+    ui.wait_until(lambda: tab.last.settings.view.ghosts and crosses(tab) > 0, 60)
+    trial = tab.last.trial
+    assert crosses(tab) == int(is_false(trial.ego_ids).sum() + is_false(trial.cav_ids).sum())
     page.close()
+
+
+def crosses(tab) -> int:
+    """How many false boxes the scene crosses out (2 segments each; 0 when hidden)."""
+    handle = tab.view.lines.get("false_marks")
+    return 0 if handle is None or not handle.visible else len(handle.points) // 2
