@@ -19,6 +19,8 @@ from cbm import se2
 Trial = TypeVar("Trial")
 """A ``evaluation.scenario.Trial`` (not imported: ``evaluation.scenario`` uses this module)."""
 
+FALSE_PREFIX = "false:"
+"""How a false box's id begins (``false:<agent>:<k>``)."""
 FALSE_DRAWS = 4
 """Uniform draws per false box: two for its centre, one for the box whose size it copies, one for its heading."""
 
@@ -55,7 +57,7 @@ def with_false_boxes(trial: Trial, rng: np.random.Generator, false_rate: float,
         real = getattr(trial, f"{role}_boxes")
         draws = rng.random((false_box_count(len(real), false_rate), FALSE_DRAWS))
         added = false_boxes(real, draws, sensor_range)
-        ids = [f"false:{role}:{k}" for k in range(len(added))]
+        ids = [f"{FALSE_PREFIX}{role}:{k}" for k in range(len(added))]
         true_xy = added[:, :2] if role == "ego" else se2.apply_points(trial.T_true, added[:, :2])
         changes[f"{role}_boxes"] = np.concatenate([real, added])
         changes[f"{role}_ids"] = np.concatenate([getattr(trial, f"{role}_ids").astype(str), np.array(ids, dtype=str)])
@@ -66,3 +68,8 @@ def with_false_boxes(trial: Trial, rng: np.random.Generator, false_rate: float,
 def missed(draws: np.ndarray, miss_rate: float) -> np.ndarray:
     """Mask of the detections an agent misses: those whose uniform draw is below ``miss_rate``."""
     return draws < miss_rate
+
+
+def is_false(ids: np.ndarray) -> np.ndarray:
+    """Mask of the false boxes among a trial's detection ``ids`` (``with_false_boxes``'s ids)."""
+    return np.char.startswith(np.asarray(ids).astype(str), FALSE_PREFIX)

@@ -1,6 +1,6 @@
-"""The Scenario tab: protocol, localization error, detection noise, co-visibility, seed. A slider
-the protocol does not read is disabled, a localization the dataset cannot give is not offered, and
-the tab's note says why."""
+"""The Scenario tab: protocol, localization error, detection noise, co-visibility, clutter (missed
+detections, false boxes), seed. A slider the protocol does not read is disabled, a localization the
+dataset cannot give is not offered, and the tab's note says why."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -22,6 +22,10 @@ SLIDERS = {
     "loc_y": (SCENARIO_WORDS["loc_y"], 0.0, 15.0, 0.25, "CAV pose error in y"),
     "loc_yaw": (SCENARIO_WORDS["loc_yaw"], 0.0, 30.0, 0.5, "CAV pose error in yaw"),
     "sensor_range": (SCENARIO_WORDS["sensor_range"], 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
+    "miss_rate": (SCENARIO_WORDS["miss_rate"], 0.0, 1.0, 0.05, "probability that an agent misses a detection it "
+                  "would make, 0 to 1 (each agent draws its own misses)"),
+    "false_rate": (SCENARIO_WORDS["false_rate"], 0.0, 2.0, 0.05, "false boxes added to each agent's detections, "
+                   "per real detection (0.3: 3 false boxes for 10 real ones); they match no object"),
 }
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the

@@ -11,6 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from cbm import se2
+from evaluation.clutter import is_false
 from loaders import Frame
 
 from ..session.explorer import Outcome
@@ -72,6 +73,8 @@ class _Parts:
     """Each CAV's boxes as drawn, by rank."""
     before: list[np.ndarray] = field(default_factory=list)
     ghosts: list[np.ndarray] = field(default_factory=list)
+    false_boxes: list[np.ndarray] = field(default_factory=list)
+    """Every agent's false boxes as drawn (crossed out while the ghosts show: no object is there)."""
     ego_poses: list[np.ndarray] = field(default_factory=list)
     cav_poses: dict[int, list[np.ndarray]] = field(default_factory=lambda: defaultdict(list))
     """Each CAV's vehicle poses, by rank."""
@@ -130,6 +133,8 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
     if view.ghosts:
         seen = np.isin(outcome.world_ids, np.concatenate([trial.ego_ids, trial.cav_ids]))
         parts.ghosts.append(_shifted(outcome.world_boxes[seen], offset))
+        drawn = (ego, *(cavs.drawn_cav(cav, panel.placement, offset) for cav in shown))
+        parts.false_boxes.extend(d.boxes[is_false(d.ids)] for d in drawn)
     parts.map_poses.append(shift @ se2.inverse(trial.ego_pose))
     if view.fused:
         fused = outcome.fused(panel.placement)
@@ -172,7 +177,7 @@ def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[st
 
 def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
     """Match lines and the marks of wrong and missed pairs (every CAV's); outlines of the CAV's
-    boxes where ``init`` put them and of the ground truth."""
+    boxes where ``init`` put them and of the ground truth; a cross over each false box (with the ghosts)."""
     strokes = {"right": palette.right, "wrong": palette.wrong, "missed": palette.missed}
     marks = {"wrong_marks": (palette.wrong.color, 3.0), "missed_marks": (palette.missed.color, 2.0)}
     return {**{name: Lines(_joined([getattr(p, name) for p in parts.shapes]), s.color, s.thickness)
@@ -181,6 +186,7 @@ def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:
                for name, (colour, width) in marks.items()},
             "cav_before": Lines(_outlines(parts.before, planes.OUTLINES), palette.cav_before, 1.5),
             "ghosts": Lines(_outlines(parts.ghosts, planes.OUTLINES), palette.ghost, 1.5),
+            "false_marks": Lines(_crosses(parts.false_boxes), palette.ghost, 1.5),
             "fused_tp": Lines(_outlines(parts.fused_tp, planes.FUSED), palette.right.color, 3.0),
             "fused_fp": Lines(_outlines(parts.fused_fp, planes.FUSED), palette.wrong.color, 3.0)}
 
@@ -217,6 +223,10 @@ def no_lines() -> np.ndarray:
 
 def _outlines(parts: list[np.ndarray], z: float) -> np.ndarray:
     return geometry.outline_segments(np.concatenate(parts), z) if parts else no_lines()
+
+
+def _crosses(parts: list[np.ndarray]) -> np.ndarray:
+    return geometry.cross_segments(np.concatenate(parts), planes.OUTLINES) if parts else no_lines()
 
 
 def _joined(parts: list[np.ndarray]) -> np.ndarray:

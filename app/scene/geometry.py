@@ -102,6 +102,15 @@ def polyline_segments(polylines: list[np.ndarray], z: float = 0.0) -> np.ndarray
     return np.concatenate(parts) if parts else np.zeros((0, 2, 3), np.float32)
 
 
+def cross_segments(boxes: np.ndarray, z: float = 0.05) -> np.ndarray:
+    """(2N, 2, 3) the two diagonals of each box's footprint: a cross over it."""
+    if len(boxes) == 0:
+        return np.zeros((0, 2, 3), np.float32)
+    corners = footprints(boxes)
+    starts, ends = corners[:, :2].reshape(-1, 2), corners[:, 2:].reshape(-1, 2)
+    return segments(starts, ends, z)
+
+
 def outline_segments(boxes: np.ndarray, z: float = 0.05) -> np.ndarray:
     """(4N, 2, 3) footprint outlines of the boxes."""
     if len(boxes) == 0:

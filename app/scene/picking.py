@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from evaluation.clutter import is_false
 from evaluation.diagnosis import short_id
 
 from ..session.explorer import Outcome
@@ -28,19 +29,24 @@ def pick(picture: Drawing, point: np.ndarray) -> tuple[str, int] | None:
 
 
 def describe(outcome: Outcome, picture: Drawing, group: str, row: int) -> str:
-    """Label text of one drawn box: whose detection, its id, and what it was matched to."""
+    """Label text of one drawn box: whose detection, its id (or that it is a false box), and what it
+    was matched to."""
     trial, pairs = outcome.trial, outcome.result.pairs
     index = int(picture.objects[group][1][row])
     ids = trial.ego_ids if group == "ego" else trial.cav_ids
     column = 0 if group == "ego" else 1
     partner = pairs[pairs[:, column] == index]
     truth = trial.gt_pairs[trial.gt_pairs[:, column] == index]
-    text = f"{group.upper()} {short_id(ids[index])}"
+    false = bool(is_false(ids[index:index + 1])[0])
+    name = f"false box {str(ids[index]).rsplit(':', 1)[-1]}" if false else short_id(ids[index])
+    text = f"{group.upper()} {name}"
     if len(partner):
         other = int(partner[0, 1 - column])
         right = len(truth) and int(truth[0, 1 - column]) == other
         other_ids = trial.cav_ids if group == "ego" else trial.ego_ids
         text += f" -> {short_id(other_ids[other])} ({'right' if right else 'wrong'})"
+    elif false:
+        text += " (matches no object)"
     elif len(truth):
         text += " (co-visible, missed)"
     else:

@@ -8,6 +8,7 @@ import numpy as np
 from cbm import se2
 from cbm.methods import METHODS
 from cbm.result import MatchResult
+from evaluation.clutter import is_false
 from evaluation.metrics import is_success
 
 from ..session.explorer import Outcome
@@ -37,6 +38,19 @@ def thresholds(outcome: Outcome) -> list[str]:
     return [f"| thresholds | σ1 {p.sigma1:.1f}° · σ2 {p.sigma2:.2f} m · σ3 {p.sigma3:.2f} m |"]
 
 
+def clutter_rows(outcome: Outcome) -> list[str]:
+    """The rows of the scenario's clutter (none without): how many of each agent's boxes are false
+    (counted among its objects, as the evaluation counts them) and the share of detections missed."""
+    scenario, trial = outcome.settings.scenario, outcome.trial
+    rows = []
+    if scenario.false_rate > 0:
+        counts = f"{int(is_false(trial.ego_ids).sum())} / {int(is_false(trial.cav_ids).sum())}"
+        rows.append(f"| of them false boxes | {counts} (they match no object) |")
+    if scenario.miss_rate > 0:
+        rows.append(f"| missed detections | {scenario.miss_rate:.0%} of each agent's |")
+    return rows
+
+
 def findings_heading(outcome: Outcome) -> str:
     """``Why it failed`` above the diagnosis of a failed frame; ``Warnings`` when the frame succeeded
     (``evaluation.metrics.is_success``) and a rule still found something."""
@@ -59,6 +73,7 @@ def metrics_markdown(outcome: Outcome) -> str:
         "| | |",
         "|---|---|",
         f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
+        *clutter_rows(outcome),
         f"| co-visible | {m.n_true} |",
         *thresholds(outcome),
         f"| matches ({method}) | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",

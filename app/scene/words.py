@@ -90,6 +90,8 @@ SCENARIO_WORDS = {
     "loc_y": "localization y (m)",
     "loc_yaw": "localization yaw (°)",
     "sensor_range": "sensor range (m)",
+    "miss_rate": "missed detections (share)",
+    "false_rate": "false boxes (per detection)",
     "seed": "seed",
 }
 """Every scenario field's label (words and unit), as the Scenario tab shows it."""

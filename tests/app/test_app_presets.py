@@ -9,18 +9,32 @@ import pytest
 
 from app.session.presets import SHIPPED_DIR, PresetError, discover, read, save_preset
 from app.session.settings import Settings, from_preset, to_preset
+from evaluation.conditions import condition
+from evaluation.scenario import ScenarioParams
+
+CONDITION_PRESETS = ("heavy-noise", "prior-error", "clutter")
+"""The shipped presets of the hard named conditions (``evaluation.conditions``), one click in the app."""
 
 
 def test_shipped_presets_load_and_cover_the_required_cases(tmp_path: Path) -> None:
     presets, problems = discover(users=tmp_path)
     assert problems == []
-    assert {"default", "paper-sind", "paper-opv2v", "released-code", "stress", "teaching"} <= set(presets)
+    assert {"default", "paper-sind", "paper-opv2v", "released-code", "stress", "teaching", "heavy-noise",
+            "prior-error", "clutter"} <= set(presets)
     settings = {name: p.apply(Settings()) for name, p in presets.items()}
     assert settings["paper-sind"].scenario.protocol == "sind"
     assert settings["paper-opv2v"].scenario.localization == "gaussian"
     assert settings["released-code"].cbm.heading == "fold"
     assert settings["stress"].scenario.sigma_p > settings["teaching"].scenario.sigma_p
     assert all(p.shipped and p.description for p in presets.values())
+
+
+@pytest.mark.parametrize("name", CONDITION_PRESETS)
+def test_a_condition_preset_is_the_named_conditions_scenario(tmp_path: Path, name: str) -> None:
+    presets, _ = discover(users=tmp_path)
+    assert presets[name].apply(Settings()).scenario == condition(name)
+    elsewhere = Settings(scenario=ScenarioParams(sigma_p=1.5, miss_rate=0.9))
+    assert presets[name].apply(elsewhere).scenario == condition(name)
 
 
 def test_malformed_files_are_reported_with_file_and_field(tmp_path: Path) -> None:
