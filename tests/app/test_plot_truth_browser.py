@@ -52,14 +52,6 @@ def axis_of(found: dict, label: str) -> dict:
     return next(a for a in found["axes"] if a["scale"] == scale)
 
 
-def go_to_frame(page, tab, frame: int) -> None:
-    row = ui.label(page, "frame").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
-    box = row.locator("input.mantine-NumberInput-input")
-    box.fill(str(frame))
-    box.press("Enter")
-    ui.wait_until(lambda: tab.last.frame_index == frame, 60)
-
-
 def test_the_timeline_draws_rte_on_its_own_axis_with_gaps_and_no_pinned_entries(browser,
                                                                                    server: ExplorerServer) -> None:
     page = ui.open_first_screen(browser, server)
@@ -67,7 +59,7 @@ def test_the_timeline_draws_rte_on_its_own_axis_with_gaps_and_no_pinned_entries(
     for frame in (1, 2):
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda f=frame: tab.last.frame_index == f, 60)
-    go_to_frame(page, tab, 10)
+    ui.go_to_frame(page, tab, 10)
     page.get_by_role("button", name="next ▶").click()
     ui.wait_until(lambda: has_values(chart(page, "timeline"), "RTE (m)", {0, 1, 2, 10, 11}), 60)
     timeline = chart(page, "timeline")

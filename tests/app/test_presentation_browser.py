@@ -93,8 +93,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     assert _colour(other_tab.view.lines["right"]) == colours.RIGHT
 
     ui.close_notifications(page)
-    page.wait_for_timeout(2000)
-    shot = page.screenshot()
+    shot = ui.settled_screenshot(page)
     pixels = np.asarray(Image.open(io.BytesIO(shot)).convert("RGB"), dtype=int)
     assert np.median(pixels) < 60, "the dark theme's scene"
     if os.environ.get("CBM_UPDATE_DOCS_IMG"):

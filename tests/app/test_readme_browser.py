@@ -42,7 +42,7 @@ def test_the_readme_picture_shows_both_halves_of_side_by_side(browser, server: E
     page.get_by_role("tab", name="Scenario").click()
     page.locator(".mantine-ScrollArea-viewport").first.evaluate("element => element.scrollTo(0, 0)")
     ui.close_notifications(page)
-    page.wait_for_timeout(2000)
+    shot = ui.settled_screenshot(page)
     if os.environ.get("CBM_UPDATE_DOCS_IMG") == "1":
-        page.screenshot(path=str(DOCS_IMAGE))
+        DOCS_IMAGE.write_bytes(shot)
     page.close()

@@ -101,5 +101,4 @@ def _save_screenshot(page) -> None:
     page.set_viewport_size({"width": 1280, "height": 720})
     ui.close_notifications(page)
     page.get_by_role("button", name="leave walkthrough").scroll_into_view_if_needed()
-    page.wait_for_timeout(2000)
-    page.screenshot(path=str(DOCS_IMAGE))
+    DOCS_IMAGE.write_bytes(ui.settled_screenshot(page))

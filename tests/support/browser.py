@@ -80,6 +80,26 @@ def wait_until(condition: Callable[[], bool], timeout: float = 15.0) -> None:
         time.sleep(0.1)
 
 
+def settled_screenshot(page, timeout: float = 60.0) -> bytes:
+    """The page's screenshot (PNG bytes) once two taken in a row are the same: closing notifications
+    have faded and the scene has drawn its last frame (no fixed wait)."""
+    deadline = time.monotonic() + timeout
+    previous = page.screenshot()
+    while (current := page.screenshot()) != previous:
+        assert time.monotonic() < deadline, "the page never stood still"
+        previous = current
+    return current
+
+
+def go_to_frame(page, tab, frame: int) -> None:
+    """Type ``frame`` into the frame slider's number box and wait until the tab has computed it."""
+    row = label(page, "frame").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+    box = row.locator("input.mantine-NumberInput-input")
+    box.fill(str(frame))
+    box.press("Enter")
+    wait_until(lambda: tab.last.frame_index == frame, 60)
+
+
 def session(server, count: int):
     """The newest of at least ``count`` tab sessions, once every one has drawn its first frame."""
     wait_until(lambda: len(server.sessions) >= count and all(s.last for s in server.sessions.values()))

@@ -7,10 +7,12 @@ import io
 import numpy as np
 from PIL import Image
 
+from support.browser import settled_screenshot
+
 
 def screenshot(page) -> np.ndarray:
-    """(H, W, 3) uint8 RGB of the page as it shows."""
-    return np.asarray(Image.open(io.BytesIO(page.screenshot())).convert("RGB"))
+    """(H, W, 3) uint8 RGB of the page once it stands still."""
+    return np.asarray(Image.open(io.BytesIO(settled_screenshot(page))).convert("RGB"))
 
 
 def project(camera, points: np.ndarray) -> np.ndarray:
