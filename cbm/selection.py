@@ -93,23 +93,53 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
 
 
 @numba.njit(cache=True, nogil=True)
+def _work_arrays(width, n_ego, n_cav, n_pairs):
+    """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates."""
+    return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
+            np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _rival_free_size(anchor, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+                     work):
+    """card(L^(2)) of one anchor, 0 where the distance limit rejects it or its set holds an ``excluded`` pair."""
+    scratch, ego_count, cav_count, voter_here, out, candidates = work
+    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+                          candidates, scratch, ego_count, cav_count, voter_here, out)
+    for k in range(size):
+        if excluded[out[k]]:
+            return 0
+    return size
+
+
+@numba.njit(cache=True, nogil=True)
 def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
                  limit):
     """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
     an ``excluded`` pair."""
-    scratch = np.zeros((3, width), np.bool_)
-    ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
-    voter_here = np.zeros(len(excluded), np.bool_)
-    out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
+    work = _work_arrays(width, n_ego, n_cav, len(excluded))
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
-        size = _filtered_size(anchors[n], signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
-        shares = False
-        for k in range(size):
-            shares = shares or excluded[out[k]]
-        sizes[n] = 0 if shares else size
+        sizes[n] = _rival_free_size(anchors[n], excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
+                                    distance, limit, work)
     return sizes
+
+
+@numba.njit(cache=True, nogil=True)
+def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
+                   distance, limit):
+    """The largest of ``best`` and the sizes ``_filtered_sizes`` gives ``anchors`` (by decreasing
+    card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
+    the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
+    so that anchor's size is at most its count, at most the largest; and every later anchor's count
+    is no larger than this one's."""
+    work = _work_arrays(width, n_ego, n_cav, len(excluded))
+    for n in range(len(anchors)):
+        if count[anchors[n]] <= best:
+            break
+        best = max(best, _rival_free_size(anchors[n], excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
+                                          n_cav, distance, limit, work))
+    return best
 
 
 def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: int, in_winner: np.ndarray,
@@ -119,9 +149,10 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
 
     Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
-    The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
-    thread); a chunk's sizes are then read in order, as one visit would (an anchor the visit would
-    skip cannot beat the runner-up anyway)."""
+    The anchors go in chunks whose halves run on two threads; a small chunk runs on the calling
+    thread, which stops at the first anchor whose card(L_ij) cannot beat the runner-up so far
+    (``_largest_rival``). A threaded chunk's sizes are read as one visit would (an anchor the visit
+    would skip cannot beat the runner-up anyway)."""
     rule = common[4]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
@@ -131,12 +162,11 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if rule != RULE_CODES["paper"]:
             anchors = anchors[~in_winner[anchors]]
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
-            sizes = _filtered_sizes(anchors, L.width, in_winner, *common)
-        else:
-            jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common)
-                    for part in np.array_split(anchors, THREADS) if len(part)]
-            sizes = np.concatenate([job.result() for job in jobs])
-        runner_up = max(runner_up, int(sizes.max(initial=0)))
+            runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
+            continue
+        jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common)
+                for part in np.array_split(anchors, THREADS) if len(part)]
+        runner_up = max(runner_up, int(max(job.result().max(initial=0) for job in jobs)))
     return runner_up
 
 
