@@ -30,6 +30,28 @@ below, handing them over costs more than it saves, and the calling thread runs t
 
 
 @dataclass(frozen=True)
+class Visit:
+    """What eq. 13's visit computed, for the hypotheses to reuse (``anchor_sets``): the anchors in
+    ``by_count_descending`` order, the filtered sizes and members (flat, with offsets) of the first
+    ``len(sizes)`` of them, and the kernel arguments they were filtered with (``kernel_arguments``)."""
+
+    order: np.ndarray
+    sizes: np.ndarray
+    offsets: np.ndarray
+    members: np.ndarray
+    common: tuple
+
+    def set_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
+        """(K, 2) pairs of one anchor's filtered set, sorted by ego index: the visit's when it
+        filtered the anchor (the same kernel, so the same members in the same order), else filtered now."""
+        at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
+        if len(at) == 0:
+            return set_of(anchor, L, self.common)
+        pairs = _as_pairs(self.members[self.offsets[at[0]]:self.offsets[at[0] + 1]], self.common[6])
+        return pairs[np.argsort(pairs[:, 0], kind="stable")]
+
+
+@dataclass(frozen=True)
 class Selection:
     anchor: int | None
     """Winning anchor pair id, or None when every set is empty or rejected."""
@@ -39,6 +61,8 @@ class Selection:
     """card(L_ij) of the winning anchor before filtering (eq. 8)."""
     runner_up_count: int
     """Largest set among anchors that share no pair with the winner."""
+    visit: Visit | None = None
+    """The visit's filtered sets (None when every set is empty)."""
 
 
 @numba.njit(cache=True, nogil=True)
@@ -259,7 +283,8 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     runner_up = strongest_rival(order, stop, L, runner_up, in_winner, common)
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
-                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)
+                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
+                     visit=Visit(order, sizes, offsets, members, common))
 
 
 def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
@@ -270,19 +295,25 @@ def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
 
 
 def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
-                distance_limit: float, winner: int, k: int, pool: int) -> list[tuple[int, np.ndarray]]:
+                distance_limit: float, winner: int, k: int, pool: int,
+                visit: Visit | None = None) -> list[tuple[int, np.ndarray]]:
     """(anchor, filtered set) of the eq. 13 ``winner`` and of the next ``k - 1`` anchors with the
     largest filtered sets among the ``pool`` largest candidate sets, each set once, largest first
-    (ties by candidate-set order: ``by_count_descending``)."""
-    common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    order = by_count_descending(L.count)[:pool]
-    sizes = filtered_sizes(order, L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    found = [(winner, set_of(winner, L, common))]
+    (ties by candidate-set order: ``by_count_descending``). The sets eq. 13's ``visit`` (of the same
+    sets) filtered are taken from it; only the rest are filtered here."""
+    if visit is None:
+        visit = Visit(by_count_descending(L.count), np.zeros(0, np.int64), np.zeros(1, np.int64),
+                      np.zeros(0, np.int64), kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
+    order = visit.order[:pool]
+    known = min(len(visit.sizes), len(order))
+    nowhere = np.zeros(len(L.count), bool)
+    sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(order[known:], L.width, nowhere, *visit.common)])
+    found = [(winner, visit.set_of(winner, L))]
     seen = {found[0][1].tobytes()}
     for index in np.argsort(-sizes, kind="stable"):
         if len(found) == k or sizes[index] == 0:
             break
-        pairs = set_of(int(order[index]), L, common)
+        pairs = visit.set_of(int(order[index]), L)
         if pairs.tobytes() not in seen:
             seen.add(pairs.tobytes())
             found.append((int(order[index]), pairs))
