@@ -173,10 +173,9 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
 
     Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
-    The anchors go in chunks whose halves run on two threads; a small chunk runs on the calling
-    thread, which stops at the first anchor whose card(L_ij) cannot beat the runner-up so far
-    (``_largest_rival``). A threaded chunk's sizes are read as one visit would (an anchor the visit
-    would skip cannot beat the runner-up anyway)."""
+    The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
+    thread); each run stops at the first anchor whose card(L_ij) cannot beat the largest size it has
+    seen (``_largest_rival``), so the largest of the halves' answers is the chunk's."""
     rule = common[4]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
@@ -188,9 +187,9 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
             continue
-        jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common)
+        jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *common)
                 for part in np.array_split(anchors, THREADS) if len(part)]
-        runner_up = max(runner_up, int(max(job.result().max(initial=0) for job in jobs)))
+        runner_up = max(int(job.result()) for job in jobs)
     return runner_up
 
 
