@@ -66,11 +66,30 @@ class Selection:
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+def _one_to_one_bound(member, size, n_cav, ego_count, cav_count):
+    """min(distinct ego objects, distinct CAV objects) among ``member[:size]``: the most pairs a
+    one-to-one subset of them can hold. The count arrays must be zero and are left so."""
+    distinct_ego, distinct_cav = 0, 0
+    for row in range(size):
+        i, j = member[row] // n_cav, member[row] % n_cav
+        distinct_ego += ego_count[i] == 0
+        distinct_cav += cav_count[j] == 0
+        ego_count[i], cav_count[j] = 1, 1
+    for row in range(size):
+        ego_count[member[row] // n_cav], cav_count[member[row] % n_cav] = 0, 0
+    return min(distinct_ego, distinct_cav)
+
+
+@numba.njit(cache=True, nogil=True)
+def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
                    candidates, scratch, ego_count, cav_count, voter_here, out):
-    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average."""
+    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average, and
+    0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always filtered): L^(2)
+    is a one-to-one subset of L_ij (eq. 10-11 only remove members), so ``_one_to_one_bound`` bounds it."""
     i, j = anchor // n_cav, anchor % n_cav
     listed = members_into(i, j, signs[i, j], *lookup, candidates)
+    if beyond >= 0 and _one_to_one_bound(candidates, listed, n_cav, ego_count, cav_count) <= beyond:
+        return 0
     size = final_set(candidates, listed, voted_start, voted_by, rule, n_cav, scratch, ego_count,
                      cav_count, voter_here, out)
     total = 0.0
@@ -101,7 +120,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
         size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
+                              limit, -1, candidates, scratch, ego_count, cav_count, voter_here, out)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -124,11 +143,12 @@ def _work_arrays(width, n_ego, n_cav, n_pairs):
 
 
 @numba.njit(cache=True, nogil=True)
-def _rival_free_size(anchor, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
-                     work):
-    """card(L^(2)) of one anchor, 0 where the distance limit rejects it or its set holds an ``excluded`` pair."""
+def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                     limit, work):
+    """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
+    ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
     scratch, ego_count, cav_count, voter_here, out, candidates = work
-    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
                           candidates, scratch, ego_count, cav_count, voter_here, out)
     for k in range(size):
         if excluded[out[k]]:
@@ -144,8 +164,8 @@ def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_
     work = _work_arrays(width, n_ego, n_cav, len(excluded))
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
-        sizes[n] = _rival_free_size(anchors[n], excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
-                                    distance, limit, work)
+        sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
+                                    n_cav, distance, limit, work)
     return sizes
 
 
@@ -156,13 +176,14 @@ def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_s
     card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
     the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
     so that anchor's size is at most its count, at most the largest; and every later anchor's count
-    is no larger than this one's."""
+    is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
+    the largest so far is not filtered (``_filtered_size``): it cannot raise the maximum either."""
     work = _work_arrays(width, n_ego, n_cav, len(excluded))
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:
             break
-        best = max(best, _rival_free_size(anchors[n], excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
-                                          n_cav, distance, limit, work))
+        best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, voted_start, voted_by, rule,
+                                          n_ego, n_cav, distance, limit, work))
     return best
 
 
