@@ -92,13 +92,16 @@ def _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, alone):
 def _voted(member, lo, hi, is_voter, voted_start, voted_by, needed, voter_here, enough):
     """enough[r] for rows lo..hi-1: at least ``needed`` voters of the set hold the row's pair in their
     voting set. ``voted_by[voted_start[m]:voted_start[m + 1]]`` are the pairs whose voting set holds
-    pair m; the scan stops at the vote it needs."""
+    pair m; the scan stops at the vote it needs. With ``needed`` 1 (the released rule) a voter's own
+    row is taken as enough unscanned: that rule keeps the voters whatever their votes."""
     for row in range(lo, hi):
         voter_here[member[row]] = is_voter[row - lo]
     for row in range(lo, hi):
         count = 0
-        enough[row - lo] = False
+        enough[row - lo] = needed == 1 and is_voter[row - lo]
         m = member[row]
+        if enough[row - lo]:
+            continue
         for k in range(voted_start[m], voted_start[m + 1]):
             if voter_here[voted_by[k]]:
                 count += 1

@@ -10,6 +10,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.special import fdtri
 
@@ -141,6 +142,52 @@ def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray,
     return a, (a + offset) % k
 
 
+@numba.njit(cache=True, nogil=True)
+def _least_median(c, s, tx, ty, src, dst, h):
+    """(f, m): the first fit f (rotation ``c, s``, translation ``tx, ty``) whose ``h``-th smallest
+    squared residual m is smallest, as ``argmin`` over every fit's would give. Each residual is
+    computed in the order of operations of numpy's broadcast, so the values are the same to the bit.
+    A fit's ``h``-th smallest is only selected when more than ``h`` of its squares lie below the
+    smallest so far; otherwise it is at least that one and cannot come first."""
+    squares = np.empty(len(src))
+    best, smallest = 0, np.inf
+    for f in range(len(c)):
+        below = 0
+        for k in range(len(src)):
+            dx = c[f] * src[k, 0] - s[f] * src[k, 1] + tx[f] - dst[k, 0]
+            dy = s[f] * src[k, 0] + c[f] * src[k, 1] + ty[f] - dst[k, 1]
+            squares[k] = dx * dx + dy * dy
+            below += squares[k] < smallest
+        if below > h:
+            best, smallest = f, _select(squares, h)
+    return best, smallest
+
+
+@numba.njit(cache=True, nogil=True)
+def _select(values, h):
+    """The ``h``-th smallest of ``values`` (Hoare's quickselect, reordering them in place)."""
+    lo, hi = 0, len(values) - 1
+    while lo < hi:
+        pivot = values[(lo + hi) // 2]
+        i, j = lo, hi
+        while i <= j:
+            while values[i] < pivot:
+                i += 1
+            while values[j] > pivot:
+                j -= 1
+            if i <= j:
+                values[i], values[j] = values[j], values[i]
+                i += 1
+                j -= 1
+        if h <= j:
+            hi = j
+        elif h >= i:
+            lo = i
+        else:
+            break
+    return values[h]
+
+
 def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, float]:
     """Least median of squares (Rousseeuw, JASA 1984) over rigid fits through two pairs
     (``hypothesis_pairs``): the fit whose ``h``-th smallest residual, ``h = floor(K/2) + 1``, is
@@ -151,13 +198,8 @@ def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, floa
     src, dst = src[order], dst[order]
     a, b = hypothesis_pairs(len(src))
     theta, tx, ty = two_point_fits(src, dst, a, b)
-    c, s = np.cos(theta)[:, None], np.sin(theta)[:, None]
-    dx = c * src[:, 0] - s * src[:, 1] + tx[:, None] - dst[:, 0]
-    dy = s * src[:, 0] + c * src[:, 1] + ty[:, None] - dst[:, 1]
-    h = len(src) // 2
-    median = np.partition(dx * dx + dy * dy, h, axis=1)[:, h]
-    best = int(np.argmin(median))
-    return se2.make(tx[best], ty[best], theta[best]), math.sqrt(median[best])
+    best, median = _least_median(np.cos(theta), np.sin(theta), tx, ty, src, dst, len(src) // 2)
+    return se2.make(tx[best], ty[best], theta[best]), math.sqrt(median)
 
 
 def least_median_sigma(median: float, k: int) -> float:

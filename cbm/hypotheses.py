@@ -34,7 +34,7 @@ from . import se2
 from .estimate import Fit, least_squares_fit, residuals
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, axis_difference, gated_assignment, reassociate
-from .selection import anchor_sets
+from .selection import Visit, anchor_sets
 
 HYPOTHESES = 6
 """Anchors refined and verified (the eq. 13 winner and the next best distinct sets)."""
@@ -160,19 +160,21 @@ def same_answer(a: Hypothesis, b: Hypothesis) -> bool:
     return 2 * shared > min(len(a.pairs), len(b.pairs))
 
 
-def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, widest: float) -> Verdict | None:
+def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, widest: float,
+           visit: Visit | None = None) -> Verdict | None:
     """Refine and score the eq. 13 ``winner`` (its set's robust fit ``winner_fit``) and the next
     best anchors' sets of ``sets`` (``cbm.pipeline.Sets``); None when no set holds 2 pairs. A set
     whose robust fit lands on the pose of a set already tried (``same_pose``, before or after its
     refinement) would refine to the same answer: it is skipped, so an easy scene costs about one
     refinement. Only the winner runs the guided re-association (its robust refit every round is the
-    costly part); the others go straight to the noise-aware one."""
+    costly part); the others go straight to the noise-aware one. The sets eq. 13's ``visit``
+    (``cbm.selection.Visit``) filtered are not filtered again."""
     density = clutter_density(sets.cav_xy)
     ego, cav = sets.ego_boxes, sets.cav_boxes
     found: list[Hypothesis] = []
     poses: list[np.ndarray] = []
     for anchor, pairs in anchor_sets(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy,
-                                     sets.params.distance_limit, winner, HYPOTHESES, POOL):
+                                     sets.params.distance_limit, winner, HYPOTHESES, POOL, visit):
         if len(pairs) < 2:
             continue
         fit = winner_fit if anchor == winner else refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])

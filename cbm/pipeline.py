@@ -129,7 +129,7 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
     if estimated and params.refine:
         t = time.perf_counter()
         verdict = verify(sets, chosen.anchor, fit, lambda src, dst: estimate(src, dst, params),
-                         params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate)
+                         params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate, chosen.visit)
         best = verdict.best
         pairs, correction = best.pairs, best.correction
         timings["reassociate"] = time.perf_counter() - t

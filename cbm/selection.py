@@ -30,6 +30,28 @@ below, handing them over costs more than it saves, and the calling thread runs t
 
 
 @dataclass(frozen=True)
+class Visit:
+    """What eq. 13's visit computed, for the hypotheses to reuse (``anchor_sets``): the anchors in
+    ``by_count_descending`` order, the filtered sizes and members (flat, with offsets) of the first
+    ``len(sizes)`` of them, and the kernel arguments they were filtered with (``kernel_arguments``)."""
+
+    order: np.ndarray
+    sizes: np.ndarray
+    offsets: np.ndarray
+    members: np.ndarray
+    common: tuple
+
+    def set_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
+        """(K, 2) pairs of one anchor's filtered set, sorted by ego index: the visit's when it
+        filtered the anchor (the same kernel, so the same members in the same order), else filtered now."""
+        at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
+        if len(at) == 0:
+            return set_of(anchor, L, self.common)
+        pairs = _as_pairs(self.members[self.offsets[at[0]]:self.offsets[at[0] + 1]], self.common[6])
+        return pairs[np.argsort(pairs[:, 0], kind="stable")]
+
+
+@dataclass(frozen=True)
 class Selection:
     anchor: int | None
     """Winning anchor pair id, or None when every set is empty or rejected."""
@@ -39,14 +61,35 @@ class Selection:
     """card(L_ij) of the winning anchor before filtering (eq. 8)."""
     runner_up_count: int
     """Largest set among anchors that share no pair with the winner."""
+    visit: Visit | None = None
+    """The visit's filtered sets (None when every set is empty)."""
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit,
+def _one_to_one_bound(member, size, n_cav, ego_count, cav_count):
+    """min(distinct ego objects, distinct CAV objects) among ``member[:size]``: the most pairs a
+    one-to-one subset of them can hold. The count arrays must be zero and are left so."""
+    distinct_ego, distinct_cav = 0, 0
+    for row in range(size):
+        i, j = member[row] // n_cav, member[row] % n_cav
+        distinct_ego += ego_count[i] == 0
+        distinct_cav += cav_count[j] == 0
+        ego_count[i], cav_count[j] = 1, 1
+    for row in range(size):
+        ego_count[member[row] // n_cav], cav_count[member[row] % n_cav] = 0, 0
+    return min(distinct_ego, distinct_cav)
+
+
+@numba.njit(cache=True, nogil=True)
+def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
                    candidates, scratch, ego_count, cav_count, voter_here, out):
-    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average."""
+    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average, and
+    0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always filtered): L^(2)
+    is a one-to-one subset of L_ij (eq. 10-11 only remove members), so ``_one_to_one_bound`` bounds it."""
     i, j = anchor // n_cav, anchor % n_cav
     listed = members_into(i, j, signs[i, j], *lookup, candidates)
+    if beyond >= 0 and _one_to_one_bound(candidates, listed, n_cav, ego_count, cav_count) <= beyond:
+        return 0
     size = final_set(candidates, listed, voted_start, voted_by, rule, n_cav, scratch, ego_count,
                      cav_count, voter_here, out)
     total = 0.0
@@ -77,7 +120,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
         size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
+                              limit, -1, candidates, scratch, ego_count, cav_count, voter_here, out)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -93,23 +136,55 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
 
 
 @numba.njit(cache=True, nogil=True)
+def _work_arrays(width, n_ego, n_cav, n_pairs):
+    """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates."""
+    return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
+            np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64))
+
+
+@numba.njit(cache=True, nogil=True)
+def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+                     limit, work):
+    """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
+    ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
+    scratch, ego_count, cav_count, voter_here, out, candidates = work
+    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
+                          candidates, scratch, ego_count, cav_count, voter_here, out)
+    for k in range(size):
+        if excluded[out[k]]:
+            return 0
+    return size
+
+
+@numba.njit(cache=True, nogil=True)
 def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
                  limit):
     """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
     an ``excluded`` pair."""
-    scratch = np.zeros((3, width), np.bool_)
-    ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
-    voter_here = np.zeros(len(excluded), np.bool_)
-    out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
+    work = _work_arrays(width, n_ego, n_cav, len(excluded))
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
-        size = _filtered_size(anchors[n], signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
-                              limit, candidates, scratch, ego_count, cav_count, voter_here, out)
-        shares = False
-        for k in range(size):
-            shares = shares or excluded[out[k]]
-        sizes[n] = 0 if shares else size
+        sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
+                                    n_cav, distance, limit, work)
     return sizes
+
+
+@numba.njit(cache=True, nogil=True)
+def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
+                   distance, limit):
+    """The largest of ``best`` and the sizes ``_filtered_sizes`` gives ``anchors`` (by decreasing
+    card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
+    the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
+    so that anchor's size is at most its count, at most the largest; and every later anchor's count
+    is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
+    the largest so far is not filtered (``_filtered_size``): it cannot raise the maximum either."""
+    work = _work_arrays(width, n_ego, n_cav, len(excluded))
+    for n in range(len(anchors)):
+        if count[anchors[n]] <= best:
+            break
+        best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, voted_start, voted_by, rule,
+                                          n_ego, n_cav, distance, limit, work))
+    return best
 
 
 def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: int, in_winner: np.ndarray,
@@ -120,8 +195,8 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
     The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
-    thread); a chunk's sizes are then read in order, as one visit would (an anchor the visit would
-    skip cannot beat the runner-up anyway)."""
+    thread); each run stops at the first anchor whose card(L_ij) cannot beat the largest size it has
+    seen (``_largest_rival``), so the largest of the halves' answers is the chunk's."""
     rule = common[4]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
@@ -131,12 +206,11 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if rule != RULE_CODES["paper"]:
             anchors = anchors[~in_winner[anchors]]
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
-            sizes = _filtered_sizes(anchors, L.width, in_winner, *common)
-        else:
-            jobs = [POOL.submit(_filtered_sizes, part, L.width, in_winner, *common)
-                    for part in np.array_split(anchors, THREADS) if len(part)]
-            sizes = np.concatenate([job.result() for job in jobs])
-        runner_up = max(runner_up, int(sizes.max(initial=0)))
+            runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
+            continue
+        jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *common)
+                for part in np.array_split(anchors, THREADS) if len(part)]
+        runner_up = max(int(job.result()) for job in jobs)
     return runner_up
 
 
@@ -229,7 +303,8 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     runner_up = strongest_rival(order, stop, L, runner_up, in_winner, common)
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
-                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up)
+                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
+                     visit=Visit(order, sizes, offsets, members, common))
 
 
 def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
@@ -240,19 +315,25 @@ def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
 
 
 def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
-                distance_limit: float, winner: int, k: int, pool: int) -> list[tuple[int, np.ndarray]]:
+                distance_limit: float, winner: int, k: int, pool: int,
+                visit: Visit | None = None) -> list[tuple[int, np.ndarray]]:
     """(anchor, filtered set) of the eq. 13 ``winner`` and of the next ``k - 1`` anchors with the
     largest filtered sets among the ``pool`` largest candidate sets, each set once, largest first
-    (ties by candidate-set order: ``by_count_descending``)."""
-    common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    order = by_count_descending(L.count)[:pool]
-    sizes = filtered_sizes(order, L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    found = [(winner, set_of(winner, L, common))]
+    (ties by candidate-set order: ``by_count_descending``). The sets eq. 13's ``visit`` (of the same
+    sets) filtered are taken from it; only the rest are filtered here."""
+    if visit is None:
+        visit = Visit(by_count_descending(L.count), np.zeros(0, np.int64), np.zeros(1, np.int64),
+                      np.zeros(0, np.int64), kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
+    order = visit.order[:pool]
+    known = min(len(visit.sizes), len(order))
+    nowhere = np.zeros(len(L.count), bool)
+    sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(order[known:], L.width, nowhere, *visit.common)])
+    found = [(winner, visit.set_of(winner, L))]
     seen = {found[0][1].tobytes()}
     for index in np.argsort(-sizes, kind="stable"):
         if len(found) == k or sizes[index] == 0:
             break
-        pairs = set_of(int(order[index]), L, common)
+        pairs = visit.set_of(int(order[index]), L)
         if pairs.tobytes() not in seen:
             seen.add(pairs.tobytes())
             found.append((int(order[index]), pairs))

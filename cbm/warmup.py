@@ -27,10 +27,11 @@ import numpy as np
 from . import se2
 from .consensus import PairSets
 from .context import build_context, fold_heading, pair_signs
+from .estimate import robust_fit
 from .local_matching import CandidateSets, member_lookup
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
-from .selection import by_count_descending, kernel_arguments, select, strongest_rival
+from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
     CBMParams(),
@@ -76,8 +77,9 @@ def compile_matching() -> None:
 
 
 def compile_selection() -> None:
-    """Compile steps 5-6 (the visit, consensus, one-to-one rule, runner-up) with a first call on
-    candidate sets whose sizes are upper bounds, without running the join that counts them."""
+    """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up on one thread and on
+    two, the robust fit's least-median start) with a first call on candidate sets whose sizes are
+    upper bounds, without running the join that counts them."""
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
     cav = se2.apply_boxes(init, cav)
     ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav[:, 6])
@@ -89,7 +91,10 @@ def compile_selection() -> None:
     sets = (candidates, PairSets.empty(n_ego * n_cav), params.consensus_rule, ego[:, :2], cav[:, :2],
             params.distance_limit)
     select(*sets)
-    strongest_rival(by_count_descending(bound), 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
+    order = by_count_descending(bound)
+    strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
+    filtered_sizes(order[:2], *sets)
+    robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}
