@@ -14,7 +14,7 @@ from .panels.actions import Edit
 from .panels.explore import ExplorePanel
 from .panels.keynumbers import KeyNumbers, unusable_markdown
 from .panels.plot import timeline_data
-from .scene import picking, presentation
+from .scene import picking, planes, presentation
 from .scene.drawing import Drawing, draw
 from .scene.pinned import with_baseline
 from .scene.view import SceneView
@@ -224,7 +224,7 @@ class ClientSession:
         self.client.flush()
         self._note = ""
         if first:
-            for name in ("ego_boxes", "cav_boxes"):
+            for name in picking.NODES:
                 self.view.meshes[name].on_click(self._picked)
         self.last, self.last_drawing = outcome, picture
 
@@ -258,22 +258,23 @@ class ClientSession:
             time.sleep(1.0 / max(1, int(self.controls.frame.speed.value)))
 
     def _picked(self, event: viser.SceneNodePointerEvent) -> None:
-        """Label the object under a click (the ray meets the plane at mid box height) and show its
-        context in the inspector."""
+        """Label the object under a click (the ray meets the plane of the footprints) and, for the ego's
+        and the first CAV's (the pair CBM's inspection holds), show its context in the inspector."""
         outcome, picture = self.last, self.last_drawing
         origin, direction = np.asarray(event.ray_origin), np.asarray(event.ray_direction)
         if outcome is None or picture is None or abs(direction[2]) < 1e-9:
             return
-        point = origin + direction * (0.8 - origin[2]) / direction[2]
+        point = origin + direction * (planes.EGO - origin[2]) / direction[2]
         found = picking.pick(picture, point[:2])
         if found is None or not outcome.settings.view.labels:
             self.view.hide_label("picked")
         if found is None:
             return
         group, index = found
-        self.explore.picked(outcome, picture, group, int(picture.objects[group][1][index]))
+        if group in ("ego", "cav"):
+            self.explore.picked(outcome, picture, group, int(picture.objects[group][1][index]))
         if not outcome.settings.view.labels:
             return
         boxes, _ = picture.objects[group]
         self.view.label("picked", picking.describe(outcome, picture, group, index),
-                        (float(boxes[index, 0]), float(boxes[index, 1]), float(boxes[index, 5]) + 1.0))
+                        (float(boxes[index, 0]), float(boxes[index, 1]), planes.LABELS))

@@ -51,7 +51,8 @@ class Drawing:
     labels: dict[str, tuple[str, tuple[float, float, float]]]
     metrics_markdown: str
     objects: dict[str, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    """(boxes (N, 7) as drawn, index into the trial's list) by group (``ego``, ``cav``), for picking."""
+    """(boxes (N, 7) as drawn, index into the trial's list) by group, for picking: ``ego``, then each
+    CAV's (``cav``, ``cav_2``, ... ``cavs.node("cav", rank)``, its trial's list), lowest layer first."""
     centre_y: float = 0.0
     """Sideways middle of the panels the layout shows (where the camera looks on reset)."""
     agents: tuple[tuple[float, float], ...] = ()
@@ -67,10 +68,8 @@ class _Parts:
     """Everything the copies of the scene contribute, gathered before it is joined into nodes."""
 
     ego: list[np.ndarray] = field(default_factory=list)
-    cav: list[np.ndarray] = field(default_factory=list)
-    """The first CAV's boxes, placed, full size (what a click picks)."""
     tiles: dict[int, list[np.ndarray]] = field(default_factory=lambda: defaultdict(list))
-    """Each CAV's boxes as drawn, by rank."""
+    """Each CAV's boxes as drawn (what a click picks), by rank."""
     before: list[np.ndarray] = field(default_factory=list)
     ghosts: list[np.ndarray] = field(default_factory=list)
     false_boxes: list[np.ndarray] = field(default_factory=list)
@@ -95,10 +94,8 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
     parts = _Parts()
     for panel in panels:
         _add_panel(parts, outcome, panel, layout.before_ghosts, palette)
-    ego, cav = np.concatenate(parts.ego), np.concatenate(parts.cav)
-    trial, copies = outcome.trial, len(panels)
-    objects = {"ego": (ego, np.tile(np.arange(len(trial.ego_boxes)), copies)),
-               "cav": (cav, np.tile(np.arange(len(trial.cav_boxes)), copies))}
+    ego = np.concatenate(parts.ego)
+    objects = _objects(outcome, parts, ego, len(panels))
     lines = {**_lines(parts, palette), **_map_lines(map_segments, parts.map_poses, palette)}
     agents = tuple(tuple(map(float, se2.translation_of(pose)))
                    for pose in (*parts.ego_poses, *(p for poses in parts.cav_poses.values() for p in poses)))
@@ -119,7 +116,6 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
     shift = se2.make(offset[0], offset[1], 0.0)
     ego = pairs.Drawn(_shifted(trial.ego_boxes, offset), trial.ego_ids)
     parts.ego.append(ego.boxes)
-    parts.cav.append(se2.apply_boxes(shift @ where[panel.placement], trial.cav_boxes))
     parts.ego_poses.append(shift)
     parts.labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(shift), planes.LABELS))
     if panel.title:
@@ -157,6 +153,16 @@ def _add_cav(parts: _Parts, cav: cavs.ShownCav, count: int, panel: Panel, ego: p
         shapes = pairs.pair_shapes(cav.pairs, cav.trial.gt_pairs, partners, drawn, palette, name,
                                    f"{cavs.node('pairs', cav.rank)}_{panel.placement}")
         parts.shapes.append(shapes)
+
+
+def _objects(outcome: Outcome, parts: _Parts, ego: np.ndarray, copies: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """What a click can pick: the ego's boxes and every CAV's, as drawn in every copy of the scene,
+    with each box's index into its trial's list."""
+    objects = {"ego": (ego, np.tile(np.arange(len(outcome.trial.ego_boxes)), copies))}
+    for cav in cavs.every_cav(outcome):
+        objects[cavs.node("cav", cav.rank)] = (np.concatenate(parts.tiles[cav.rank]),
+                                               np.tile(np.arange(len(cav.trial.cav_boxes)), copies))
+    return objects
 
 
 def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:

@@ -20,6 +20,8 @@ LINES = 12 * STEP
 """Match lines, from a drawn box's centre to its partner's."""
 FUSED = 13 * STEP
 """Outlines of the fused boxes (late fusion)."""
+HIGHLIGHT = 14 * STEP
+"""Lines drawn over the match lines: the walkthrough's followed pair and the context vectors that matched."""
 LABELS = 2.5
 """Labels float above the vehicles (screen-space text: their height moves no footprint)."""
 

@@ -1,12 +1,16 @@
 """The shareable recording: one self-contained HTML page (inline script and style, no library, no
 network) that replays the frames a tab has shown, seen from above in the ego frame.
 
-Each frame draws the ego's boxes, the CAV's boxes where the wrong pose put them (outlines) and
-where the estimate puts them, and the match lines right, wrong and missed in the app's palette
-(Okabe-Ito when the tab is in presentation mode), beside the frame's metrics, worded and numbered as
-the app's metrics panel; a slider, previous, next and play above the view move through the frames;
-the wheel zooms and a drag pans (double click: fit again). The view takes the height the window
-leaves, so the controls and the metrics are in the first screen of a 1280x720 window.
+Each frame draws what the app's top-down view draws, flat in one plane: the ego's boxes and the CAV's
+where the estimate puts them as the app's footprints (the CAV's narrowed on the same centre,
+``cavs.SLIM``), their corners written in the page's data, so that a pair the metrics call aligned
+shows its two footprints on one centre; over them the CAV's boxes where the wrong pose put them
+(outlines), the match lines from footprint centre to footprint centre right, wrong and missed, and the
+boxes of wrong and missed pairs outlined, in the app's palette (Okabe-Ito when the tab is in
+presentation mode), beside the frame's metrics, worded and numbered as the app's metrics panel; a
+slider, previous, next and play above the view move through the frames; the view is the app's
+top-down one (x up the page); the wheel zooms and a drag pans (double click: fit again). The view
+takes the height the window leaves, so the controls and the metrics are in the first screen of a 1280x720 window.
 """
 from __future__ import annotations
 
@@ -24,7 +28,8 @@ from cbm.methods import METHODS
 
 from ..session.recording import FrameRecord, Recording
 from ..session.settings import Settings
-from . import colours
+from . import colours, geometry
+from .cavs import SLIM
 from .text import number
 from .words import label_of, margin_words
 
@@ -67,10 +72,20 @@ def metrics_rows(metrics: dict[str, Any]) -> list[list[str]]:
     return rows
 
 
+def footprints(top: np.ndarray, slim: float = 1.0) -> list:
+    """The (N, 4, 2) corners of top-down boxes (N, 5: x, y, length, width, yaw) as the app draws their
+    footprints (``geometry.footprints``), length and width times ``slim``, rounded for the page."""
+    top = np.asarray(top, dtype=float).reshape(-1, 5)
+    boxes = np.zeros((len(top), 7))
+    boxes[:, [0, 1, 3, 4, 6]] = top
+    boxes[:, 3:5] *= slim
+    return _rounded(geometry.footprints(boxes))
+
+
 def frame_data(record: FrameRecord) -> dict[str, Any]:
-    """One frame as the page's script reads it."""
-    return {"frame": record.frame, "agents": record.agents, "ego": _rounded(record.ego),
-            "before": _rounded(record.cav_before), "after": _rounded(record.cav_after),
+    """One frame as the page's script reads it: every box as the corners of its footprint drawn."""
+    return {"frame": record.frame, "agents": record.agents, "ego": footprints(record.ego),
+            "before": footprints(record.cav_before), "after": footprints(record.cav_after, SLIM[0]),
             "poseBefore": _rounded(record.cav_pose_before), "poseAfter": _rounded(record.cav_pose_after),
             "right": record.right.tolist(), "wrong": record.wrong.tolist(), "missed": record.missed.tolist(),
             "success": bool(record.metrics["success"]), "table": metrics_rows(record.metrics)}
@@ -157,10 +172,12 @@ let index = 0, timer = null, view = null, drag = null;
 const rgb = (c, a) => `rgba(${c[0]},${c[1]},${c[2]},${a === undefined ? 1 : a})`;
 const toScreen = (x, y) => [view.ox - y * view.scale, view.oy - x * view.scale];
 
-function corners(b, slim) {
-  const [x, y, l, w, yaw] = b, k = slim ? 0.7 : 1, c = Math.cos(yaw), s = Math.sin(yaw);
-  return [[1, 1], [1, -1], [-1, -1], [-1, 1]].map(([u, v]) => {
-    const a = u * l * k / 2, d = v * w * k / 2;
+function quad(q) { return q.map(([x, y]) => toScreen(x, y)); }
+function centre(q) { return [0, 1].map(k => q.reduce((sum, p) => sum + p[k], 0) / q.length); }
+function rect(x, y, l, w, yaw) {
+  const c = Math.cos(yaw), s = Math.sin(yaw);
+  return [[1, 1], [-1, 1], [-1, -1], [1, -1]].map(([u, v]) => {
+    const a = u * l / 2, d = v * w / 2;
     return toScreen(x + c * a - s * d, y + s * a + c * d);
   });
 }
@@ -171,7 +188,7 @@ function polygon(points, fill, stroke, width) {
 }
 function vehicle(pose, colour) {
   const [x, y, yaw] = pose;
-  polygon(corners([x, y, 4.8, 2.0, yaw], false), rgb(colour, 0.9), '#000', 0.5);
+  polygon(rect(x, y, 4.8, 2.0, yaw), rgb(colour, 0.9), '#000', 0.5);
   const c = Math.cos(yaw), s = Math.sin(yaw), tip = toScreen(x + 2.4 * c, y + 2.4 * s), [cx, cy] = toScreen(x, y);
   ctx.beginPath(); ctx.moveTo(cx, cy); ctx.lineTo(tip[0], tip[1]);
   ctx.strokeStyle = '#fff'; ctx.lineWidth = 2; ctx.stroke();
@@ -180,10 +197,13 @@ function pairLines(f, pairs, stroke) {
   ctx.strokeStyle = rgb(stroke.color); ctx.lineWidth = stroke.width;
   ctx.setLineDash(stroke.dash ? [stroke.dash * view.scale, stroke.dash * view.scale] : []);
   for (const [e, c] of pairs) {
-    const a = toScreen(f.ego[e][0], f.ego[e][1]), b = toScreen(f.after[c][0], f.after[c][1]);
-    ctx.beginPath(); ctx.moveTo(a[0], a[1]); ctx.lineTo(b[0], b[1]); ctx.stroke();
+    const [ax, ay] = toScreen(...centre(f.ego[e])), [bx, by] = toScreen(...centre(f.after[c]));
+    ctx.beginPath(); ctx.moveTo(ax, ay); ctx.lineTo(bx, by); ctx.stroke();
   }
   ctx.setLineDash([]);
+}
+function marks(f, pairs, stroke, width) {
+  for (const [e, c] of pairs) for (const q of [f.ego[e], f.after[c]]) polygon(quad(q), null, rgb(stroke.color), width);
 }
 function sized() {
   const r = canvas.getBoundingClientRect();
@@ -191,7 +211,7 @@ function sized() {
 }
 function fit() {
   let lo = [Infinity, Infinity], hi = [-Infinity, -Infinity];
-  for (const f of frames) for (const b of [...f.ego, ...f.after, [0, 0]]) {
+  for (const f of frames) for (const b of [...f.ego.flat(), ...f.after.flat(), [0, 0]]) {
     lo = [Math.min(lo[0], b[0]), Math.min(lo[1], b[1])]; hi = [Math.max(hi[0], b[0]), Math.max(hi[1], b[1])];
   }
   const w = Math.max(hi[1] - lo[1], 10), h = Math.max(hi[0] - lo[0], 10);
@@ -202,9 +222,10 @@ function fit() {
 function draw() {
   const f = frames[index];
   ctx.clearRect(0, 0, canvas.width, canvas.height);
-  for (const b of f.before) polygon(corners(b, false), null, rgb(pal.before), 1.5);
-  for (const b of f.ego) polygon(corners(b, false), rgb(pal.ego, 0.75), rgb(pal.ego), 1);
-  for (const b of f.after) polygon(corners(b, true), rgb(pal.cav, 0.85), rgb(pal.cav), 1);
+  for (const q of f.ego) polygon(quad(q), rgb(pal.ego), null);
+  for (const q of f.after) polygon(quad(q), rgb(pal.cav), null);
+  for (const q of f.before) polygon(quad(q), null, rgb(pal.before), 1.5);
+  marks(f, f.missed, pal.missed, 2); marks(f, f.wrong, pal.wrong, 3);
   pairLines(f, f.missed, pal.missed); pairLines(f, f.wrong, pal.wrong); pairLines(f, f.right, pal.right);
   vehicle([0, 0, 0], pal.egoVehicle); vehicle(f.poseAfter, pal.cavVehicle);
   ctx.globalAlpha = 0.35; vehicle(f.poseBefore, pal.cavVehicle); ctx.globalAlpha = 1;

@@ -1,49 +1,49 @@
 """The walkthrough's geometry, in the ego frame: the boxes, pair lines, context vectors drawn in
-one object's frame, and the Welsch weights as line widths."""
+one object's frame, and the Welsch weights as line widths. Everything lies flat in the main scene's
+layers (``scene.planes``): the boxes as the same footprints the main scene draws, the lines in the
+plane of its match lines, so that stepping into the walkthrough leaves every box where it was."""
 from __future__ import annotations
 
 import numpy as np
 
-from ..scene import geometry
+from ..scene import geometry, planes
+from ..scene.cavs import SLIM
 from ..scene.colours import CAV_BOXES, EGO_BOXES
 from ..scene.drawing import Lines, Mesh, no_lines
 from ..scene.inspector import band_segments, region_segments
 
-PAIR_HEIGHT = 1.9
-"""Metres above the ground of pair lines (above the boxes' tiles)."""
-VECTOR_HEIGHT = 2.1
-"""Metres above the ground of context vectors and their regions."""
 WEIGHT_CLASSES = ((0.75, 7.0), (0.5, 4.5), (0.25, 2.5), (0.0, 1.0))
 """(least Welsch weight, line width) of each class of pairs drawn in the robust fit's step."""
 
 
 def ego_mesh(boxes: np.ndarray) -> Mesh:
-    return Mesh(*geometry.footprint_mesh(boxes), EGO_BOXES)
+    """The ego's boxes as the main scene draws them: footprints on the ego's layer."""
+    return Mesh(*geometry.footprint_mesh(boxes, planes.EGO), EGO_BOXES)
 
 
 def cav_mesh(boxes: np.ndarray) -> Mesh:
-    """The CAV's boxes in the CAV's own frame (the node is placed by a pose), narrower and taller
-    than the ego's as in the main scene, so a matched pair shows both colours."""
+    """The CAV's boxes in the CAV's own frame (the node is placed by a pose) as the main scene draws
+    the first CAV's: footprints narrowed on the same centre (``cavs.SLIM``) on its layer, so a matched
+    pair shows both colours."""
     slim = boxes.copy()
-    slim[:, 3:5] *= 0.7
-    slim[:, 5] *= 1.3
-    return Mesh(*geometry.footprint_mesh(slim), CAV_BOXES)
+    slim[:, 3:5] *= SLIM[0]
+    return Mesh(*geometry.footprint_mesh(slim, planes.cav(1)), CAV_BOXES)
 
 
 def pair_segments(ego_xy: np.ndarray, cav_xy: np.ndarray, pairs: np.ndarray,
-                  z: float = PAIR_HEIGHT) -> np.ndarray:
+                  z: float = planes.LINES) -> np.ndarray:
     """(K, 2, 3) lines from each pair's ego centre to its CAV centre."""
     pairs = np.asarray(pairs, dtype=int).reshape(-1, 2)
     return geometry.segments(ego_xy[pairs[:, 0]], cav_xy[pairs[:, 1]], z)
 
 
-def rays(origin: np.ndarray, targets: np.ndarray, z: float = VECTOR_HEIGHT) -> np.ndarray:
+def rays(origin: np.ndarray, targets: np.ndarray, z: float = planes.LINES) -> np.ndarray:
     """(N, 2, 3) lines from ``origin`` to each of ``targets``."""
     targets = np.asarray(targets, dtype=float).reshape(-1, 2)
     return geometry.segments(np.broadcast_to(origin, targets.shape), targets, z)
 
 
-def to_scene(segments: np.ndarray, origin: np.ndarray, heading: float, z: float = VECTOR_HEIGHT) -> np.ndarray:
+def to_scene(segments: np.ndarray, origin: np.ndarray, heading: float, z: float = planes.LINES) -> np.ndarray:
     """Segments given in an object's own frame (eq. 5-6), placed at ``origin`` turned by ``heading``."""
     c, s = np.cos(heading), np.sin(heading)
     out = np.array(segments, dtype=np.float32, copy=True)
@@ -86,5 +86,6 @@ def midpoints(segments: np.ndarray) -> np.ndarray:
     return middle
 
 
-def outlines(boxes: np.ndarray) -> np.ndarray:
-    return geometry.outline_segments(boxes, 0.1)
+def outlines(boxes: np.ndarray, z: float = planes.OUTLINES) -> np.ndarray:
+    """(4N, 2, 3) footprint outlines of ``boxes`` (full size), on the outlines' layer unless ``z`` says."""
+    return geometry.outline_segments(boxes, z)

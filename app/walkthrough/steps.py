@@ -11,6 +11,7 @@ import numpy as np
 
 from cbm import se2
 
+from ..scene import planes
 from ..scene.colours import CAV_BOXES, EGO_BOXES, GHOST, MISSED, RIGHT, WRONG
 from ..scene.drawing import Lines, Mesh
 from ..scene.inspector import BAND, REGION
@@ -152,13 +153,13 @@ def local_matching(facts: Facts) -> Step:
     ego_members, ego_vectors = inspection.context("ego", i)
     cav_members, cav_vectors = inspection.context("cav", j, against=i)
     origin, heading = facts.ego_xy[i], float(inspection.sets.ego_heading[i])
-    placed = lambda segments: shapes.to_scene(segments, origin, heading)  # noqa: E731
+    placed = lambda segments, z=planes.LINES: shapes.to_scene(segments, origin, heading, z)  # noqa: E731
     others = detail.candidates[(detail.candidates[:, 0] != i) | (detail.candidates[:, 1] != j)]
     ego_hit, cav_hit = np.isin(ego_members, others[:, 0]), np.isin(cav_members, others[:, 1])
     lines = {"ego_vectors": Lines(placed(shapes.local_vectors(ego_vectors)), EGO_BOXES, 1.5),
              "cav_vectors": Lines(placed(shapes.local_vectors(cav_vectors)), CAV_BOXES, 1.5),
-             "matched": Lines(placed(shapes.local_vectors(np.concatenate([ego_vectors[ego_hit],
-                                                                            cav_vectors[cav_hit]]))), RIGHT, 4.0)}
+             "matched": Lines(placed(shapes.local_vectors(np.concatenate([ego_vectors[ego_hit], cav_vectors[cav_hit]])),
+                                     planes.HIGHLIGHT), RIGHT, 4.0)}
     labels = {"ego_object": (f"{facts.ego_name(i)} ⇄ {facts.cav_name(j)}", _at(origin))}
     shown, span = "", None
     if len(others):
@@ -208,8 +209,13 @@ def candidate_set(facts: Facts) -> Step:
             + ("A set of fewer than two pairs is emptied." if len(candidates) == 0 else
                "A pair may still appear twice: an object is not yet matched one-to-one."))
     lines = {"true": Lines(segments[true], RIGHT, 3.0), "wrong": Lines(segments[~true], WRONG, 3.0),
-             "anchor": Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, [facts.pair], 2.3), CAV_BOXES, 6.0)}
+             "anchor": _anchor_line(facts, 6.0)}
     return _step(facts, 3, text, lines, _names(facts))
+
+
+def _anchor_line(facts: Facts, width: float) -> Lines:
+    """The followed pair's line, over the other pairs' (``planes.HIGHLIGHT``)."""
+    return Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, [facts.pair], planes.HIGHLIGHT), CAV_BOXES, width)
 
 
 def consensus(facts: Facts) -> Step:
@@ -255,7 +261,7 @@ def anchor(facts: Facts) -> Step:
             f"(limit {params.distance_limit:g} m{', rejected' if detail.rejected else ''}). {verdict}")
     lines = {"final": Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, detail.final), RIGHT, 3.5),
              "dropped": Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, dropped), MISSED, 1.5),
-             "anchor": Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, [facts.pair], 2.3), CAV_BOXES, 7.0)}
+             "anchor": _anchor_line(facts, 7.0)}
     return _step(facts, 5, text, lines, _names(facts))
 
 
@@ -306,7 +312,7 @@ def reassociation(facts: Facts) -> Step:
     kept = np.array(sorted(mine & final), dtype=int).reshape(-1, 2)
     lines = {"kept": Lines(shapes.pair_segments(facts.ego_xy, moved, kept), RIGHT, 2.0),
              "added": Lines(shapes.pair_segments(facts.ego_xy, moved, added), ADDED, 5.0),
-             "added_boxes": Lines(shapes.outlines(facts.trial.ego_boxes[added[:, 0]]), ADDED, 3.0),
+             "added_boxes": Lines(shapes.outlines(facts.trial.ego_boxes[added[:, 0]], planes.MARKS), ADDED, 3.0),
              "dropped": Lines(shapes.pair_segments(facts.ego_xy, moved, dropped), MISSED, 2.0)}
     if not params.refine:
         text = "The guided re-association is switched off (`refine`): CBM's own pairs and pose stand, as in the paper."

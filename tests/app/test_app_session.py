@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import loaders
-from app.scene import drawing, picking
+from app.scene import cavs, drawing, picking
 from app.session.coalesce import Coalescer
 from app.session.explorer import Explorer
 from app.session.settings import AUTO_CAV, Settings, ViewOptions
@@ -51,8 +51,9 @@ def test_before_and_after_place_the_cav_by_init_and_by_the_estimate(explorer: Ex
     before = explorer.compute(_view(Settings(), layout="before"))
     cav_after = drawing.draw(after, {}).objects["cav"][0]
     cav_before = drawing.draw(before, {}).objects["cav"][0]
-    assert np.allclose(cav_after, se2.apply_boxes(after.result.transform, after.trial.cav_boxes))
-    assert np.allclose(cav_before, se2.apply_boxes(before.trial.init, before.trial.cav_boxes))
+    slim = np.array([1, 1, 1, cavs.SLIM[0], cavs.SLIM[0], 1, 1])
+    assert np.allclose(cav_after, slim * se2.apply_boxes(after.result.transform, after.trial.cav_boxes))
+    assert np.allclose(cav_before, slim * se2.apply_boxes(before.trial.init, before.trial.cav_boxes))
     assert "ego_before" in drawing.draw(before, {}).labels and "cav_after" in drawing.draw(after, {}).labels
 
 

@@ -9,6 +9,8 @@ import numpy as np
 import pytest
 
 from app.scene import colours
+from app.scene.cavs import SLIM
+from app.scene.drawing import draw
 from app.scene.recording_html import DATA_ID, recording_html
 from app.session.explorer import Explorer, Outcome, classified_pairs
 from app.session.recording import Recording, record_of, top_down
@@ -92,3 +94,23 @@ def test_presentation_mode_uses_the_colour_blind_safe_palette(outcomes: list[Out
 def test_an_empty_recording_makes_no_page() -> None:
     with pytest.raises(ValueError):
         recording_html(Recording(), "synthetic")
+
+
+def test_the_page_draws_the_apps_footprints_and_a_right_pair_at_rte_0_on_one_centre(small_explorer: Explorer) -> None:
+    """Without noise the oracle's estimate is the true pose (RTE 0): the page's data puts the CAV's
+    footprint of each right pair on its ego footprint's centre, narrowed as the app narrows it, and
+    every footprint at the corners of the tile the app draws."""
+    settings = Settings()
+    settings = dataclasses.replace(settings, method="oracle", scenario=dataclasses.replace(
+        settings.scenario, sigma_p=0.0, sigma_theta=0.0, flip_prob=0.0))
+    outcome = small_explorer.compute(settings)
+    recording = Recording()
+    recording.add(outcome)
+    frame = page_data(recording_html(recording, "synthetic"))["frames"][0]
+    ego, after, right = np.array(frame["ego"]), np.array(frame["after"]), np.array(frame["right"])
+    assert outcome.metrics.rte < 1e-9 and len(right) == outcome.metrics.n_true > 0
+    centre = ego[right[:, 0]].mean(axis=1, keepdims=True)
+    assert np.allclose(after[right[:, 1]], centre + SLIM[0] * (ego[right[:, 0]] - centre), atol=2e-3)
+    scene = draw(outcome, {})
+    assert np.allclose(ego, scene.meshes["ego_boxes"].vertices[:, :2].reshape(-1, 4, 2), atol=1e-3)
+    assert np.allclose(after, scene.meshes["cav_boxes"].vertices[:, :2].reshape(-1, 4, 2), atol=1e-3)

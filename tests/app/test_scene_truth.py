@@ -8,12 +8,13 @@ import dataclasses
 import numpy as np
 
 from app.panels.keynumbers import key_numbers_html
-from app.scene import cavs, pairs, planes
+from app.scene import cavs, pairs, picking, planes
 from app.scene.drawing import draw
 from app.scene.pairs import unexplained
 from app.session.explorer import Explorer, classified_pairs
 from app.session.presets import SHIPPED_DIR, read
 from app.session.settings import Settings
+from evaluation.diagnosis import short_id
 from evaluation.metrics import is_success
 
 
@@ -76,3 +77,26 @@ def test_every_cav_has_a_vehicle_a_label_and_a_key_numbers_line(explorer: Explor
         assert f"CAV {cav.rank} · {'success' if is_success(cav.metrics) else 'failed'}" in key_numbers
     assert len(drawing.meshes["cav_vehicle_4"].faces) == 0 and "3 of 3 CAVs succeed" in key_numbers
     assert "CAV 3" in cavs.legend(3) and cavs.legend(1) == ""
+
+
+def test_a_click_picks_the_box_seen_on_top_and_names_its_cav(explorer: Explorer) -> None:
+    """Every CAV's boxes can be clicked (issue 24): a click on a CAV's footprint, nested inside the
+    ego's and the CAVs' before it, picks that CAV's box and names the CAV; on the ego's rim, the ego's."""
+    outcome = explorer.compute(dataclasses.replace(Settings(frame=10), cavs=3))
+    picture = draw(outcome, explorer.map_segments)
+    shown = cavs.every_cav(outcome)
+    assert list(picture.objects) == ["ego", "cav", "cav_2", "cav_3"] and set(picking.NODES) <= set(picture.meshes)
+    for cav in shown:
+        group, later = cavs.node("cav", cav.rank), [other.trial.cav_ids for other in shown[cav.rank:]]
+        boxes, rows = picture.objects[group]
+        alone = [r for r in range(len(rows)) if not any(np.isin(cav.trial.cav_ids[rows[r]], ids) for ids in later)]
+        under = [r for r in alone if np.isin(cav.trial.cav_ids[rows[r]], outcome.trial.ego_ids)]
+        row = under[0]
+        assert picking.pick(picture, boxes[row, :2]) == (group, row)
+        name = short_id(cav.trial.cav_ids[rows[row]])
+        assert picking.describe(outcome, picture, group, row).startswith(f"CAV {cav.rank} {name}")
+    ego, _ = picture.objects["ego"]
+    i = int(outcome.result.pairs[0, 0])
+    rim = ego[i, :2] + 0.45 * ego[i, 3] * np.array([np.cos(ego[i, 6]), np.sin(ego[i, 6])])
+    assert picking.pick(picture, rim) == ("ego", i)
+    assert picking.describe(outcome, picture, "ego", i).startswith(f"EGO {short_id(outcome.trial.ego_ids[i])}")

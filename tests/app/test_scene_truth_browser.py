@@ -1,6 +1,6 @@
 """The picture is evidence (issue 24, items 1 to 3), read back from the browser's pixels: at RTE 0
 a matched pair's footprints show on top of each other under the default camera; the boxes of a
-wrong pair are marked themselves; every CAV is drawn as a CAV."""
+wrong pair are marked themselves; every CAV is drawn as a CAV, and a click on its box names it."""
 from __future__ import annotations
 
 import contextlib
@@ -9,13 +9,16 @@ import dataclasses
 import numpy as np
 import pytest
 
+from app.scene import planes
 from app.scene.colours import CAV_COLOURS
+from app.scene.drawing import draw
 from app.scene.geometry import footprints
 from app.server import ExplorerServer
 from app.session.explorer import Explorer, classified_pairs
 from app.session.presets import SHIPPED_DIR, read
 from app.session.settings import Settings
 from cbm import se2
+from evaluation.diagnosis import short_id
 from support import browser as ui
 from support import pixels
 
@@ -222,3 +225,58 @@ def test_three_cavs_each_have_a_vehicle_label_lines_legend_and_key_numbers(brows
     assert len(tab.last_drawing.lines["right"].segments) == pairs == outcome.metrics.n_correct + sum(
         other.metrics.n_correct for other in outcome.others)
     assert "CAV 1 ·" in key_numbers and "3 of 3 CAVs succeed" in key_numbers
+
+
+def test_a_click_on_a_third_cavs_box_names_that_cav(browser, explorer: Explorer, tmp_path) -> None:
+    """A click on CAV 3's footprint labels that box with CAV 3's name and its id: one nested on top of
+    the ego's and the other CAVs' of the same object, and one of an object neither the ego nor CAV 1
+    sees (no footprint of theirs under it: CAV 3's own node answers the click)."""
+    settings = Settings(frame=10)
+    settings = dataclasses.replace(settings, cavs=3, scenario=dataclasses.replace(settings.scenario, sensor_range=25.0))
+    with running(explorer, settings, tmp_path) as server:
+        page = ui.open_first_screen(browser, server)
+        tab = ui.session(server, 1)
+        camera = settled_camera(tab)
+        frame = frame_with_cav3_boxes_in_view(explorer, tab.last.settings, camera)
+        if frame != tab.last.frame_index:
+            ui.go_to_frame(page, tab, frame)
+        ui.close_notifications(page)
+        outcome, drawing = tab.last, tab.last_drawing
+        boxes, rows = drawing.objects["cav_3"]
+        picked = lambda: tab.view.labels.get("picked")  # noqa: E731
+        for alone in (False, True):
+            row = largest(boxes, clickable(outcome, drawing, camera, alone))
+            x, y = pixels.project(camera, np.array([[*boxes[row, :2], planes.cav(3)]]))[0]
+            page.mouse.click(x, y)
+            expected = f"CAV 3 {short_id(outcome.others[1].trial.cav_ids[rows[row]])}"
+            ui.wait_until(lambda text=expected: picked() is not None and picked().visible
+                          and picked().text.startswith(text), 30)
+        page.close()
+
+
+def frame_with_cav3_boxes_in_view(explorer: Explorer, settings: Settings, camera) -> int:
+    """The first frame from ``settings``' on with both kinds of ``clickable`` boxes of CAV 3."""
+    for frame in range(settings.frame, len(explorer)):
+        outcome = explorer.compute(dataclasses.replace(settings, frame=frame))
+        drawing = draw(outcome, {})
+        if all(clickable(outcome, drawing, camera, alone).any() for alone in (False, True)):
+            return frame
+    raise AssertionError("no frame with boxes of CAV 3 to click in view")
+
+
+def clickable(outcome, drawing, camera, alone: bool) -> np.ndarray:
+    """Which drawn boxes of CAV 3 show in the free part of the page, 4 m clear of every label and
+    vehicle, with an object the ego sees too (its footprint under CAV 3's) or (``alone``) neither the
+    ego nor CAV 1 sees."""
+    boxes, rows = drawing.objects["cav_3"]
+    ids = outcome.others[1].trial.cav_ids[rows]
+    others = np.concatenate([outcome.trial.ego_ids, outcome.trial.cav_ids])
+    seen = ~np.isin(ids, others) if alone else np.isin(ids, outcome.trial.ego_ids)
+    marks = np.array([[*position[:2]] for _, position in drawing.labels.values()] + list(drawing.agents))
+    clear = np.array([np.min(np.hypot(*(marks - box[:2]).T)) > 4.0 for box in boxes], dtype=bool)
+    return seen & clear & in_free_part(camera, boxes[:, :2])
+
+
+def largest(boxes: np.ndarray, chosen: np.ndarray) -> int:
+    """The row of the largest footprint among the ``chosen`` boxes."""
+    return int(np.argmax(np.where(chosen, boxes[:, 3] * boxes[:, 4], -1.0)))

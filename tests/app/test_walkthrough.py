@@ -8,7 +8,9 @@ import re
 import numpy as np
 import pytest
 
+from app.scene import planes
 from app.scene.colours import CAV_BOXES, EGO_BOXES, GHOST, MISSED, RIGHT, WRONG
+from app.scene.drawing import draw
 from app.scene.inspector import BAND, REGION
 from app.scene.linecolours import as_shown
 from app.scene.words import plural
@@ -155,3 +157,28 @@ def test_a_step_about_the_pair_says_how_far_to_look(outcome: Outcome) -> None:
     assert np.hypot(tip[0] - local.focus[0], tip[1] - local.focus[1]) < local.span / 2
     assert all(steps.SPAN[0] <= s.span <= steps.SPAN[1] for s in shown if s.focus is not None)
     assert facts.pair is not None
+
+
+def _centres(vertices: np.ndarray, pose: np.ndarray) -> np.ndarray:
+    """(N, 2) centres of footprint tiles (4 vertices each) placed by the SE(2) ``pose``."""
+    return se2.apply_points(pose, vertices.reshape(-1, 4, 3).mean(axis=1)[:, :2])
+
+
+def test_every_step_draws_flat_in_the_main_scenes_planes_where_it_drew_the_boxes(explorer: Explorer) -> None:
+    """Stepping into the walkthrough from the default view leaves every box where the main scene
+    drew it: the same footprints on the same layers, the CAV's at ``init`` where the faint outlines
+    were and at the estimate where its tiles were; every line flat between the outlines' layer and
+    the highlighted lines', none at a box's height."""
+    outcome = explorer.compute(Settings())
+    scene, shown = draw(outcome, {}), steps.walkthrough(outcome)
+    before = scene.lines["cav_before"].segments[:, 0, :2].reshape(-1, 4, 2).mean(axis=1)
+    for step in shown:
+        assert np.allclose(step.meshes["ego_boxes"].vertices, scene.meshes["ego_boxes"].vertices), step.key
+        assert np.allclose(step.meshes["cav_boxes"].vertices[:, 2], planes.cav(1)), step.key
+        for name, line in step.lines.items():
+            heights = line.segments[..., 2]
+            assert np.all((heights >= planes.OUTLINES) & (heights <= planes.HIGHLIGHT)), (step.key, name)
+    first, last = shown[0], shown[-1]
+    assert np.allclose(_centres(first.meshes["cav_boxes"].vertices, first.cav_pose), before, atol=1e-3)
+    assert np.allclose(se2.apply_points(last.cav_pose, last.meshes["cav_boxes"].vertices[:, :2]),
+                       scene.meshes["cav_boxes"].vertices[:, :2], atol=1e-3)
