@@ -118,7 +118,8 @@ def recording_data(recording: Recording, dataset: str, presentation: bool) -> di
     palette = colours.palette(dataclasses.replace(settings.view, presentation=presentation, dark=False))
     return {"app": APP_NAME, "version": app_version(), "dataset": dataset,
             "exported": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
-            "settings": settings_lines(settings), "legend": re.sub(r"\*\*", "", palette.legend),
+            "settings": settings_lines(settings),
+            "legend": re.sub(r"\*\*", "", palette.legend).replace(colours.LABELS_NOTE, ""),
             "palette": palette_data(palette), "frames": [frame_data(r) for r in records]}
 
 

@@ -80,6 +80,7 @@ def test_the_page_holds_the_frames_as_json_and_nothing_from_the_network(outcomes
     assert len(first["ego"]) == outcomes[0].metrics.n_ego and len(first["right"]) == outcomes[0].metrics.n_correct
     assert ["co-visible", str(outcomes[0].metrics.n_true)] in first["table"]
     assert data["palette"]["right"]["color"] == list(colours.STANDARD.right.color)
+    assert "outlined red" in data["legend"] and "labelled" not in data["legend"], "the page draws no pair labels"
 
 
 def test_presentation_mode_uses_the_colour_blind_safe_palette(outcomes: list[Outcome]) -> None:
