@@ -194,9 +194,10 @@ class ClientSession:
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
         """The outcome of ``settings`` and its drawing. Until CBM's kernels are compiled a small
         frame runs interpreted, its note says so, and the tab recomputes once they are ready; a
-        large frame waits for them. The status line says what it waits for when that takes a moment."""
+        large frame waits for them, as does any frame when they are only loaded from the cache. The
+        status line says what it waits for when that takes a moment."""
         say = self.controls.metrics.say
-        if not self.kernels.ready and self._objects(settings) > SMALL:
+        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > SMALL):
             self._compiled_note_due = True
             with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):

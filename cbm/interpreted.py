@@ -28,7 +28,7 @@ LOCK = threading.RLock()
 """Held by an ``interpreted()`` block, and by whoever loads or compiles the kernels meanwhile."""
 
 
-def _kernel_names() -> list[tuple[object, str, CPUDispatcher]]:
+def kernels() -> list[tuple[object, str, CPUDispatcher]]:
     """(module, name, dispatcher) of every numba kernel a loaded module of ``cbm`` names."""
     found = []
     for name, module in list(sys.modules.items()):
@@ -44,7 +44,7 @@ def _kernel_names() -> list[tuple[object, str, CPUDispatcher]]:
 def interpreted() -> Iterator[None]:
     """Within the block, ``cbm.match`` runs its kernels' plain Python functions (nothing compiles)."""
     with LOCK:
-        swapped = _kernel_names()
+        swapped = kernels()
         try:
             for module, attribute, dispatcher in swapped:
                 setattr(module, attribute, dispatcher.py_func)

@@ -18,7 +18,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
 from cbm.interpreted import LOCK, interpreted
-from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, warm_up
+from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, in_cache, warm_up
 
 COMPILED_AFTER = 1.0
 """Seconds of compiling above which the kernels were compiled (a warm cache loads in a fraction of one)."""
@@ -34,6 +34,8 @@ class Kernels:
 
     def __init__(self) -> None:
         self.started = time.monotonic()
+        self.cached = in_cache()
+        """The kernels were in numba's cache at start: loading them here takes a fraction of a second."""
         self.compile_seconds: float | None = None
         """Seconds the subprocesses took to fill the cache (None until they finished or if one failed)."""
         self.load_seconds: float | None = None
@@ -96,10 +98,10 @@ class Kernels:
             return None
 
     def _prepare(self) -> None:
-        """Fill the cache in subprocesses, then load the kernels here (or compile them here, when
-        one failed); ready in any case, so that a broken kernel fails the recompute
+        """Fill the cache in subprocesses unless it holds the kernels, then load them here (or
+        compile them here, when a subprocess failed); ready in any case, so that a broken kernel fails the recompute
         that calls it, with its own error, rather than making it wait forever."""
-        self.compile_seconds = self._compile_in_subprocess()
+        self.compile_seconds = None if self.cached else self._compile_in_subprocess()
         with LOCK:
             try:
                 started = time.perf_counter()
