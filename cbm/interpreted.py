@@ -9,15 +9,19 @@ a second on a frame of 30-50 objects per agent (``SMALL``), against the seconds 
 compile the kernels on a fresh install; a server answers its first frames this way while the
 kernels compile in the background (``app.session.kernels``).
 
-Only one ``interpreted()`` block runs at a time (``LOCK``); whoever loads or compiles the kernels
-in this process holds ``LOCK`` meanwhile, because numba would then read the swapped names.
+Only one ``interpreted()`` block runs at a time (``LOCK``), and numba compiles (or loads from its
+cache) none of the kernels while one runs: it would read the swapped names. ``guard_compiles``
+makes every kernel's compile take ``LOCK`` (a compiled kernel never compiles again, so only the
+first calls pay for it); ``interpreted()`` calls it, and so should whoever may compile in another
+thread before the first block.
 """
 from __future__ import annotations
 
 import sys
 import threading
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from contextlib import contextmanager
+from functools import wraps
 
 from numba.core.registry import CPUDispatcher
 
@@ -40,9 +44,29 @@ def kernels() -> list[tuple[object, str, CPUDispatcher]]:
     return found
 
 
+def guard_compiles() -> None:
+    """Every loaded kernel compiles (or loads from the cache) holding ``LOCK``, never during an
+    ``interpreted()`` block of another thread."""
+    for _, _, dispatcher in kernels():
+        if not getattr(dispatcher.compile, "guarded", False):
+            dispatcher.compile = _locked(dispatcher.compile)
+
+
+def _locked(compile_: Callable) -> Callable:
+    """``compile_`` holding ``LOCK``."""
+    @wraps(compile_)
+    def compile_holding_the_lock(*args, **kwargs):
+        with LOCK:
+            return compile_(*args, **kwargs)
+
+    compile_holding_the_lock.guarded = True
+    return compile_holding_the_lock
+
+
 @contextmanager
 def interpreted() -> Iterator[None]:
     """Within the block, ``cbm.match`` runs its kernels' plain Python functions (nothing compiles)."""
+    guard_compiles()
     with LOCK:
         swapped = kernels()
         try:

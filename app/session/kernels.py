@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-from cbm.interpreted import LOCK, interpreted
+from cbm.interpreted import LOCK, guard_compiles, interpreted
 from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, in_cache, warm_up
 
 COMPILED_AFTER = 1.0
@@ -34,6 +34,7 @@ class Kernels:
 
     def __init__(self) -> None:
         self.started = time.monotonic()
+        guard_compiles()
         self.cached = in_cache()
         """The kernels were in numba's cache at start: loading them here takes a fraction of a second."""
         self.compile_seconds: float | None = None

@@ -1,6 +1,8 @@
 """The interpreted path (``cbm.interpreted``: every kernel's plain Python function, nothing
 compiled) gives the compiled path's pairs, counts and transform on the stored reference cases of
 ``test_match_reference`` that a first frame may have (up to 60 objects per agent)."""
+import threading
+
 import numpy as np
 import pytest
 
@@ -27,3 +29,24 @@ def test_the_kernels_are_restored_after_the_block():
     with interpreted():
         assert context._fill_context is kernel.py_func
     assert context._fill_context is kernel and not LOCK._is_owned()
+
+
+def test_a_kernel_compiles_only_outside_an_interpreted_block():
+    from cbm import context
+    from cbm.warmup import VARIANTS, warm_up
+    kernel = context._fill_context
+    with interpreted():
+        pass
+    warm_up(VARIANTS[:1])
+    asked, done = threading.Event(), threading.Event()
+
+    def compile_again():
+        asked.set()
+        kernel.compile(kernel.signatures[0])
+        done.set()
+
+    with interpreted():
+        threading.Thread(target=compile_again, daemon=True).start()
+        assert asked.wait(60)
+        assert not done.wait(0.5)
+    assert done.wait(60)
