@@ -46,7 +46,7 @@ class ClientSession:
     """Everything one tab has; nothing in it is shared with other tabs but the ``Explorer``.
 
     ``settings`` is one immutable value, replaced as a whole by ``apply``; a worker recomputes the
-    latest value (``Coalescer``) and shows it, once CBM's ``kernels`` are ready."""
+    latest value (``Coalescer``) and shows it; a small frame runs CBM interpreted until ``kernels`` are ready."""
 
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
         self.client, self.explorer, self.kernels = client, explorer, kernels
