@@ -9,6 +9,8 @@ import time
 import numpy as np
 import viser
 
+from cbm.interpreted import SMALL
+
 from . import panels
 from .panels.actions import Edit
 from .panels.explore import ExplorePanel
@@ -22,7 +24,7 @@ from .session.baseline import Baseline
 from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
 from .session.history import FrameHistory, settings_key, sweep_rows
-from .session.kernels import Kernels
+from .session.kernels import COMPILING, Kernels
 from .session.offers import offers_of
 from .session.presets import PresetError, discover, save_preset, skipped_markdown
 from .session.progress import announced
@@ -44,11 +46,13 @@ class ClientSession:
     """Everything one tab has; nothing in it is shared with other tabs but the ``Explorer``.
 
     ``settings`` is one immutable value, replaced as a whole by ``apply``; a worker recomputes the
-    latest value (``Coalescer``) and shows it, once CBM's ``kernels`` are ready."""
+    latest value (``Coalescer``) and shows it; a small frame runs CBM interpreted until ``kernels`` are ready."""
 
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
         self.client, self.explorer, self.kernels = client, explorer, kernels
         self._note = ""
+        self._compiled_note_due = False
+        """A result ran interpreted or waited for the compile: the next compiled one says how long it took."""
         self._lock = threading.Lock()
         self._settings = settings
         self.last: Outcome | None = None
@@ -188,19 +192,41 @@ class ClientSession:
         self._timeline_later.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
-        """The outcome of ``settings`` and its drawing, once CBM's kernels are ready; the status
-        line says what it waits for when that takes a moment."""
+        """The outcome of ``settings`` and its drawing. Until CBM's kernels are compiled a small
+        frame runs interpreted, its note says so, and the tab recomputes once they are ready; a
+        large frame waits for them, as does any frame when they are only loaded from the cache. The
+        status line says what it waits for when that takes a moment."""
         say = self.controls.metrics.say
-        if not self.kernels.ready:
+        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > SMALL):
+            self._compiled_note_due = True
             with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):
                 self.kernels.wait()
-            self._note = self.kernels.note()
-        with announced(lambda s: say(f"Computing… {s:.1f} s")):
+        with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting:
             outcome = self.explorer.compute(settings)
             pinned = self.baseline.outcome(self.explorer, settings)
-            return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
-                                                  self.explorer.sequence[outcome.frame_index]), outcome, pinned)
+        self._note_kernels(interpreting)
+        return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
+                                           self.explorer.sequence[outcome.frame_index]), outcome, pinned)
+
+    def _objects(self, settings: Settings) -> int:
+        """Objects in the frame ``settings`` shows (a bound on what each agent sees)."""
+        return len(self.explorer.sequence[min(max(settings.frame, 0), len(self.explorer) - 1)].track_ids)
+
+    def _note_kernels(self, interpreting: bool) -> None:
+        """The note beside this result: the compile still running, or (once) the compile's time."""
+        if interpreting:
+            self._note = COMPILING
+            if not self._compiled_note_due:
+                self.kernels.when_ready(self._recompute)
+            self._compiled_note_due = True
+        elif self._compiled_note_due:
+            self._note, self._compiled_note_due = self.kernels.note(), False
+
+    def _recompute(self) -> None:
+        """The current settings again (the kernels got ready: the note and CBM time change)."""
+        if not self._closed.is_set():
+            self.worker.submit(self._settings)
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
         """Show a result: the scene's changed nodes and the panels, in one batch sent at once."""

@@ -4,8 +4,9 @@ numba compiles CBM's kernels on their first call, which takes seconds on a fresh
 them in its on-disk cache. At server start ``prepare`` compiles them in two subprocesses at once
 (``cbm.warmup.compile_side_by_side``; the compiler is mostly Python: in a thread it would hold
 this process's interpreter lock and stall the server) while the dataset loads, then loads the
-cached kernels into this process with one small match. Recomputes wait for ``ready``; the time
-spent compiling is reported on its own, never as CBM's time.
+cached kernels into this process with one small match. Until then a recompute of a small frame
+runs CBM interpreted (``running``: ``cbm.interpreted``, the same results without the compiler) and a
+large one waits for ``ready``; the time spent compiling is reported on its own, never as CBM's time.
 """
 from __future__ import annotations
 
@@ -13,11 +14,17 @@ import atexit
 import subprocess
 import threading
 import time
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 
-from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, warm_up
+from cbm.interpreted import LOCK, guard_compiles, interpreted
+from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, in_cache, warm_up
 
 COMPILED_AFTER = 1.0
 """Seconds of compiling above which the kernels were compiled (a warm cache loads in a fraction of one)."""
+COMPILING = ("CBM's kernels compiling (first start only): this result ran interpreted, no compile in its "
+             "CBM time.")
+"""What a result computed before the kernels were ready says beside its CBM time."""
 TIMEOUT = 600.0
 """Seconds the compiling subprocesses may take before they are given up (this process then compiles)."""
 
@@ -27,12 +34,16 @@ class Kernels:
 
     def __init__(self) -> None:
         self.started = time.monotonic()
+        guard_compiles()
+        self.cached = in_cache()
+        """The kernels were in numba's cache at start: loading them here takes a fraction of a second."""
         self.compile_seconds: float | None = None
         """Seconds the subprocesses took to fill the cache (None until they finished or if one failed)."""
         self.load_seconds: float | None = None
         """Seconds this process took to load them (to compile them too if the subprocess failed)."""
         self._ready = threading.Event()
         self._processes: list[subprocess.Popen] = []
+        self._waiting: list[Callable[[], None]] = []
         atexit.register(self.stop)
         threading.Thread(target=self._prepare, name="cbm-kernels", daemon=True).start()
 
@@ -43,6 +54,26 @@ class Kernels:
     def wait(self, timeout: float | None = None) -> bool:
         """Block until the kernels are loaded; False on timeout."""
         return self._ready.wait(timeout)
+
+    @contextmanager
+    def running(self) -> Iterator[bool]:
+        """CBM within the block runs compiled once the kernels are ready; until then interpreted
+        (yields True), one block at a time, and never while this process loads them."""
+        if not self.ready:
+            with LOCK:
+                if not self.ready:
+                    with interpreted():
+                        yield True
+                    return
+        yield False
+
+    def when_ready(self, callback: Callable[[], None]) -> None:
+        """Call ``callback`` once the kernels are ready (at once if they are)."""
+        with LOCK:
+            if not self.ready:
+                self._waiting.append(callback)
+                return
+        callback()
 
     def note(self) -> str:
         """What a first result says about the start-up compile ("" when nothing was compiled)."""
@@ -68,16 +99,20 @@ class Kernels:
             return None
 
     def _prepare(self) -> None:
-        """Fill the cache in subprocesses, then load the kernels here (or compile them here, when
-        one failed); ready in any case, so that a broken kernel fails the recompute
+        """Fill the cache in subprocesses unless it holds the kernels, then load them here (or
+        compile them here, when a subprocess failed); ready in any case, so that a broken kernel fails the recompute
         that calls it, with its own error, rather than making it wait forever."""
-        try:
-            self.compile_seconds = self._compile_in_subprocess()
-            started = time.perf_counter()
-            warm_up(VARIANTS[:1])
-            self.load_seconds = time.perf_counter() - started
-        finally:
-            self._ready.set()
+        self.compile_seconds = None if self.cached else self._compile_in_subprocess()
+        with LOCK:
+            try:
+                started = time.perf_counter()
+                warm_up(VARIANTS[:1])
+                self.load_seconds = time.perf_counter() - started
+            finally:
+                self._ready.set()
+                waiting, self._waiting = self._waiting, []
+        for callback in waiting:
+            callback()
 
 
 _shared: Kernels | None = None

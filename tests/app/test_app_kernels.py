@@ -1,6 +1,6 @@
 """CBM's compiled kernels at server start: a subprocess fills numba's on-disk cache while the server
-starts, the first recompute waits for them and says so, and the first frame's CBM time does not
-include the compile. Also the status line's progress reports."""
+starts, the first frames run interpreted meanwhile and say so, and no CBM time includes the
+compile. Also the status line's progress reports."""
 from __future__ import annotations
 
 import re
@@ -11,11 +11,14 @@ import threading
 import time
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from app.session.kernels import Kernels
+from app.session import kernels as kernels_module
+from app.session.kernels import COMPILING, Kernels
 from app.session.progress import announced
-from cbm.warmup import VARIANTS, warm_up
+from cbm import CBMParams, match
+from cbm.warmup import VARIANTS, scene, warm_up
 from support import browser as ui
 
 REPO = Path(__file__).resolve().parents[2]
@@ -30,9 +33,43 @@ def test_warm_up_calls_match_once_per_variant() -> None:
 def test_the_kernels_get_ready_when_the_subprocess_cannot_run(monkeypatch: pytest.MonkeyPatch,
                                                               tmp_path: Path) -> None:
     monkeypatch.setattr(sys, "executable", str(tmp_path / "no-such-python"))
+    monkeypatch.setattr(kernels_module, "in_cache", lambda: False)
     kernels = Kernels()
     assert kernels.wait(timeout=300)
     assert kernels.compile_seconds is None and kernels.load_seconds is not None
+
+
+def test_a_frame_runs_interpreted_while_the_kernels_compile(monkeypatch: pytest.MonkeyPatch) -> None:
+    """Not ready: ``running`` runs CBM interpreted, with the compiled results; once the compile
+    ends the waiting callbacks run and CBM runs compiled."""
+    release, called = threading.Event(), []
+    monkeypatch.setattr(kernels_module, "compile_side_by_side", lambda *args, **kwargs: release.wait(60) and 0.0)
+    monkeypatch.setattr(kernels_module, "in_cache", lambda: False)
+    kernels = Kernels()
+    ego, cav, init = scene()
+    expected = match(ego, cav, init, CBMParams())
+    with kernels.running() as interpreting:
+        result = match(ego, cav, init, CBMParams())
+    kernels.when_ready(lambda: called.append(True))
+    assert interpreting and not kernels.ready and called == []
+    assert np.array_equal(result.pairs, expected.pairs) and np.array_equal(result.transform, expected.transform)
+    release.set()
+    assert kernels.wait(timeout=120)
+    with kernels.running() as interpreting:
+        assert not interpreting
+    assert called == [True]
+
+
+def test_the_cache_is_found_filled_or_empty(tmp_path: Path) -> None:
+    """``in_cache`` in a new process: False on an empty cache, True once ``--part`` filled both halves."""
+    env = {"NUMBA_CACHE_DIR": str(tmp_path), "PATH": "/usr/bin:/bin"}
+    asked = [sys.executable, "-c", "from cbm.warmup import in_cache; print(in_cache())"]
+    before = subprocess.run(asked, cwd=REPO, env=env, capture_output=True, text=True, check=True).stdout.split()
+    for part in ("matching", "selection"):
+        subprocess.run([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=REPO, env=env, check=True,
+                       capture_output=True)
+    after = subprocess.run(asked, cwd=REPO, env=env, capture_output=True, text=True, check=True).stdout.split()
+    assert (before, after) == (["False"], ["True"])
 
 
 def test_a_slow_block_is_announced_until_it_ends_and_a_quick_one_not_at_all() -> None:
@@ -57,8 +94,9 @@ def _free_port() -> int:
 @pytest.mark.browser
 @ui.requires_chromium
 def test_a_fresh_start_compiles_off_the_clock(browser, tmp_path: Path) -> None:
-    """With an empty numba cache the page says it is preparing the kernels, then shows the first
-    frame with a CBM time of milliseconds and the compile time apart."""
+    """With an empty numba cache the first frame is shown while the kernels compile, said so
+    beside the interpreted CBM time (shorter than the compile); once compiled, the frame again with a
+    CBM time of milliseconds and the compile time apart."""
     port = _free_port()
     env = {"CBM_EXPLORER_PRESETS": str(tmp_path), "NUMBA_CACHE_DIR": str(tmp_path / "numba"), "PATH": "/usr/bin:/bin"}
     process = subprocess.Popen([sys.executable, "serve.py", "--port", str(port), "--dataset", "synthetic:60"],
@@ -69,12 +107,13 @@ def test_a_fresh_start_compiles_off_the_clock(browser, tmp_path: Path) -> None:
         assert any(line.startswith("CBM Explorer on") for line in process.stdout)
         page = browser.new_page(viewport={"width": 1400, "height": 900})
         page.goto(f"http://127.0.0.1:{port}")
-        page.get_by_text("Preparing CBM's compiled kernels (first start only)").wait_for(timeout=60_000)
-        page.get_by_text("precision / recall").first.wait_for(timeout=240_000)
-        note = page.get_by_text(re.compile("CBM's kernels compiled in")).inner_text()
+        page.get_by_text(COMPILING).wait_for(timeout=120_000)
+        first = re.search(r"CBM time\s+([\d.]+) ms", ui.metrics(page))
+        note = page.get_by_text(re.compile("CBM's kernels compiled in")).inner_text(timeout=240_000)
         compiled = float(re.search(r"compiled in ([\d.]+) s", note).group(1))
         shown = re.search(r"CBM time\s+([\d.]+) ms", ui.metrics(page))
         assert compiled > 1.0 and float(shown.group(1)) < 1000.0, (note, shown.group(0))
+        assert float(first.group(1)) < 1000.0 * compiled, (first.group(0), note)
         page.close()
     finally:
         watchdog.cancel()

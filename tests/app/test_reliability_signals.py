@@ -38,9 +38,10 @@ def slow_dataset(tmp_path_factory) -> Path:
 
 @pytest.mark.parametrize("signum", [signal.SIGTERM, signal.SIGINT])
 def test_a_stop_signal_while_the_dataset_loads_stops_within_2_s(slow_dataset, tmp_path, signum: int) -> None:
+    empty = str(tmp_path / "numba")  # a filled cache is loaded without compiling subprocesses
     process = subprocess.Popen([sys.executable, "serve.py", "--dataset", str(slow_dataset), "--port", "0"],
                                cwd=REPO, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env={**os.environ, "CBM_EXPLORER_PRESETS": str(tmp_path)})
+                               env={**os.environ, "CBM_EXPLORER_PRESETS": str(tmp_path), "NUMBA_CACHE_DIR": empty})
     wait_for(lambda: descendants(process.pid) or process.poll() is not None, 120,
              "the kernels' compiling subprocesses, started just before the dataset loads")
     children = descendants(process.pid)
