@@ -55,6 +55,12 @@ SAMPLED_FRAMES = 25
 """Frames, evenly spread, that the start-up check tries for a usable ego and CAV."""
 
 
+def kernels_ready_line(kernels) -> str:
+    """The console line once CBM's kernels are loaded: until then small frames ran interpreted."""
+    note = kernels.note()
+    return f"CBM's kernels ready: {note}" if note else "CBM's kernels ready (loaded from the cache)."
+
+
 def _warn(message: str) -> None:
     print(f"{os.path.basename(sys.argv[0])}: warning: {message}", file=sys.stderr, flush=True)
 
@@ -158,6 +164,7 @@ def main(argv: list[str] | None = None) -> int:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")
     print(f"CBM Explorer on {sequence.name} ({len(sequence)} frames): open {server.url}", flush=True)
+    server.kernels.when_ready(lambda: print(kernels_ready_line(server.kernels), flush=True))
     while not stopping.wait(0.1):
         pass
     for number in (signal.SIGTERM, signal.SIGINT):
