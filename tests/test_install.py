@@ -13,13 +13,11 @@ import ast
 import csv
 import os
 import re
-import select
 import shutil
 import signal
 import subprocess
 import sys
 import sysconfig
-import time
 import urllib.request
 import venv
 import zipfile
@@ -28,6 +26,8 @@ from importlib.metadata import packages_distributions
 from pathlib import Path
 
 import pytest
+
+from support.processes import line_with
 
 if sys.version_info >= (3, 11):
     import tomllib
@@ -128,25 +128,12 @@ def test_cbm_explorer_lists_the_shipped_presets_from_any_folder(installed: Insta
     assert {name: "shipped" for name in shipped} == listed
 
 
-def _line_with(process: subprocess.Popen, words: str, timeout: float) -> str:
-    """The first line of the process's stdout that holds ``words`` (fails past ``timeout`` seconds)."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
-        ready, _, _ = select.select([process.stdout], [], [], deadline - time.monotonic())
-        line = process.stdout.readline() if ready else ""
-        if words in line:
-            return line
-        if ready and not line:
-            break
-    raise AssertionError(f"no line with {words!r}; exit status {process.poll()}")
-
-
 @pytest.mark.wheel
 def test_cbm_explorer_serves_the_app_from_any_folder(installed: Installed) -> None:
     process = subprocess.Popen([str(installed.bin / "cbm-explorer"), "--port", "0"], cwd=installed.elsewhere,
                                env=installed.env, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
     try:
-        line = _line_with(process, "open http://", START_TIMEOUT)
+        line = line_with(process, "open http://", START_TIMEOUT)
         assert "argoverse2/adcf7d18" in line and "156 frames" in line
         url = re.search(r"http://\S+", line).group(0)
         with urllib.request.urlopen(url, timeout=60) as response:

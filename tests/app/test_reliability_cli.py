@@ -8,7 +8,6 @@ import signal
 import socket
 import subprocess
 import sys
-import threading
 import time
 import urllib.request
 from collections.abc import Iterator
@@ -18,6 +17,7 @@ from pathlib import Path
 import pytest
 
 from app.server import AddressError, check_free, resolve
+from support.processes import line_with
 
 REPO = Path(__file__).resolve().parents[2]
 
@@ -82,28 +82,12 @@ def test_resolve_gives_up_after_its_timeout(monkeypatch: pytest.MonkeyPatch) -> 
     assert time.monotonic() - started < 2
 
 
-def _line_with(process: subprocess.Popen, words: str, timeout: float) -> str:
-    """The next line of the process's stdout that holds ``words`` (fails past ``timeout`` seconds;
-    read in a thread: the lines may already wait in the pipe's buffer, where a select would miss them)."""
-    found: list[str] = []
-
-    def read() -> None:
-        found.extend(line for line in process.stdout if words in line)
-
-    threading.Thread(target=read, daemon=True).start()
-    deadline = time.monotonic() + timeout
-    while not found:
-        assert time.monotonic() < deadline and process.poll() is None, f"no line with {words!r}"
-        time.sleep(0.1)
-    return found[0]
-
-
 @pytest.mark.parametrize("number", [signal.SIGTERM, signal.SIGINT])
 def test_sigterm_and_sigint_stop_within_2_s_cleanly(number: int, tmp_path: Path) -> None:
     with serving("--port", "0", presets=tmp_path) as (process, url):
         assert url.startswith("http://127.0.0.1:")
         urllib.request.urlopen(url, timeout=30).close()
-        _line_with(process, "kernels ready", 600.0)
+        line_with(process, "kernels ready", 600.0)
         process.send_signal(number)
         started = time.monotonic()
         process.wait(timeout=10)

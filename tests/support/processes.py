@@ -2,6 +2,7 @@
 alive, what it has loaded; and waiting for a condition with a generous limit."""
 from __future__ import annotations
 
+import threading
 import time
 from collections.abc import Callable
 from pathlib import Path
@@ -49,3 +50,24 @@ def wait_for(condition: Callable[[], bool], limit: float, what: str) -> None:
     while not condition():
         assert time.monotonic() < deadline, f"timed out waiting for {what}"
         time.sleep(0.02)
+
+
+def line_with(process, words: str, timeout: float) -> str:
+    """The next line of ``process``'s stdout (a text pipe) that holds ``words``; fails past ``timeout``
+    seconds or when the process ends first. Read in a thread: lines may already wait in the pipe's
+    buffer, where a ``select`` on the pipe would miss them and wait for output that never comes."""
+    found: list[str] = []
+
+    def read() -> None:
+        for line in process.stdout:
+            if words in line:
+                found.append(line)
+                return
+
+    threading.Thread(target=read, name="line-reader", daemon=True).start()
+    deadline = time.monotonic() + timeout
+    while not found:
+        assert time.monotonic() < deadline, f"no line with {words!r} within {timeout:.0f} s"
+        assert process.poll() is None or found, f"the process ended (status {process.poll()}) with no {words!r}"
+        time.sleep(0.1)
+    return found[0]
