@@ -14,7 +14,7 @@ from evaluation.metrics import is_success
 from ..session.explorer import Outcome
 from ..session.names import agent_name
 from .cavs import per_cav_rows
-from .words import margin_words
+from .words import margin_words, plural
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -109,5 +109,7 @@ def evidence_rows(result: object) -> list[str]:
     if margin != margin:
         return []
     if margin == float("inf"):
-        return [f"| evidence | {result.hypotheses} hypotheses, every one lands on this pose |"]
-    return [f"| evidence | margin {margin:.1f} over the runner-up pose (of {result.hypotheses} hypotheses) |"]
+        agree = "every one lands on this pose" if result.hypotheses > 1 else "no rival anchor set to test"
+        return [f"| evidence | {plural(result.hypotheses, 'hypothesis', 'hypotheses')}, {agree} |"]
+    return [f"| evidence | margin {margin:.1f} over the runner-up pose (of "
+            f"{plural(result.hypotheses, 'hypothesis', 'hypotheses')}) |"]

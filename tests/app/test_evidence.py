@@ -30,6 +30,8 @@ def test_a_verified_pose_shows_its_margin_and_other_methods_show_nothing():
     page = key_numbers_html(SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=result))
     assert WARNING_ID not in page and "confidence: 12.3" in page
     assert evidence_rows(result) == ["| evidence | margin 12.3 over the runner-up pose (of 3 hypotheses) |"]
+    alone = SimpleNamespace(abstained=False, reason="", evidence_margin=math.inf, hypotheses=1)
+    assert evidence_rows(alone) == ["| evidence | 1 hypothesis, no rival anchor set to test |"]
     icp = SimpleNamespace(pairs=None)
     assert evidence_rows(icp) == [] and "confidence" not in key_numbers_html(
         SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=icp))
