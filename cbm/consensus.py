@@ -38,35 +38,41 @@ class PairSets:
         return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int32))
 
 
-@numba.njit(cache=True)
-def _group_by_member(anchor, member, n_pairs):
-    """(start, anchors) of the quadruples grouped by member with a counting sort, plus (A, A) for
-    every anchor A that has a quadruple (every non-empty voting set holds its own pair)."""
-    has_set = np.zeros(n_pairs, np.bool_)
-    start = np.zeros(n_pairs + 1, np.int64)
+@numba.njit(cache=True, nogil=True)
+def _count_by_member(anchor, member, has_set, start):
+    """Adds the quadruples (anchor, member) to ``start[member + 1]`` and marks their anchors in ``has_set``."""
     for row in range(len(anchor)):
         has_set[anchor[row]] = True
         start[member[row] + 1] += 1
-    for pair in range(n_pairs):
-        if has_set[pair]:
-            start[pair + 1] += 1
-    for pair in range(n_pairs):
-        start[pair + 1] += start[pair]
-    fill = start[:-1].copy()
-    values = np.empty(start[n_pairs], np.int32)
+
+
+@numba.njit(cache=True, nogil=True)
+def _place_by_member(anchor, member, fill, values):
+    """Writes each quadruple's anchor at ``values[fill[member]]`` and moves that member's ``fill`` on."""
     for row in range(len(anchor)):
         values[fill[member[row]]] = anchor[row]
         fill[member[row]] += 1
-    for pair in range(n_pairs):
-        if has_set[pair]:
-            values[fill[pair]] = pair
-            fill[pair] += 1
-    return start, values
 
 
-def voted_by_member(anchor: np.ndarray, member: np.ndarray, n_pairs: int) -> PairSets:
-    """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m."""
-    start, values = _group_by_member(anchor, member, n_pairs)
+def voted_by_member(votes: list[tuple[np.ndarray, np.ndarray]], n_pairs: int) -> PairSets:
+    """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m.
+
+    ``votes`` are the join's parts of (anchor, member) rows, in order; a counting sort groups them by
+    member (in row order), then adds (A, A) for every anchor A that has a quadruple (every non-empty
+    voting set holds its own pair). The list is emptied part by part as the parts are placed, so the
+    rows and their grouping (4 bytes a row) are never held twice."""
+    has_set = np.zeros(n_pairs, np.bool_)
+    start = np.zeros(n_pairs + 1, np.int64)
+    for anchor, member in votes:
+        _count_by_member(anchor, member, has_set, start)
+    start[1:] += has_set
+    np.cumsum(start, out=start)
+    values = np.empty(start[n_pairs], np.int32)
+    fill = start[:-1].copy()
+    while votes:
+        _place_by_member(*votes.pop(0), fill, values)
+    own = np.flatnonzero(has_set)
+    values[fill[own]] = own
     return PairSets(start=start, member=values)
 
 

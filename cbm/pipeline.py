@@ -70,14 +70,14 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     t = time.perf_counter()
     timings["context"] = t - started
 
-    candidates, vote_anchor, vote_member = count_candidates(
+    candidates, votes = count_candidates(
         ego_context, cav_context, ego_heading, signs, params.sigma1_rad, params.sigma2,
-        params.sigma3 if params.consensus else None, ready.kept)
+        params.sigma3 if params.consensus else None, None if reuse is None else ready.kept)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
 
     n_pairs = len(ego) * len(cav)
-    voted_by = voted_by_member(vote_anchor, vote_member, n_pairs) if params.consensus else PairSets.empty(n_pairs)
+    voted_by = voted_by_member(votes, n_pairs) if params.consensus else PairSets.empty(n_pairs)
     timings["voting_sets"] = time.perf_counter() - t
     return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates,
                 voted_by)

@@ -16,9 +16,10 @@ MOST_PAIRS = 2**31 - 1
 
 def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
                      sigma2: float, sigma3: float | None,
-                     kept: dict | None = None) -> tuple[CandidateSets, np.ndarray, np.ndarray]:
+                     kept: dict | None = None) -> tuple[CandidateSets, list[tuple[np.ndarray, np.ndarray]]]:
     """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
-    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join.
+    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join, as the
+    join's parts (``run_join``).
     ``kept`` (``cbm.reuse.Prepared.kept``): the grids and sorted blocks built earlier for the same
     contexts, read and filled."""
     n_ego, n_cav = signs.shape
@@ -27,9 +28,9 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
                          "sets keep pair ids in 32 bits)")
     count2 = np.zeros(n_ego * n_cav, np.int64)
     radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
-    vote_anchor, vote_member = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2,
-                                        -1.0 if sigma3 is None else sigma3, count2, kept)
+    votes = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2, -1.0 if sigma3 is None else sigma3,
+                     count2, kept)
     count2 += count2 > 0
     candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs)
-    return candidates, vote_anchor, vote_member
+    return candidates, votes
 

@@ -123,9 +123,10 @@ def _grown(values, n):
 
 def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
              radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
-             kept: dict | None = None) -> tuple[np.ndarray, np.ndarray]:
+             kept: dict | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
-    at a time, then their ego objects are joined in parts; the votes come back in a fixed order.
+    at a time, then their ego objects are joined in parts; the votes come back as the parts'
+    (anchor, member) rows, in a fixed order (not joined into one array: that would hold them twice).
     ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
     vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
     per_anchor = max(len(ego_heading) - 1, 0)
@@ -134,19 +135,26 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     run = POOL.submit if parallel else _at_once
     votes = []
     for first in range(0, len(groups), THREADS if parallel else 1):
-        batch = groups[first:first + (THREADS if parallel else 1)]
-        grids = _grids(batch, first, cav, signs, radius, run, kept)
-        jobs = []
-        for group, grid in zip(batch, grids):
-            common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
-                      grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
-                      radius, sigma2, sigma3, count2)
-            parts = np.array_split(group, THREADS) if parallel else [group]
-            jobs += [run(_join, part, *common) for part in parts if len(part)]
-        votes += [job.result() for job in jobs]
-    if not votes:
-        return np.zeros(0, np.int32), np.zeros(0, np.int32)
-    return np.concatenate([v[0] for v in votes]), np.concatenate([v[1] for v in votes])
+        votes += _join_batch(groups[first:first + (THREADS if parallel else 1)], first, ego, cav, per_anchor, signs,
+                             sigma1_rad, radius, sigma2, sigma3, count2, kept, run)
+    return votes
+
+
+def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context, per_anchor: int,
+                signs: np.ndarray, sigma1_rad: float, radius: float, sigma2: float, sigma3: float,
+                count2: np.ndarray, kept: dict | None, run) -> list[tuple[np.ndarray, np.ndarray]]:
+    """The votes of the heading groups ``batch`` (numbered from ``first``), their grids built (or
+    taken from ``kept``) here: without ``kept`` they are freed on return, before the next batch's."""
+    parallel = run is not _at_once
+    grids = _grids(batch, first, cav, signs, radius, run, kept)
+    jobs = []
+    for group, grid in zip(batch, grids):
+        common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
+                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
+                  radius, sigma2, sigma3, count2)
+        parts = np.array_split(group, THREADS) if parallel else [group]
+        jobs += [run(_join, part, *common) for part in parts if len(part)]
+    return [job.result() for job in jobs]
 
 
 def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,

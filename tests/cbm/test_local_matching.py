@@ -40,8 +40,9 @@ def test_counts_and_members_equal_the_direct_enumeration(seed, heading):
     ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav[:, 6])
     signs = pair_signs(ego_heading, cav_heading, heading)
     ego_context, cav_context = build_context(ego[:, :2], ego_heading), build_context(cav[:, :2], cav_heading)
-    candidates, vote_anchor, vote_member = count_candidates(ego_context, cav_context, ego_heading, signs,
-                                                            params.sigma1_rad, params.sigma2, params.sigma3)
+    candidates, parts = count_candidates(ego_context, cav_context, ego_heading, signs, params.sigma1_rad,
+                                         params.sigma2, params.sigma3)
+    vote_anchor, vote_member = (np.concatenate([part[k] for part in parts]) for k in (0, 1))
     expected = direct_sets(ego_context, cav_context, signs, len(ego), len(cav), params.sigma1, params.sigma2)
     assert {a: int(c) for a, c in enumerate(candidates.count) if c} == {a: len(m) for a, m in expected.items()}
     for anchor, members in expected.items():
