@@ -57,8 +57,9 @@ SAMPLED_FRAMES = 25
 
 def kernels_ready_line(kernels) -> str:
     """The console line once CBM's kernels are loaded: until then small frames ran interpreted."""
-    note = kernels.note()
-    return f"CBM's kernels ready: {note}" if note else "CBM's kernels ready (loaded from the cache)."
+    spent = (kernels.compile_seconds or 0.0) + (kernels.load_seconds or 0.0)
+    how = f"compiled in {spent:.1f} s, cached from now on" if kernels.note() else "loaded from the cache"
+    return f"CBM's kernels ready ({how})."
 
 
 def _warn(message: str) -> None:
