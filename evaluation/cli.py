@@ -38,7 +38,6 @@ For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg 
 from __future__ import annotations
 
 import argparse
-import contextlib
 import math
 import multiprocessing.util
 import os
@@ -64,7 +63,7 @@ from .compare import CompareError, compare, mismatches
 from .conditions import CONDITIONS
 from .outputs import OutError, check_out, stage_outputs
 from .run import DEFAULT_METHODS, Plan, plan, run_plan
-from .stop import Stopped, StopSignals, Watchdog, descendants
+from .stop import Stopped, StopSignals, Watchdog, kill_descendants
 
 
 class CliError(ValueError):
@@ -329,9 +328,7 @@ def exit_now(code: int) -> NoReturn:
     are released first (multiprocessing's own first exit step), so its resource tracker has nothing to warn about;
     any process still descended from this one (a Ray instance cut in its start-up) is killed, none left orphaned."""
     multiprocessing.util._run_finalizers(0)
-    for pid in descendants():
-        with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGKILL)
+    kill_descendants()
     sys.stdout.flush()
     sys.stderr.flush()
     os._exit(code)

@@ -95,12 +95,29 @@ def descendants(pid: int | None = None) -> list[int]:
     return found
 
 
+def kill_descendants(rounds: int = 50) -> None:
+    """Kill every process descended from this one, none left orphaned: each one found is first
+    stopped (SIGSTOP, so it can start no more) and the tree read again until it shows no new one
+    (a process starting children meanwhile, as Ray's raylet does in its start-up, would otherwise
+    leave them to outlive it); then all are killed."""
+    stopped: set[int] = set()
+    for _ in range(rounds):
+        found = set(descendants()) - stopped
+        if not found:
+            break
+        for pid in found:
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGSTOP)
+        stopped |= found
+    for pid in stopped:
+        with contextlib.suppress(OSError):
+            os.kill(pid, signal.SIGKILL)
+
+
 def force_exit(line: str, signum: int) -> NoReturn:
     """End the process now: every descendant process killed (none orphaned), ``line`` on stderr,
     exit status 128 + ``signum``; for a stop the main thread cannot act on in time."""
-    for pid in descendants():
-        with contextlib.suppress(OSError):
-            os.kill(pid, signal.SIGKILL)
+    kill_descendants()
     with contextlib.suppress(OSError, ValueError):
         sys.stdout.flush()
         sys.stderr.write(line + "\n")
