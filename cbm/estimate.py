@@ -36,6 +36,10 @@ READMIT_ALPHA = 1e-3
 """A pair left out comes back unless a true pair would lie as far out with at most this probability."""
 READMIT_CAP = 10.0
 """A pair more than this many sigma off stays out, however few the inliers that read sigma."""
+REWEIGHT_STEPS = 20
+REWEIGHT_TOL = 1e-6
+"""Most reweighting steps at the final scale, and the step (largest change of an entry of the
+transform) below which they stop."""
 
 
 @dataclass(frozen=True)
@@ -59,22 +63,50 @@ def weighted_procrustes(src: np.ndarray, dst: np.ndarray, weights: np.ndarray | 
     Kabsch (1976) / Umeyama (1991) in closed form for SE(2): with weighted centroids
     ``mu_s, mu_d`` and centred points ``a_k = src_k - mu_s``, ``b_k = dst_k - mu_d``, the angle is
     ``theta = atan2(sum w (a x b), sum w (a . b))`` (the SVD solution with det R = +1) and
-    ``t = mu_d - R(theta) mu_s``. Needs at least two points of positive weight.
+    ``t = mu_d - R(theta) mu_s`` (``_procrustes``). Needs at least two points of positive weight.
     """
-    src = np.asarray(src, dtype=float).reshape(-1, 2)
-    dst = np.asarray(dst, dtype=float).reshape(-1, 2)
-    w = np.ones(len(src)) if weights is None else np.asarray(weights, dtype=float)
+    src = np.ascontiguousarray(src, dtype=float).reshape(-1, 2)
+    dst = np.ascontiguousarray(dst, dtype=float).reshape(-1, 2)
+    w = np.ones(len(src)) if weights is None else np.ascontiguousarray(weights, dtype=float)
     if np.count_nonzero(w > 0) < 2:
         raise ValueError("weights must hold at least two positive entries")
-    w = w / w.sum()
-    mu_s, mu_d = w @ src, w @ dst
-    a, b = src - mu_s, dst - mu_d
-    cos_part = w @ (a[:, 0] * b[:, 0] + a[:, 1] * b[:, 1])
-    sin_part = w @ (a[:, 0] * b[:, 1] - a[:, 1] * b[:, 0])
-    theta = float(np.arctan2(sin_part, cos_part))
-    R = se2.make(0.0, 0.0, theta)[:2, :2]
-    t = mu_d - R @ mu_s
-    return se2.make(t[0], t[1], theta)
+    return _procrustes(src, dst, w)
+
+
+@numba.njit(cache=True, nogil=True)
+def _procrustes(src, dst, w):
+    """``weighted_procrustes`` of float (K, 2) ``src``, ``dst`` and (K,) weights ``w`` (two positive),
+    summed pair by pair in order: the same transform compiled or not."""
+    total = 0.0
+    for k in range(len(w)):
+        total += w[k]
+    ms0, ms1, md0, md1 = 0.0, 0.0, 0.0, 0.0
+    for k in range(len(w)):
+        wk = w[k] / total
+        ms0, ms1 = ms0 + wk * src[k, 0], ms1 + wk * src[k, 1]
+        md0, md1 = md0 + wk * dst[k, 0], md1 + wk * dst[k, 1]
+    cos_part, sin_part = 0.0, 0.0
+    for k in range(len(w)):
+        wk = w[k] / total
+        a0, a1, b0, b1 = src[k, 0] - ms0, src[k, 1] - ms1, dst[k, 0] - md0, dst[k, 1] - md1
+        cos_part += wk * (a0 * b0 + a1 * b1)
+        sin_part += wk * (a0 * b1 - a1 * b0)
+    theta = math.atan2(sin_part, cos_part)
+    c, s = math.cos(theta), math.sin(theta)
+    T = np.zeros((3, 3))
+    T[0, 0], T[0, 1], T[0, 2] = c, -s, md0 - (c * ms0 - s * ms1)
+    T[1, 0], T[1, 1], T[1, 2] = s, c, md1 - (s * ms0 + c * ms1)
+    T[2, 2] = 1.0
+    return T
+
+
+@numba.njit(cache=True, nogil=True)
+def _residuals_into(T, src, dst, r):
+    """``r[k] = ||T(src_k) - dst_k||`` (``residuals``) in a kernel."""
+    for k in range(len(src)):
+        dx = T[0, 0] * src[k, 0] + T[0, 1] * src[k, 1] + T[0, 2] - dst[k, 0]
+        dy = T[1, 0] * src[k, 0] + T[1, 1] * src[k, 1] + T[1, 2] - dst[k, 1]
+        r[k] = math.sqrt(dx * dx + dy * dy)
 
 
 def residuals(T: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
@@ -102,17 +134,24 @@ def least_squares_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     return Fit(T, np.ones(len(src)), math.inf, sigma)
 
 
-def _reweighted(src: np.ndarray, dst: np.ndarray, T: np.ndarray, nu: float, max_inner: int = 20,
-                tol: float = 1e-6) -> np.ndarray:
-    """Iteratively reweighted weighted Procrustes at a fixed Welsch scale ``nu``, from ``T``."""
-    r = residuals(T, src, dst)
+@numba.njit(cache=True, nogil=True)
+def _reweighted(src, dst, T, nu, max_inner, tol):
+    """Iteratively reweighted weighted Procrustes at a fixed Welsch scale ``nu`` (weights
+    ``exp(-r^2 / (2 nu^2))``, ``welsch_weights``), from ``T``: at most ``max_inner`` steps, until a
+    step moves no entry of ``T`` by ``tol`` or fewer than two weights are above 1e-12."""
+    r, w = np.empty(len(src)), np.empty(len(src))
+    _residuals_into(T, src, dst, r)
     for _ in range(max_inner):
-        w = welsch_weights(r, nu)
-        if np.count_nonzero(w > 1e-12) < 2:
+        positive = 0
+        for k in range(len(src)):
+            w[k] = math.exp(-(r[k] ** 2) / (2.0 * nu ** 2))
+            positive += w[k] > 1e-12
+        if positive < 2:
             break
-        T_next = weighted_procrustes(src, dst, w)
+        T_next = _procrustes(src, dst, w)
         step = np.abs(T_next - T).max()
-        T, r = T_next, residuals(T_next, src, dst)
+        T = T_next
+        _residuals_into(T, src, dst, r)
         if step < tol:
             break
     return T
@@ -235,6 +274,7 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     many sigma off weigh nothing. The scale is read once, from a least-squares fit of the inliers:
     read from the robust fit's own residuals it would shrink on few pairs, round after round.
     """
+    src, dst = np.ascontiguousarray(src, dtype=float), np.ascontiguousarray(dst, dtype=float)
     floor = nu_floor / WELSCH_EFFICIENT_SCALE
     inlier = np.ones(len(src), dtype=bool)
     if len(src) >= MIN_TO_REJECT:
@@ -252,5 +292,5 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
             r = residuals(T, src, dst)
     sigma = max(inlier_sigma(r, inlier), floor)
     nu = WELSCH_EFFICIENT_SCALE * sigma
-    T = _reweighted(src, dst, T, nu)
+    T = _reweighted(src, dst, T, nu, REWEIGHT_STEPS, REWEIGHT_TOL)
     return Fit(T, welsch_weights(residuals(T, src, dst), nu), nu, sigma)
