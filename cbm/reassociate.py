@@ -19,10 +19,9 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from . import se2
@@ -103,27 +102,45 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     if n_rows * n_cols <= DENSE_BLOCK:
         pairs = _assign_block(candidates, cost)
     else:
-        alone = _alone(candidates, len(ego), len(cav))
+        group, size = _connected_groups(candidates[:, 0], candidates[:, 1], len(ego), len(cav))
+        alone = size[group] == 1
         rest = np.flatnonzero(~alone)
-        pairs = np.concatenate([candidates[alone]] + [_assign_block(candidates[rest[group]], cost[rest[group]])
-                                                      for group in _connected_groups(candidates[rest], len(ego),
-                                                                                     len(cav))])
+        order = rest[np.argsort(group[rest], kind="stable")]
+        groups = np.split(order, np.flatnonzero(np.diff(group[order])) + 1) if len(order) else []
+        pairs = np.concatenate([candidates[alone]] + [_assign_block(candidates[g], cost[g]) for g in groups])
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
-def _alone(candidates: np.ndarray, n_ego: int, n_cav: int) -> np.ndarray:
-    """Candidates whose boxes are in no other candidate: each one a group that pairs as it is."""
-    rows, cols = np.bincount(candidates[:, 0], minlength=n_ego), np.bincount(candidates[:, 1], minlength=n_cav)
-    return (rows[candidates[:, 0]] == 1) & (cols[candidates[:, 1]] == 1)
+@numba.njit(cache=True, nogil=True)
+def _root(parent, node):
+    """The root of ``node``'s tree in the union-find forest ``parent`` (halving the path on the way)."""
+    while parent[node] != node:
+        parent[node] = parent[parent[node]]
+        node = parent[node]
+    return node
 
 
-def _connected_groups(candidates: np.ndarray, n_ego: int, n_cav: int) -> list[np.ndarray]:
-    """Indices of the candidates of each connected group (boxes linked through shared candidates)."""
-    size = n_ego + n_cav
-    graph = coo_matrix((np.ones(len(candidates)), (candidates[:, 0], n_ego + candidates[:, 1])), shape=(size, size))
-    group = connected_components(graph, directed=False)[1][candidates[:, 0]]
-    order = np.argsort(group, kind="stable")
-    return np.split(order, np.flatnonzero(np.diff(group[order])) + 1)
+@numba.njit(cache=True, nogil=True)
+def _connected_groups(rows, cols, n_ego, n_cav):
+    """(group of each candidate (row, col), candidates in each group): the connected groups of boxes
+    linked through shared candidates (union-find over the ego boxes and, after them, the CAV
+    boxes), numbered in order of first appearance. A group of one candidate is a candidate whose
+    boxes are in no other candidate: it pairs as it is."""
+    parent = np.arange(n_ego + n_cav)
+    for k in range(len(rows)):
+        a, b = _root(parent, rows[k]), _root(parent, n_ego + cols[k])
+        if a != b:
+            parent[max(a, b)] = min(a, b)
+    number = np.full(n_ego + n_cav, -1, np.int64)
+    group, size = np.empty(len(rows), np.int64), np.zeros(len(rows), np.int64)
+    groups = 0
+    for k in range(len(rows)):
+        root = _root(parent, rows[k])
+        if number[root] < 0:
+            number[root], groups = groups, groups + 1
+        group[k] = number[root]
+        size[group[k]] += 1
+    return group, size[:groups]
 
 
 def _assign_block(candidates: np.ndarray, cost: np.ndarray) -> np.ndarray:

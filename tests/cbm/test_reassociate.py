@@ -60,6 +60,25 @@ def test_large_problems_split_into_groups_with_the_same_answer(monkeypatch):
     assert len(dense) > 100
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_groups_are_the_connected_components_of_the_candidates(seed):
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    rng = np.random.default_rng(seed)
+    n_ego, n_cav = 40, 30
+    candidates = np.unique(np.stack([rng.integers(0, n_ego, 25), rng.integers(0, n_cav, 25)], axis=1), axis=0)
+    group, size = module._connected_groups(candidates[:, 0], candidates[:, 1], n_ego, n_cav)
+    graph = coo_matrix((np.ones(len(candidates)), (candidates[:, 0], n_ego + candidates[:, 1])),
+                       shape=(n_ego + n_cav,) * 2)
+    expected = connected_components(graph, directed=False)[1][candidates[:, 0]]
+    same, expected_same = group[:, None] == group[None, :], expected[:, None] == expected[None, :]
+    np.testing.assert_array_equal(same, expected_same)
+    np.testing.assert_array_equal(size, np.bincount(group))
+    first = np.array([np.flatnonzero(group == g)[0] for g in range(len(size))])
+    assert (np.diff(first) > 0).all() and len(size) > 5
+
+
 def test_refinement_adds_true_pairs_cbm_missed():
     own, refined, kept, right = [], [], 0, 0
     for seed in range(8):
