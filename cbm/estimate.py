@@ -157,17 +157,6 @@ def _reweighted(src, dst, T, nu, max_inner, tol):
     return T
 
 
-def two_point_fits(src: np.ndarray, dst: np.ndarray, a: np.ndarray,
-                   b: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """(theta, tx, ty) of the least-squares rigid fit of each two pairs (a_h, b_h): the angle turns
-    ``src_b - src_a`` onto ``dst_b - dst_a`` and the midpoints coincide."""
-    ds, dd = src[b] - src[a], dst[b] - dst[a]
-    theta = np.arctan2(ds[:, 0] * dd[:, 1] - ds[:, 1] * dd[:, 0], ds[:, 0] * dd[:, 0] + ds[:, 1] * dd[:, 1])
-    c, s = np.cos(theta), np.sin(theta)
-    ms, md = 0.5 * (src[a] + src[b]), 0.5 * (dst[a] + dst[b])
-    return theta, md[:, 0] - (c * ms[:, 0] - s * ms[:, 1]), md[:, 1] - (s * ms[:, 0] + c * ms[:, 1])
-
-
 def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs (a, b), a != b, of the two-pair hypotheses: all of them when there are at most
     ``limit``, else ``limit`` of them spread evenly: round after round every pair is an ``a``,
@@ -182,24 +171,36 @@ def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray,
 
 
 @numba.njit(cache=True, nogil=True)
-def _least_median(c, s, tx, ty, src, dst, h):
-    """(f, m): the first fit f (rotation ``c, s``, translation ``tx, ty``) whose ``h``-th smallest
-    squared residual m is smallest, as ``argmin`` over every fit's would give. Each residual is
-    computed in the order of operations of numpy's broadcast, so the values are the same to the bit.
-    A fit's ``h``-th smallest is only selected when more than ``h`` of its squares lie below the
-    smallest so far; otherwise it is at least that one and cannot come first."""
+def _two_point_fit(src, dst, a, b):
+    """(cos, sin, tx, ty) of the least-squares rigid fit of the two pairs a and b: the angle turns
+    ``src_b - src_a`` onto ``dst_b - dst_a`` and the midpoints coincide."""
+    ds0, ds1, dd0, dd1 = src[b, 0] - src[a, 0], src[b, 1] - src[a, 1], dst[b, 0] - dst[a, 0], dst[b, 1] - dst[a, 1]
+    theta = math.atan2(ds0 * dd1 - ds1 * dd0, ds0 * dd0 + ds1 * dd1)
+    c, s = math.cos(theta), math.sin(theta)
+    ms0, ms1 = 0.5 * (src[a, 0] + src[b, 0]), 0.5 * (src[a, 1] + src[b, 1])
+    md0, md1 = 0.5 * (dst[a, 0] + dst[b, 0]), 0.5 * (dst[a, 1] + dst[b, 1])
+    return c, s, md0 - (c * ms0 - s * ms1), md1 - (s * ms0 + c * ms1)
+
+
+@numba.njit(cache=True, nogil=True)
+def _least_median(src, dst, a, b, h):
+    """(cos, sin, tx, ty, m) of the first two-pair fit (``_two_point_fit`` of each ``a[f], b[f]``)
+    whose ``h``-th smallest squared residual m is smallest, as ``argmin`` over every fit's would
+    give. A fit's ``h``-th smallest is only selected when more than ``h`` of its squares lie below
+    the smallest so far; otherwise it is at least that one and cannot come first."""
     squares = np.empty(len(src))
-    best, smallest = 0, np.inf
-    for f in range(len(c)):
+    best, smallest = _two_point_fit(src, dst, a[0], b[0]), np.inf
+    for f in range(len(a)):
+        c, s, tx, ty = _two_point_fit(src, dst, a[f], b[f])
         below = 0
         for k in range(len(src)):
-            dx = c[f] * src[k, 0] - s[f] * src[k, 1] + tx[f] - dst[k, 0]
-            dy = s[f] * src[k, 0] + c[f] * src[k, 1] + ty[f] - dst[k, 1]
+            dx = c * src[k, 0] - s * src[k, 1] + tx - dst[k, 0]
+            dy = s * src[k, 0] + c * src[k, 1] + ty - dst[k, 1]
             squares[k] = dx * dx + dy * dy
             below += squares[k] < smallest
         if below > h:
-            best, smallest = f, _select(squares, h)
-    return best, smallest
+            best, smallest = (c, s, tx, ty), _select(squares, h)
+    return best[0], best[1], best[2], best[3], smallest
 
 
 @numba.njit(cache=True, nogil=True)
@@ -236,9 +237,8 @@ def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, floa
     order = np.lexsort((np.linalg.norm(src - src.mean(axis=0), axis=1), np.linalg.norm(dst - dst.mean(axis=0), axis=1)))
     src, dst = src[order], dst[order]
     a, b = hypothesis_pairs(len(src))
-    theta, tx, ty = two_point_fits(src, dst, a, b)
-    best, median = _least_median(np.cos(theta), np.sin(theta), tx, ty, src, dst, len(src) // 2)
-    return se2.make(tx[best], ty[best], theta[best]), math.sqrt(median)
+    c, s, tx, ty, median = _least_median(src, dst, a, b, len(src) // 2)
+    return np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]]), math.sqrt(median)
 
 
 def least_median_sigma(median: float, k: int) -> float:
