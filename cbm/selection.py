@@ -12,11 +12,11 @@ least-squares rigid fit of the set, then the set's centroids (see ``tie_break_ke
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
-from scipy.spatial.distance import cdist
 
 from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
@@ -81,9 +81,10 @@ def _one_to_one_bound(member, size, n_cav, ego_count, cav_count):
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
+def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
                    candidates, scratch, ego_count, cav_count, voter_here, out):
-    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average, and
+    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average (their
+    distances computed from the ``centres``, ego and CAV, as needed), and
     0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always filtered): L^(2)
     is a one-to-one subset of L_ij (eq. 10-11 only remove members), so ``_one_to_one_bound`` bounds it."""
     i, j = anchor // n_cav, anchor % n_cav
@@ -92,15 +93,18 @@ def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_
         return 0
     size = final_set(candidates, listed, voted_start, voted_by, rule, n_cav, scratch, ego_count,
                      cav_count, voter_here, out)
+    ego_xy, cav_xy = centres
     total = 0.0
     for k in range(size):
-        total += distance[out[k]]
+        e, c = out[k] // n_cav, out[k] % n_cav
+        dx, dy = ego_xy[e, 0] - cav_xy[c, 0], ego_xy[e, 1] - cav_xy[c, 1]
+        total += math.sqrt(dx * dx + dy * dy)
     return size if size == 0 or total / size <= limit else 0
 
 
 @numba.njit(cache=True)
 def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
-                  distance, limit):
+                  centres, limit):
     """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
 
     Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
@@ -119,7 +123,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
                               limit, -1, candidates, scratch, ego_count, cav_count, voter_here, out)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
@@ -143,12 +147,12 @@ def _work_arrays(width, n_ego, n_cav, n_pairs):
 
 
 @numba.njit(cache=True, nogil=True)
-def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
                      limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
     ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
     scratch, ego_count, cav_count, voter_here, out, candidates = work
-    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance, limit, beyond,
+    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
                           candidates, scratch, ego_count, cav_count, voter_here, out)
     for k in range(size):
         if excluded[out[k]]:
@@ -157,7 +161,7 @@ def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, distance,
+def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
                  limit):
     """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
     an ``excluded`` pair."""
@@ -165,13 +169,13 @@ def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
         sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
-                                    n_cav, distance, limit, work)
+                                    n_cav, centres, limit, work)
     return sizes
 
 
 @numba.njit(cache=True, nogil=True)
 def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
-                   distance, limit):
+                   centres, limit):
     """The largest of ``best`` and the sizes ``_filtered_sizes`` gives ``anchors`` (by decreasing
     card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
     the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
@@ -183,7 +187,7 @@ def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_s
         if count[anchors[n]] <= best:
             break
         best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, voted_start, voted_by, rule,
-                                          n_ego, n_cav, distance, limit, work))
+                                          n_ego, n_cav, centres, limit, work))
     return best
 
 
@@ -254,8 +258,8 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
 def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray,
                      cav_xy: np.ndarray, distance_limit: float) -> tuple:
     """The arguments the visiting kernels share, after their own."""
-    distance = cdist(ego_xy, cav_xy).ravel()
-    return (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy), distance,
+    centres = (np.ascontiguousarray(ego_xy, dtype=float), np.ascontiguousarray(cav_xy, dtype=float))
+    return (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy), centres,
             float(distance_limit))
 
 
