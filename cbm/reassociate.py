@@ -102,7 +102,7 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     if n_rows * n_cols <= DENSE_BLOCK:
         pairs = _assign_block(candidates, cost)
     else:
-        group, size = _connected_groups(candidates[:, 0], candidates[:, 1], len(ego), len(cav))
+        group, size = connected_groups(candidates[:, 0], candidates[:, 1], len(ego), len(cav))
         alone = size[group] == 1
         rest = np.flatnonzero(~alone)
         order = rest[np.argsort(group[rest], kind="stable")]
@@ -121,7 +121,7 @@ def _root(parent, node):
 
 
 @numba.njit(cache=True, nogil=True)
-def _connected_groups(rows, cols, n_ego, n_cav):
+def connected_groups(rows, cols, n_ego, n_cav):
     """(group of each candidate (row, col), candidates in each group): the connected groups of boxes
     linked through shared candidates (union-find over the ego boxes and, after them, the CAV
     boxes), numbered in order of first appearance. A group of one candidate is a candidate whose

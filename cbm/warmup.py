@@ -32,6 +32,7 @@ from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
+from .reassociate import connected_groups
 from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
@@ -90,7 +91,7 @@ def compile_matching() -> None:
 
 def compile_selection() -> None:
     """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up on one thread and on
-    two, the robust fit's least-median start) with a first call on candidate sets whose sizes are
+    two, the robust fit, the grouping of a large assignment) with a first call on candidate sets whose sizes are
     upper bounds, without running the join that counts them."""
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
     cav = se2.apply_boxes(init, cav)
@@ -107,6 +108,8 @@ def compile_selection() -> None:
     strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
     filtered_sizes(order[:2], *sets)
     robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
+    pairs = np.zeros((2, 2), np.intp)
+    connected_groups(pairs[:, 0], pairs[:, 1], 1, 1)
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}

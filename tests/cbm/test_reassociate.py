@@ -68,7 +68,7 @@ def test_groups_are_the_connected_components_of_the_candidates(seed):
     rng = np.random.default_rng(seed)
     n_ego, n_cav = 40, 30
     candidates = np.unique(np.stack([rng.integers(0, n_ego, 25), rng.integers(0, n_cav, 25)], axis=1), axis=0)
-    group, size = module._connected_groups(candidates[:, 0], candidates[:, 1], n_ego, n_cav)
+    group, size = module.connected_groups(candidates[:, 0], candidates[:, 1], n_ego, n_cav)
     graph = coo_matrix((np.ones(len(candidates)), (candidates[:, 0], n_ego + candidates[:, 1])),
                        shape=(n_ego + n_cav,) * 2)
     expected = connected_components(graph, directed=False)[1][candidates[:, 0]]
