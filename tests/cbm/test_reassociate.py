@@ -8,6 +8,7 @@ import pytest
 from cbm import CBMParams, match, se2
 from cbm import reassociate as module
 from cbm.estimate import robust_fit
+from cbm.interpreted import interpreted
 from cbm.reassociate import MAX_ROUNDS, gated_assignment, reassociate
 from evaluation.metrics import aggregate, evaluate, is_success
 from evaluation.scenario import ScenarioParams, make_trial
@@ -77,6 +78,10 @@ def test_groups_are_the_connected_components_of_the_candidates(seed):
     np.testing.assert_array_equal(size, np.bincount(group))
     first = np.array([np.flatnonzero(group == g)[0] for g in range(len(size))])
     assert (np.diff(first) > 0).all() and len(size) > 5
+    with interpreted():
+        plain = module.connected_groups(candidates[:, 0], candidates[:, 1], n_ego, n_cav)
+    np.testing.assert_array_equal(plain[0], group)
+    np.testing.assert_array_equal(plain[1], size)
 
 
 def test_refinement_adds_true_pairs_cbm_missed():
