@@ -7,6 +7,7 @@ that follows the noise the residuals show (``robust_fit``).
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass
 
@@ -114,16 +115,16 @@ def residuals(T: np.ndarray, src: np.ndarray, dst: np.ndarray) -> np.ndarray:
     return np.linalg.norm(se2.apply_points(T, src) - dst, axis=1)
 
 
-def welsch_weights(r: np.ndarray, nu: float) -> np.ndarray:
-    """Welsch weights exp(-r^2 / (2 nu^2))."""
-    return np.exp(-(r ** 2) / (2.0 * nu ** 2))
-
-
-def inlier_sigma(r: np.ndarray, inlier: np.ndarray) -> float:
+@numba.njit(cache=True, nogil=True)
+def inlier_sigma(r, inlier):
     """Per-axis std-dev of the inliers' residuals with the fit's 3 degrees of freedom taken out:
     ``sqrt(sum r^2 / (2 K_in - 3))`` (0 below 2 inliers)."""
-    k = int(np.count_nonzero(inlier))
-    return math.sqrt(float(np.sum(r[inlier] ** 2)) / (2 * k - 3)) if k >= 2 else 0.0
+    k, total = 0, 0.0
+    for n in range(len(r)):
+        if inlier[n]:
+            k += 1
+            total += r[n] ** 2
+    return math.sqrt(total / (2 * k - 3)) if k >= 2 else 0.0
 
 
 def least_squares_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
@@ -136,17 +137,13 @@ def least_squares_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
 
 @numba.njit(cache=True, nogil=True)
 def _reweighted(src, dst, T, nu, max_inner, tol):
-    """Iteratively reweighted weighted Procrustes at a fixed Welsch scale ``nu`` (weights
-    ``exp(-r^2 / (2 nu^2))``, ``welsch_weights``), from ``T``: at most ``max_inner`` steps, until a
-    step moves no entry of ``T`` by ``tol`` or fewer than two weights are above 1e-12."""
+    """Iteratively reweighted weighted Procrustes at a fixed Welsch scale ``nu`` (Welsch weights
+    ``exp(-r^2 / (2 nu^2))``), from ``T``: at most ``max_inner`` steps, until a step moves no entry
+    of ``T`` by ``tol`` or fewer than two weights are above 1e-12. Returns ``T`` and its weights."""
     r, w = np.empty(len(src)), np.empty(len(src))
     _residuals_into(T, src, dst, r)
     for _ in range(max_inner):
-        positive = 0
-        for k in range(len(src)):
-            w[k] = math.exp(-(r[k] ** 2) / (2.0 * nu ** 2))
-            positive += w[k] > 1e-12
-        if positive < 2:
+        if _welsch_into(r, nu, w) < 2:
             break
         T_next = _procrustes(src, dst, w)
         step = np.abs(T_next - T).max()
@@ -154,7 +151,41 @@ def _reweighted(src, dst, T, nu, max_inner, tol):
         _residuals_into(T, src, dst, r)
         if step < tol:
             break
-    return T
+    _welsch_into(r, nu, w)
+    return T, w
+
+
+@numba.njit(cache=True, nogil=True)
+def _welsch_into(r, nu, w):
+    """Welsch weights ``w = exp(-r^2 / (2 nu^2))``; returns how many are above 1e-12."""
+    positive = 0
+    for k in range(len(r)):
+        w[k] = math.exp(-(r[k] ** 2) / (2.0 * nu ** 2))
+        positive += w[k] > 1e-12
+    return positive
+
+
+@numba.njit(cache=True, nogil=True)
+def _inlier_fit(src, dst, inlier, bounds, floor):
+    """Step 2 of ``robust_fit``: (T, sigma) of the least-squares fit of the ``inlier`` pairs after a
+    pair left out comes back within ``bounds[K_in]`` sigma of it (``readmit_bounds``), the fit
+    then repeated. Zero weights leave ``_procrustes``'s sums as they are, so fitting every pair at
+    weight 1 or 0 is fitting the inliers alone."""
+    weight = inlier.astype(np.float64)
+    T = _procrustes(src, dst, weight)
+    r = np.empty(len(src))
+    _residuals_into(T, src, dst, r)
+    kept = int(weight.sum())
+    if kept < len(src):
+        limit = bounds[kept] * max(inlier_sigma(r, inlier), floor)
+        back = r <= limit
+        if (back != inlier).any():
+            if np.count_nonzero(back) < 2:
+                raise ValueError("weights must hold at least two positive entries")
+            inlier = back
+            T = _procrustes(src, dst, inlier.astype(np.float64))
+            _residuals_into(T, src, dst, r)
+    return T, max(inlier_sigma(r, inlier), floor)
 
 
 def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray, np.ndarray]:
@@ -248,11 +279,15 @@ def least_median_sigma(median: float, k: int) -> float:
     return median / RAYLEIGH_MEDIAN * (1.0 + 5.0 / max(2 * k - 3, 1))
 
 
-def readmit_bound(inliers: int) -> float:
-    """How many sigma (read from ``inliers`` pairs) a true pair's residual stays below with
-    probability 1 - ``READMIT_ALPHA``: ``sqrt(2 F(2, 2K - 3))`` at that level (the noise estimate of
-    few pairs is itself uncertain), at most ``READMIT_CAP``."""
-    return min(math.sqrt(2.0 * float(fdtri(2, max(2 * inliers - 3, 1), 1.0 - READMIT_ALPHA))), READMIT_CAP)
+@functools.lru_cache(maxsize=256)
+def readmit_bounds(most: int) -> np.ndarray:
+    """For K = 0..``most`` inliers: how many sigma (read from K pairs) a true pair's residual stays
+    below with probability 1 - ``READMIT_ALPHA``: ``sqrt(2 F(2, 2K - 3))`` at that level (the noise
+    estimate of few pairs is itself uncertain), at most ``READMIT_CAP``. Read-only, kept per size."""
+    dfd = np.maximum(2 * np.arange(most + 1) - 3, 1)
+    bounds = np.minimum(np.sqrt(2.0 * fdtri(2, dfd, 1.0 - READMIT_ALPHA)), READMIT_CAP)
+    bounds.flags.writeable = False
+    return bounds
 
 
 def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
@@ -263,7 +298,7 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
        (``least_median_sigma``); pairs within ``INLIER_GATE`` sigma_0 of it are the inliers.
     2. Read the noise from the inliers: their least-squares fit and its residual std-dev sigma
        (``inlier_sigma``, never below ``nu_floor / c``) -- Rousseeuw and Leroy's reweighted least
-       squares (1987, ch. 5); a pair left out comes back when it lies within ``readmit_bound``
+       squares (1987, ch. 5); a pair left out comes back when it lies within ``readmit_bounds``
        sigma of that fit (few inliers know their noise only roughly), then the fit is repeated.
     3. Minimise eq. 14 by iteratively reweighted Procrustes (the majorise-minimise step of Zhang,
        Yao, Deng, TPAMI 2022) at nu = c sigma, ``c = WELSCH_EFFICIENT_SCALE``: Holland and Welsch's
@@ -282,15 +317,7 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
         inlier = residuals(T, src, dst) <= INLIER_GATE * max(least_median_sigma(median, len(src)), floor)
         if np.count_nonzero(inlier) < 2:
             inlier[:] = True
-    T = weighted_procrustes(src[inlier], dst[inlier])
-    r = residuals(T, src, dst)
-    if not inlier.all():
-        back = r <= readmit_bound(int(np.count_nonzero(inlier))) * max(inlier_sigma(r, inlier), floor)
-        if (back != inlier).any():
-            inlier = back
-            T = weighted_procrustes(src[inlier], dst[inlier])
-            r = residuals(T, src, dst)
-    sigma = max(inlier_sigma(r, inlier), floor)
+    T, sigma = _inlier_fit(src, dst, inlier, readmit_bounds(len(src)), floor)
     nu = WELSCH_EFFICIENT_SCALE * sigma
-    T = _reweighted(src, dst, T, nu, REWEIGHT_STEPS, REWEIGHT_TOL)
-    return Fit(T, welsch_weights(residuals(T, src, dst), nu), nu, sigma)
+    T, weights = _reweighted(src, dst, T, nu, REWEIGHT_STEPS, REWEIGHT_TOL)
+    return Fit(T, weights, nu, sigma)
