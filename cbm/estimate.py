@@ -188,17 +188,20 @@ def _inlier_fit(src, dst, inlier, bounds, floor):
     return T, max(inlier_sigma(r, inlier), floor)
 
 
+@functools.lru_cache(maxsize=256)
 def hypothesis_pairs(k: int, limit: int = LMEDS_HYPOTHESES) -> tuple[np.ndarray, np.ndarray]:
     """Index pairs (a, b), a != b, of the two-pair hypotheses: all of them when there are at most
     ``limit``, else ``limit`` of them spread evenly: round after round every pair is an ``a``,
-    its ``b`` a fixed offset ahead, the offsets spread by the golden ratio."""
+    its ``b`` a fixed offset ahead, the offsets spread by the golden ratio. Read-only, kept per size."""
     if k * (k - 1) // 2 <= limit:
         a, b = np.triu_indices(k, 1)
-        return a, b
-    h = np.arange(limit)
-    a, rounds = h % k, h // k + 1
-    offset = 1 + np.floor(rounds * GOLDEN * (k - 1)).astype(np.intp) % (k - 1)
-    return a, (a + offset) % k
+    else:
+        h = np.arange(limit)
+        a, rounds = h % k, h // k + 1
+        offset = 1 + np.floor(rounds * GOLDEN * (k - 1)).astype(np.intp) % (k - 1)
+        b = (a + offset) % k
+    a.flags.writeable, b.flags.writeable = False, False
+    return a, b
 
 
 @numba.njit(cache=True, nogil=True)
