@@ -1,52 +1,75 @@
 """Per-step times of ``cbm.match`` (``MatchResult.timings``), two checkouts side by side.
 
-On a machine others load too, only times taken in the same session mean anything: each round runs
-every scene once in each checkout (in a process of its own, alternating which goes first), and the
-medians over the rounds are printed per step with their ratio (other / this checkout).
+On a machine others load too, only times taken together mean anything: the other checkout's
+``cbm`` is imported into the same process under another name, and every trial runs in both,
+alternating which goes first, round after round. Per step it prints the median over all runs of
+each checkout, the median of the per-run ratios (other / this checkout: the load hits both runs
+of a pair alike) and, for the total, the share of pairs where this checkout was faster.
 
     python bench/bench_steps.py --against ../base [--scenes street:100 street:300 dense:300] [--rounds 5]
 
-Without ``--against`` it prints this checkout's medians only. The trials are ``bench_match.py``'s.
+Without ``--against`` it prints this checkout's medians only. The trials are ``bench_match.py``'s;
+the pairs and transforms of both checkouts are compared on every run (a difference stops it).
 """
 from __future__ import annotations
 
 import argparse
-import json
-import subprocess
+import importlib.util
 import sys
 from pathlib import Path
+from types import ModuleType
 
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
+sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "bench")]
 STEPS = ("context", "local_matching", "voting_sets", "consensus_selection", "estimate", "reassociate", "total")
+ROUNDING = 1e-9
+"""Largest difference of the two checkouts' transforms taken as rounding (``test_match_reference``)."""
 
 
-def one_run(scene: str, trials: int) -> dict[str, list[float]]:
-    """Per step, the milliseconds of each trial of ``scene`` (``layout:size``) after a first call."""
-    sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "bench")]
+def other_cbm(checkout: Path) -> ModuleType:
+    """``checkout``'s ``cbm`` package, imported as ``cbm_other`` (its modules import each other relatively)."""
+    spec = importlib.util.spec_from_file_location("cbm_other", checkout / "cbm" / "__init__.py",
+                                                  submodule_search_locations=[str(checkout / "cbm")])
+    module = importlib.util.module_from_spec(spec)
+    sys.modules["cbm_other"] = module
+    spec.loader.exec_module(module)
+    return module
+
+
+def run(package: ModuleType, trial) -> tuple[dict[str, float], object]:
+    """Milliseconds per step of one match of ``trial`` by ``package``, and its result."""
+    result = package.match(trial.ego_boxes, trial.cav_boxes, trial.init, package.CBMParams())
+    return {step: 1000 * result.timings.get(step, 0.0) for step in STEPS}, result
+
+
+def same(a, b, scene: str) -> None:
+    """Stops with a one-line message when two results' pairs or transforms differ."""
+    if not np.array_equal(a.pairs, b.pairs) or np.abs(a.transform - b.transform).max() > ROUNDING:
+        raise SystemExit(f"bench_steps: the checkouts' results differ on {scene}")
+
+
+def measure(scene: str, packages: dict[str, ModuleType], rounds: int, trials: int) -> dict[str, dict[str, list]]:
+    """Per checkout and step, the milliseconds of every run of every trial of ``scene`` (``layout:size``)."""
     from bench_match import trials_for
-
-    from cbm import CBMParams, match
 
     layout, size = scene.split(":")
     found = trials_for(int(size), trials, layout)
-    match(found[0].ego_boxes[:60], found[0].cav_boxes[:60], found[0].init, CBMParams())
-    times: dict[str, list[float]] = {step: [] for step in STEPS}
-    for trial in found:
-        timings = match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams()).timings
-        for step in STEPS:
-            times[step].append(1000 * timings.get(step, 0.0))
+    for package in packages.values():
+        run(package, found[0])
+    times = {name: {step: [] for step in STEPS} for name in packages}
+    names = list(packages)
+    for round_ in range(rounds):
+        for k, trial in enumerate(found):
+            results = {}
+            for name in (names if (round_ + k) % 2 == 0 else names[::-1]):
+                timings, results[name] = run(packages[name], trial)
+                for step in STEPS:
+                    times[name][step].append(timings[step])
+            if len(results) == 2:
+                same(*results.values(), scene)
     return times
-
-
-def run_in(checkout: Path, scene: str, trials: int) -> dict[str, list[float]]:
-    """``one_run`` in a fresh process importing ``checkout``'s sources."""
-    code = (f"import sys, json; sys.path.insert(0, {str(ROOT / 'bench')!r}); import bench_steps; "
-            f"bench_steps.ROOT = bench_steps.Path({str(checkout)!r}); "
-            f"print(json.dumps(bench_steps.one_run({scene!r}, {trials})))")
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True, cwd=checkout)
-    return json.loads(out.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
@@ -56,20 +79,25 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--trials", type=int, default=7)
     args = parser.parse_args()
-    checkouts = {"this": ROOT} if args.against is None else {"base": args.against.resolve(), "this": ROOT}
+    import cbm
+    packages = {"this": cbm}
+    if args.against is not None:
+        if not (args.against / "cbm" / "__init__.py").is_file():
+            raise SystemExit(f"bench_steps: --against {args.against}: no cbm/__init__.py there")
+        packages = {"base": other_cbm(args.against.resolve()), "this": cbm}
     for scene in args.scenes:
-        runs: dict[str, dict[str, list[float]]] = {name: {step: [] for step in STEPS} for name in checkouts}
-        for round_ in range(args.rounds):
-            names = list(checkouts) if round_ % 2 == 0 else list(reversed(checkouts))
-            for name in names:
-                for step, values in run_in(checkouts[name], scene, args.trials).items():
-                    runs[name][step].append(float(np.median(values)))
-        print(f"{scene}, median ms over {args.rounds} rounds of {args.trials} trials")
-        print("| step | " + " | ".join(checkouts) + (" | base / this |" if len(checkouts) == 2 else " |"))
+        times = measure(scene, packages, args.rounds, args.trials)
+        print(f"{scene}: median ms of {args.rounds} rounds x {args.trials} trials"
+              + (", per-run ratio base / this, alternating" if len(packages) == 2 else ""))
+        print("| step | " + " | ".join(packages) + (" | base / this |" if len(packages) == 2 else " |"))
+        print("|---|" + "---:|" * (len(packages) + (len(packages) == 2)))
         for step in STEPS:
-            medians = {name: float(np.median(runs[name][step])) for name in checkouts}
-            ratio = f" | {medians['base'] / max(medians['this'], 1e-9):.2f}" if len(checkouts) == 2 else ""
-            print(f"| {step} | " + " | ".join(f"{m:.1f}" for m in medians.values()) + ratio + " |", flush=True)
+            cells = [f"{np.median(times[name][step]):.2f}" for name in packages]
+            if len(packages) == 2:
+                base, this = np.array(times["base"][step]), np.array(times["this"][step])
+                cells.append(f"{np.median(base / np.maximum(this, 1e-6)):.2f}"
+                             + (f" (faster in {np.mean(this < base):.0%})" if step == "total" else ""))
+            print(f"| {step} | " + " | ".join(cells) + " |", flush=True)
 
 
 if __name__ == "__main__":
