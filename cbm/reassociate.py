@@ -98,17 +98,72 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    n_rows, n_cols = len(np.unique(candidates[:, 0])), len(np.unique(candidates[:, 1]))
+    rows, cols = candidates[:, 0], candidates[:, 1]
+    n_rows, n_cols = np.count_nonzero(np.bincount(rows)), np.count_nonzero(np.bincount(cols))
     if n_rows * n_cols <= DENSE_BLOCK:
-        pairs = _assign_block(candidates, cost)
+        group, size = np.zeros(len(candidates), np.int64), np.array([len(candidates)])
     else:
-        group, size = connected_groups(candidates[:, 0], candidates[:, 1], len(ego), len(cav))
-        alone = size[group] == 1
-        rest = np.flatnonzero(~alone)
-        order = rest[np.argsort(group[rest], kind="stable")]
-        groups = np.split(order, np.flatnonzero(np.diff(group[order])) + 1) if len(order) else []
-        pairs = np.concatenate([candidates[alone]] + [_assign_block(candidates[g], cost[g]) for g in groups])
+        group, size = connected_groups(rows, cols, len(ego), len(cav))
+    alone = size[group] == 1
+    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), len(ego),
+                                                                      len(cav), _UNPAIRED)
+    pairs = [candidates[alone]]
+    for g in np.flatnonzero(size > 1):
+        block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
+        r, c = linear_sum_assignment(block)
+        inside = block[r, c] < _UNPAIRED
+        pairs.append(np.stack([row_ids[row_at[g] + r[inside]], col_ids[col_at[g] + c[inside]]], axis=1))
+    pairs = np.concatenate(pairs)
     return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+
+
+@numba.njit(cache=True, nogil=True)
+def dense_blocks(rows, cols, cost, group, n_groups, n_ego, n_cav, unpaired):
+    """Each group's dense block for the assignment: the boxes its candidates name, in increasing
+    order (``row_ids[row_at[g]:row_at[g + 1]]``, ``col_ids`` likewise), and the block of their costs
+    (``blocks[block_at[g]:block_at[g + 1]]``, row by row; ``unpaired`` where no candidate is)."""
+    start = np.zeros(n_groups + 1, np.int64)
+    for k in range(len(rows)):
+        start[group[k] + 1] += 1
+    start = np.cumsum(start)
+    members, fill = np.empty(len(rows), np.int64), start[:-1].copy()
+    for k in range(len(rows)):
+        members[fill[group[k]]] = k
+        fill[group[k]] += 1
+    row_ids, col_ids = np.empty(len(rows), np.int64), np.empty(len(rows), np.int64)
+    row_at, col_at = np.zeros(n_groups + 1, np.int64), np.zeros(n_groups + 1, np.int64)
+    block_at = np.zeros(n_groups + 1, np.int64)
+    for g in range(n_groups):
+        here = members[start[g]:start[g + 1]]
+        row_at[g + 1] = row_at[g] + _sorted_distinct(rows, here, row_ids[row_at[g]:])
+        col_at[g + 1] = col_at[g] + _sorted_distinct(cols, here, col_ids[col_at[g]:])
+        block_at[g + 1] = block_at[g] + (row_at[g + 1] - row_at[g]) * (col_at[g + 1] - col_at[g])
+    blocks = np.full(block_at[n_groups], unpaired)
+    local_row, local_col = np.empty(n_ego, np.int64), np.empty(n_cav, np.int64)
+    for g in range(n_groups):
+        for n in range(row_at[g], row_at[g + 1]):
+            local_row[row_ids[n]] = n - row_at[g]
+        for n in range(col_at[g], col_at[g + 1]):
+            local_col[col_ids[n]] = n - col_at[g]
+        width = col_at[g + 1] - col_at[g]
+        for k in members[start[g]:start[g + 1]]:
+            blocks[block_at[g] + local_row[rows[k]] * width + local_col[cols[k]]] = cost[k]
+    return row_ids, row_at, col_ids, col_at, blocks, block_at
+
+
+@numba.njit(cache=True, nogil=True)
+def _sorted_distinct(values, at, out):
+    """The distinct ``values[at]`` in increasing order into ``out``; returns how many."""
+    if len(at) == 1:
+        out[0] = values[at[0]]
+        return 1
+    found = np.sort(values[at])
+    n = 0
+    for value in found:
+        if n == 0 or out[n - 1] != value:
+            out[n] = value
+            n += 1
+    return n
 
 
 @numba.njit(cache=True, nogil=True)
@@ -141,17 +196,6 @@ def connected_groups(rows, cols, n_ego, n_cav):
         group[k] = number[root]
         size[group[k]] += 1
     return group, size[:groups]
-
-
-def _assign_block(candidates: np.ndarray, cost: np.ndarray) -> np.ndarray:
-    """The assignment among some candidates, on the dense block of the boxes they name."""
-    rows, row_of = np.unique(candidates[:, 0], return_inverse=True)
-    cols, col_of = np.unique(candidates[:, 1], return_inverse=True)
-    block = np.full((len(rows), len(cols)), _UNPAIRED)
-    block[row_of, col_of] = cost
-    r, c = linear_sum_assignment(block)
-    inside = block[r, c] < _UNPAIRED
-    return np.stack([rows[r[inside]], cols[c[inside]]], axis=1)
 
 
 def reassociate(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, gate: float,

@@ -32,7 +32,7 @@ from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
-from .reassociate import connected_groups
+from .reassociate import connected_groups, gated_assignment
 from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
@@ -110,6 +110,7 @@ def compile_selection() -> None:
     robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
     pairs = np.zeros((2, 2), np.intp)
     connected_groups(pairs[:, 0], pairs[:, 1], 1, 1)
+    gated_assignment(ego, cav, 3.0, 1.0)
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}

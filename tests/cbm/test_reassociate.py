@@ -84,6 +84,25 @@ def test_groups_are_the_connected_components_of_the_candidates(seed):
     np.testing.assert_array_equal(plain[1], size)
 
 
+def test_each_groups_block_holds_its_candidates_costs_between_its_boxes_in_order():
+    rng = np.random.default_rng(5)
+    candidates = np.unique(np.stack([rng.integers(0, 40, 30), rng.integers(0, 30, 30)], axis=1), axis=0)
+    cost = rng.uniform(0.0, 9.0, len(candidates))
+    group, size = module.connected_groups(candidates[:, 0], candidates[:, 1], 40, 30)
+    row_ids, row_at, col_ids, col_at, blocks, block_at = module.dense_blocks(
+        candidates[:, 0], candidates[:, 1], cost, group, len(size), 40, 30, -1.0)
+    for g in range(len(size)):
+        mine = candidates[group == g]
+        rows, row_of = np.unique(mine[:, 0], return_inverse=True)
+        cols, col_of = np.unique(mine[:, 1], return_inverse=True)
+        expected = np.full((len(rows), len(cols)), -1.0)
+        expected[row_of, col_of] = cost[group == g]
+        np.testing.assert_array_equal(row_ids[row_at[g]:row_at[g + 1]], rows)
+        np.testing.assert_array_equal(col_ids[col_at[g]:col_at[g + 1]], cols)
+        np.testing.assert_array_equal(blocks[block_at[g]:block_at[g + 1]].reshape(expected.shape), expected)
+    assert (size > 2).any()
+
+
 def test_refinement_adds_true_pairs_cbm_missed():
     own, refined, kept, right = [], [], 0, 0
     for seed in range(8):
