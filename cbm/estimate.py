@@ -221,7 +221,8 @@ def _least_median(src, dst, a, b, h):
     """(cos, sin, tx, ty, m) of the first two-pair fit (``_two_point_fit`` of each ``a[f], b[f]``)
     whose ``h``-th smallest squared residual m is smallest, as ``argmin`` over every fit's would
     give. A fit's ``h``-th smallest is only selected when more than ``h`` of its squares lie below
-    the smallest so far; otherwise it is at least that one and cannot come first."""
+    the smallest so far; otherwise it is at least that one and cannot come first, and its squares
+    stop as soon as too few are left to get there."""
     squares = np.empty(len(src))
     best, smallest = _two_point_fit(src, dst, a[0], b[0]), np.inf
     for f in range(len(a)):
@@ -232,6 +233,8 @@ def _least_median(src, dst, a, b, h):
             dy = s * src[k, 0] + c * src[k, 1] + ty - dst[k, 1]
             squares[k] = dx * dx + dy * dy
             below += squares[k] < smallest
+            if below + len(src) - 1 - k <= h:
+                break
         if below > h:
             best, smallest = (c, s, tx, ty), _select(squares, h)
     return best[0], best[1], best[2], best[3], smallest
