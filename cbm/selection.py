@@ -324,21 +324,37 @@ def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: 
     """(anchor, filtered set) of the eq. 13 ``winner`` and of the next ``k - 1`` anchors with the
     largest filtered sets among the ``pool`` largest candidate sets, each set once, largest first
     (ties by candidate-set order: ``by_count_descending``). The sets eq. 13's ``visit`` (of the same
-    sets) filtered are taken from it; only the rest are filtered here."""
+    sets) filtered are taken from it; of the rest only those are filtered here whose card(L_ij)
+    exceeds the last set taken from the visit's (when it gave ``k``): filtering never grows a set,
+    and a tie goes to the visited anchor, which comes first in the order."""
     if visit is None:
         visit = Visit(by_count_descending(L.count), np.zeros(0, np.int64), np.zeros(1, np.int64),
                       np.zeros(0, np.int64), kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
     order = visit.order[:pool]
     known = min(len(visit.sizes), len(order))
+    first = (winner, visit.set_of(winner, L))
+    found = _distinct_largest(order[:known], visit.sizes[:known], first, k, lambda anchor: visit.set_of(anchor, L))
+    rest = order[known:]
+    if len(found) == k:
+        rest = rest[L.count[rest] > len(found[-1][1])]
+    if len(rest) == 0:
+        return found
     nowhere = np.zeros(len(L.count), bool)
-    sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(order[known:], L.width, nowhere, *visit.common)])
-    found = [(winner, visit.set_of(winner, L))]
-    seen = {found[0][1].tobytes()}
+    sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
+    return _distinct_largest(np.concatenate([order[:known], rest]), sizes, first, k,
+                             lambda anchor: visit.set_of(anchor, L))
+
+
+def _distinct_largest(anchors: np.ndarray, sizes: np.ndarray, first: tuple[int, np.ndarray], k: int,
+                      set_of) -> list[tuple[int, np.ndarray]]:
+    """``first`` and the next anchors by decreasing filtered size ``sizes`` (ties in the order of
+    ``anchors``) whose sets differ from those taken, until ``k`` are taken or the sizes reach 0."""
+    found, seen = [first], {first[1].tobytes()}
     for index in np.argsort(-sizes, kind="stable"):
         if len(found) == k or sizes[index] == 0:
             break
-        pairs = visit.set_of(int(order[index]), L)
+        pairs = set_of(int(anchors[index]))
         if pairs.tobytes() not in seen:
             seen.add(pairs.tobytes())
-            found.append((int(order[index]), pairs))
+            found.append((int(anchors[index]), pairs))
     return found
