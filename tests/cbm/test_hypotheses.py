@@ -99,3 +99,29 @@ def test_the_evidence_of_a_pair_falls_with_distance_and_heading_disagreement_and
     agree, across = heading_log_ratio(np.radians([3.0, 80.0]), sigma)
     assert agree > 0 > across
     assert heading_sigma(np.zeros(3)) == HEADING_FLOOR
+
+
+@pytest.mark.parametrize("layout", ["street", "dense"])
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("k, pool", [(6, 64), (3, 64), (6, 400)])
+def test_the_pool_taken_from_the_visit_is_the_pool_filtered_whole(layout, seed, k, pool):
+    from cbm.pipeline import build_sets, checked_inputs
+    from cbm.selection import anchor_sets, select
+    from support.scenes import dense_scene
+
+    if layout == "dense":
+        boxes, ids = dense_scene(80, np.random.default_rng(60)), np.arange(80)
+    else:
+        frame = loaders.synthetic.generate(n_objects=80, n_frames=1, seed=60)[0]
+        boxes, ids = frame.boxes(), frame.track_ids
+    trial = make_trial(boxes, ids, ScenarioParams(protocol="sind", eta=0.5, sigma_p=0.3, sigma_theta=3.0,
+                                                  flip_prob=0.5, seed=seed))
+    ego, cav, init, params = checked_inputs(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
+    sets = build_sets(ego, cav, init, params)
+    arguments = (sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
+    chosen = select(*arguments)
+    reused = anchor_sets(*arguments, chosen.anchor, k, pool, chosen.visit)
+    whole = anchor_sets(*arguments, chosen.anchor, k, pool)
+    assert [anchor for anchor, _ in reused] == [anchor for anchor, _ in whole]
+    for (_, a), (_, b) in zip(reused, whole):
+        np.testing.assert_array_equal(a, b)
