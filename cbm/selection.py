@@ -288,16 +288,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     best = int(sizes.max(initial=0))
     if best == 0:
         return empty
-    set_keys: dict[bytes, tuple[float, ...]] = {}
-    keys = {}
-    for k in np.flatnonzero(sizes == best):
-        m = members[offsets[k]:offsets[k + 1]]
-        fingerprint = np.sort(m).tobytes()
-        if fingerprint not in set_keys:
-            set_keys[fingerprint] = tie_break_key(_as_pairs(m, n_cav), ego_xy, cav_xy)
-        a = int(visited[k])
-        keys[k] = set_keys[fingerprint] + (*ego_xy[a // n_cav], *cav_xy[a % n_cav])
-    k_win = min(keys, key=keys.__getitem__)
+    k_win = _tie_broken(np.flatnonzero(sizes == best), visited, members, offsets, ego_xy, cav_xy)
     winner = members[offsets[k_win]:offsets[k_win + 1]]
     in_winner = np.zeros(n_ego * n_cav, dtype=bool)
     in_winner[winner] = True
@@ -309,6 +300,25 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
                      visit=Visit(order, sizes, offsets, members, common))
+
+
+def _tie_broken(tied: np.ndarray, visited: np.ndarray, members: np.ndarray, offsets: np.ndarray,
+                ego_xy: np.ndarray, cav_xy: np.ndarray) -> int:
+    """Which of the ``tied`` visited sets (positions in ``visited``) wins: the one, or the least
+    ``tie_break_key`` followed by the anchor's centres (a key per distinct set)."""
+    if len(tied) == 1:
+        return int(tied[0])
+    n_cav = len(cav_xy)
+    set_keys: dict[bytes, tuple[float, ...]] = {}
+    keys = {}
+    for k in tied:
+        m = members[offsets[k]:offsets[k + 1]]
+        fingerprint = np.sort(m).tobytes()
+        if fingerprint not in set_keys:
+            set_keys[fingerprint] = tie_break_key(_as_pairs(m, n_cav), ego_xy, cav_xy)
+        a = int(visited[k])
+        keys[k] = set_keys[fingerprint] + (*ego_xy[a // n_cav], *cav_xy[a % n_cav])
+    return int(min(keys, key=keys.__getitem__))
 
 
 def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
