@@ -83,7 +83,8 @@ def main() -> None:
     packages = {"this": cbm}
     if args.against is not None:
         if not (args.against / "cbm" / "__init__.py").is_file():
-            raise SystemExit(f"bench_steps: --against {args.against}: no cbm/__init__.py there")
+            print(f"bench_steps: --against {args.against}: no cbm/__init__.py there", file=sys.stderr)
+            raise SystemExit(2)
         packages = {"base": other_cbm(args.against.resolve()), "this": cbm}
     for scene in args.scenes:
         times = measure(scene, packages, args.rounds, args.trials)
