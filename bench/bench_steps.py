@@ -79,6 +79,11 @@ def main() -> None:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--trials", type=int, default=7)
     args = parser.parse_args()
+    for scene in args.scenes:
+        layout, _, size = scene.partition(":")
+        if layout not in ("street", "dense") or not size.isdigit():
+            print(f"bench_steps: --scenes {scene}: expected street:SIZE or dense:SIZE", file=sys.stderr)
+            raise SystemExit(2)
     import cbm
     packages = {"this": cbm}
     if args.against is not None:
