@@ -54,11 +54,13 @@ def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_sta
 
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
-          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2):
+          g_member, g_check, cos2_sigma1, sigma2, sigma3, count2):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
-    within sigma3 as (anchor, member) rows. A grid row with ``check``
+    within sigma3 as (anchor, member) rows. Each pass scans only the cells its own threshold's
+    window covers, and a negative threshold skips its pass: a sigma2 edit counts again without
+    listing the votes, a sigma3 edit lists them without counting. A grid row with ``check``
     s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
     time are visited column by column of the grid, so consecutive queries read the same few
     columns (from the cache) and the chunk's counters stay in it too. The counting loop combines
@@ -66,7 +68,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
     full speed); the votes are listed in a second, narrower pass over the cells within sigma3 (a
     branch in the counting loop would slow it down more than the second pass costs), also without
     branches: every row is written and the count moves on only for an accepted one, in lists grown
-    beforehand to hold the whole window. A negative sigma3 lists nothing.
+    beforehand to hold the whole window.
     """
     n_cav = signs.shape[1]
     vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
@@ -81,16 +83,15 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             z2 = zx * zx + zy * zy
             zu, zv = zx + zy, zx - zy
-            k0, k1, c0, c1 = cells(zu, zv, radius, u0, v0, cell, nx, ny)
-            for k in range(k0, k1 + 1):
+            k0, k1, c0, c1 = cells(zu, zv, sigma2, u0, v0, cell, nx, ny)
+            for k in range(k0, k1 + 1 if sigma2 >= 0.0 else k0):
                 for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
                     b, wx, wy = g_anchor[v], gx[v], gy[v]
-                    l1 = abs(zx - wx) + abs(zy - wy)
                     dot = zx * wx + zy * wy
                     squared_norms = z2 * (wx * wx + wy * wy)
-                    ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
-                          & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
-                    count2[row + b] += ok & (l1 <= sigma2)
+                    count2[row + b] += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
+                                        & (abs(zx - wx) + abs(zy - wy) <= sigma2) & (squared_norms > 0.0)
+                                        & (dot * dot >= cos2_sigma1 * squared_norms))
             if sigma3 < 0.0:
                 continue
             k0, k1, c0, c1 = cells(zu, zv, sigma3, u0, v0, cell, nx, ny)
@@ -127,8 +128,10 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
     at a time, then their ego objects are joined in parts; the votes come back as the parts'
     (anchor, member) rows, in a fixed order (not joined into one array: that would hold them twice).
-    ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
-    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
+    The grids are built for ``radius`` (at least both thresholds); a negative ``sigma2`` counts
+    nothing (``count2`` is not read), a negative ``sigma3`` lists nothing. ``kept`` holds the grids
+    between calls on the same contexts: a grid serves any radius (every vector of the cells a window
+    covers is tested exactly), kept while its cells suit the radius."""
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
     parallel = len(ego.vectors) >= PARALLEL_FROM
@@ -151,7 +154,7 @@ def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context,
     for group, grid in zip(batch, grids):
         common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
                   grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
-                  radius, sigma2, sigma3, count2)
+                  sigma2, sigma3, count2)
         parts = np.array_split(group, THREADS) if parallel else [group]
         jobs += [run(_join, part, *common) for part in parts if len(part)]
     return [job.result() for job in jobs]
