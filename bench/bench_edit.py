@@ -51,19 +51,22 @@ def app_edits(dataset: str, edits: int) -> dict[str, float]:
 
 
 def plain_matches(trials: int) -> dict[str, float]:
-    """Median ms of ``cbm.match`` without reuse on each of ``SCENES`` (``trials`` trials each)."""
+    """Median ms of ``cbm.match`` without reuse on each of ``SCENES`` (``trials`` trials each), and
+    of its local matching (the join and what it lists; ``MatchResult.timings``)."""
     from bench_match import trials_for
 
     from cbm import CBMParams, match
 
     times = {}
     for layout, size in SCENES:
-        spent = []
+        spent, joined = [], []
         for trial in trials_for(size, trials, layout):
             started = time.perf_counter()
-            match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
+            result = match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
             spent.append(1000 * (time.perf_counter() - started))
+            joined.append(1000 * result.timings["local_matching"])
         times[f"match {layout} {size}"] = statistics.median(spent)
+        times[f"match {layout} {size}: local matching"] = statistics.median(joined)
     return times
 
 

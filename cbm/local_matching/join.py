@@ -84,9 +84,12 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
                 _count_query(zx, zy, slot_row[u // per_anchor], u0, v0, cell, nx, ny, start, gx, gy, g_slot,
                              cos2_sigma1, sigma2, slots)
             if sigma3 >= 0.0:
-                vote_anchor, vote_member, n_votes = _vote_query(
-                    zx, zy, u // per_anchor, ego_member[u], signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
-                    g_member, g_check, cos2_sigma1, sigma3, vote_anchor, vote_member, n_votes)
+                most = n_votes + _window_rows(zx, zy, sigma3, u0, v0, cell, nx, ny, start)
+                while most > len(vote_anchor):
+                    vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
+                n_votes = _vote_query(zx, zy, u // per_anchor, ego_member[u], signs, u0, v0, cell, nx, ny, start, gx,
+                                      gy, g_anchor, g_member, g_check, cos2_sigma1, sigma3, vote_anchor, vote_member,
+                                      n_votes)
         if sigma2 >= 0.0:
             _add_slots(ego_ids[chunk:last], signs, slots, count2)
     return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
@@ -114,17 +117,12 @@ def _vote_query(zx, zy, i, member, signs, u0, v0, cell, nx, ny, start, gx, gy, g
                 cos2_sigma1, sigma3, vote_anchor, vote_member, n_votes):
     """The quadruples within sigma3 of one ego vector z of anchor ``i`` (and ``member``) appended
     as (anchor, member) pair ids, without branches: every row is written and the count moves on
-    only for an accepted one, in lists grown beforehand to hold the whole window. Returns the lists
-    and their length."""
+    only for an accepted one, in lists grown beforehand to hold the whole window
+    (``_window_rows``). Returns the lists' new length."""
     n_cav = signs.shape[1]
     sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
     z2 = zx * zx + zy * zy
     k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma3, u0, v0, cell, nx, ny)
-    most = n_votes
-    for k in range(k0, k1 + 1):
-        most += start[k * ny + c1 + 1] - start[k * ny + c0]
-    while most > len(vote_anchor):
-        vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
     for k in range(k0, k1 + 1):
         for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
             b, wx, wy = g_anchor[v], gx[v], gy[v]
@@ -135,7 +133,17 @@ def _vote_query(zx, zy, i, member, signs, u0, v0, cell, nx, ny, start, gx, gy, g
             n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
                         & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
                         & (dot * dot >= cos2_sigma1 * squared_norms))
-    return vote_anchor, vote_member, n_votes
+    return n_votes
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _window_rows(zx, zy, radius, u0, v0, cell, nx, ny, start):
+    """The grid rows in the window of radius ``radius`` around z."""
+    k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
+    rows = 0
+    for k in range(k0, k1 + 1):
+        rows += start[k * ny + c1 + 1] - start[k * ny + c0]
+    return rows
 
 
 @numba.njit(cache=True, nogil=True)
