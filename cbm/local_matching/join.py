@@ -84,10 +84,11 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
                 _count_query(zx, zy, slot_row[u // per_anchor], u0, v0, cell, nx, ny, start, gx, gy, g_slot,
                              cos2_sigma1, sigma2, slots)
             if sigma3 >= 0.0:
-                most = n_votes + _window_rows(zx, zy, sigma3, u0, v0, cell, nx, ny, start)
+                k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma3, u0, v0, cell, nx, ny)
+                most = n_votes + _window_rows(k0, k1, c0, c1, ny, start)
                 while most > len(vote_anchor):
                     vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
-                n_votes = _vote_query(zx, zy, u // per_anchor, ego_member[u], signs, u0, v0, cell, nx, ny, start, gx,
+                n_votes = _vote_query(zx, zy, u // per_anchor, ego_member[u], signs, k0, k1, c0, c1, ny, start, gx,
                                       gy, g_anchor, g_member, g_check, cos2_sigma1, sigma3, vote_anchor, vote_member,
                                       n_votes)
         if sigma2 >= 0.0:
@@ -113,16 +114,15 @@ def _count_query(zx, zy, slot_row, u0, v0, cell, nx, ny, start, gx, gy, g_slot, 
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _vote_query(zx, zy, i, member, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor, g_member, g_check,
+def _vote_query(zx, zy, i, member, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check,
                 cos2_sigma1, sigma3, vote_anchor, vote_member, n_votes):
     """The quadruples within sigma3 of one ego vector z of anchor ``i`` (and ``member``) appended
     as (anchor, member) pair ids, without branches: every row is written and the count moves on
-    only for an accepted one, in lists grown beforehand to hold the whole window
-    (``_window_rows``). Returns the lists' new length."""
+    only for an accepted one, in lists grown beforehand to hold the whole window, the cells c0..c1
+    of the columns k0..k1 (``_window_rows``). Returns the lists' new length."""
     n_cav = signs.shape[1]
     sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
     z2 = zx * zx + zy * zy
-    k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma3, u0, v0, cell, nx, ny)
     for k in range(k0, k1 + 1):
         for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
             b, wx, wy = g_anchor[v], gx[v], gy[v]
@@ -137,9 +137,8 @@ def _vote_query(zx, zy, i, member, signs, u0, v0, cell, nx, ny, start, gx, gy, g
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _window_rows(zx, zy, radius, u0, v0, cell, nx, ny, start):
-    """The grid rows in the window of radius ``radius`` around z."""
-    k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
+def _window_rows(k0, k1, c0, c1, ny, start):
+    """The grid rows in the cells c0..c1 of the columns k0..k1 (``grid.cells``)."""
     rows = 0
     for k in range(k0, k1 + 1):
         rows += start[k * ny + c1 + 1] - start[k * ny + c0]
