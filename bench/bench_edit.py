@@ -8,7 +8,7 @@ of ``bench_match.py`` (SIND protocol, street and dense layouts), median per tria
 runs in a process of its own, the checkouts alternating round by round on the same machine (a loaded
 machine shifts both alike), and the table gives the medians over the rounds and their ratio.
 
-    python bench/bench_edit.py [--roots . ../baseline] [--rounds 5] [--datasets synthetic:300]
+    python bench/bench_edit.py [--roots . ../baseline] [--rounds 5] [--datasets synthetic:300] [--sizes 100 300]
 """
 from __future__ import annotations
 
@@ -26,8 +26,8 @@ EDITS = {"sigma2": (2.5, 3.0), "sigma3": (0.8, 1.0), "sigma1": (9.0, 10.0)}
 """The threshold edits timed, each alternating between two values (the default preset's last)."""
 PACKAGES = ("cbm", "loaders", "evaluation", "app")
 """The project's packages: a round must import every one of them from its own checkout."""
-SCENES = (("street", 100), ("street", 300), ("dense", 100), ("dense", 300))
-"""(layout, objects per agent) of the plain matches (``bench_match.trials_for``)."""
+LAYOUTS = ("street", "dense")
+"""The layouts of the plain matches (``bench_match.trials_for``)."""
 
 
 def app_edits(dataset: str, edits: int) -> dict[str, float]:
@@ -53,15 +53,16 @@ def app_edits(dataset: str, edits: int) -> dict[str, float]:
     return times
 
 
-def plain_matches(trials: int) -> dict[str, float]:
-    """Median ms of ``cbm.match`` without reuse on each of ``SCENES`` (``trials`` trials each), and
+def plain_matches(sizes: list[int], trials: int) -> dict[str, float]:
+    """Median ms of ``cbm.match`` without reuse on both layouts at each of ``sizes`` objects per agent
+    (``trials`` trials each), and
     of its local matching (the join and what it lists; ``MatchResult.timings``)."""
     from bench_match import trials_for
 
     from cbm import CBMParams, match
 
     times = {}
-    for layout, size in SCENES:
+    for layout, size in ((layout, size) for size in sizes for layout in LAYOUTS):
         spent, joined = [], []
         for trial in trials_for(size, trials, layout):
             started = time.perf_counter()
@@ -81,7 +82,7 @@ def one_round(args: argparse.Namespace) -> dict[str, float]:
     times = {}
     for dataset in args.datasets:
         times.update(app_edits(dataset, args.edits))
-    times.update(plain_matches(args.trials))
+    times.update(plain_matches(args.sizes, args.trials))
     mixed = [name for name, module in list(sys.modules.items())
              if name.split(".")[0] in PACKAGES and Path.cwd() not in Path(module.__file__).resolve().parents]
     if mixed:
@@ -93,7 +94,7 @@ def run_round(root: Path, args: argparse.Namespace) -> dict[str, float]:
     """One round measured in a process whose ``cbm`` and ``app`` are ``root``'s."""
     env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"), str(HERE.parent)]))
     command = [sys.executable, str(HERE), "--one", "--edits", str(args.edits), "--trials", str(args.trials),
-               "--datasets", *args.datasets]
+               "--sizes", *map(str, args.sizes), "--datasets", *args.datasets]
     out = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True, check=True)
     return json.loads(out.stdout.strip().splitlines()[-1])
 
@@ -105,7 +106,9 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=5)
     parser.add_argument("--edits", type=int, default=10)
     parser.add_argument("--trials", type=int, default=5)
-    parser.add_argument("--datasets", nargs="+", default=["synthetic:300"])
+    parser.add_argument("--datasets", nargs="*", default=["synthetic:300"])
+    parser.add_argument("--sizes", type=int, nargs="*", default=[100, 300],
+                        help="objects per agent of the plain matches")
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
