@@ -91,11 +91,14 @@ def one_round(args: argparse.Namespace) -> dict[str, float]:
 
 
 def run_round(root: Path, args: argparse.Namespace) -> dict[str, float]:
-    """One round measured in a process whose ``cbm`` and ``app`` are ``root``'s."""
-    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"), str(HERE.parent)]))
+    """One round measured in a process whose packages (and ``bench_match``) are ``root``'s."""
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests"), str(root / "bench")]))
     command = [sys.executable, str(HERE), "--one", "--edits", str(args.edits), "--trials", str(args.trials),
                "--sizes", *map(str, args.sizes), "--datasets", *args.datasets]
-    out = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True, check=True)
+    out = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True)
+    if out.returncode != 0:
+        last = (out.stderr.strip().splitlines() or [f"exit status {out.returncode}"])[-1]
+        raise SystemExit(f"bench_edit: the round in {root} failed: {last}")
     return json.loads(out.stdout.strip().splitlines()[-1])
 
 
@@ -112,6 +115,7 @@ def main() -> int:
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
+        sys.path[:] = [entry for entry in sys.path if entry != str(HERE.parent)]  # the round's own bench/ instead
         print(json.dumps(one_round(args)))
         return 0
     roots = [root.resolve() for root in args.roots]
