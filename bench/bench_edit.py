@@ -115,7 +115,8 @@ def main() -> int:
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
-        sys.path[:] = [entry for entry in sys.path if entry != str(HERE.parent)]  # the round's own bench/ instead
+        if sys.path[0] == str(HERE.parent):
+            del sys.path[0]  # the script's own bench/: the round's (on PYTHONPATH) is used instead
         print(json.dumps(one_round(args)))
         return 0
     roots = [root.resolve() for root in args.roots]
