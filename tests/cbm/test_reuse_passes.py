@@ -41,3 +41,12 @@ def test_a_new_input_computes_both_again():
     outcome(trial("street", 0), CBMParams(), reuse)
     outcome(trial("street", 1), CBMParams(), reuse)
     assert [(p.passes("count"), p.passes("votes")) for p in reuse._entries.values()] == [(1, 1), (1, 1)]
+
+
+def test_the_kept_counts_and_voting_sets_count_in_the_memory_budget():
+    t, reuse = trial("dense", 0), Reuse()
+    outcome(t, CBMParams(), reuse)
+    kept = next(iter(reuse._entries.values())).kept
+    before = reuse.nbytes()
+    count, voted_by = kept.pop("count")[1], kept.pop("voted_by")[1]
+    assert before - reuse.nbytes() == count.nbytes + voted_by.start.nbytes + voted_by.member.nbytes > 0
