@@ -17,7 +17,7 @@ from .inputs import checked_boxes, checked_transform
 from .local_matching import CandidateSets, count_candidates
 from .params import CBMParams
 from .result import MatchResult
-from .reuse import Reuse, prepare
+from .reuse import Reuse, prepare, recall, remember
 from .selection import select
 
 
@@ -61,7 +61,9 @@ class Sets:
 def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
                timings: dict[str, float] | None = None, reuse: Reuse | None = None) -> Sets:
     """Steps 1-4 and the candidate and voting sets, for checked inputs; with ``reuse``, what an
-    earlier call on the same input built and no threshold changes is taken from it."""
+    earlier call on the same input built and no threshold changes is taken from it, and so are the
+    counts of eq. 8 when sigma1 and sigma2 are unchanged and the voting sets of eq. 9 when sigma1 and
+    sigma3 are (``cbm.reuse.recall``)."""
     timings = {} if timings is None else timings
     started = time.perf_counter()
     ready = prepare(ego, cav, init, params.heading) if reuse is None else reuse.prepared(ego, cav, init, params.heading)
@@ -70,14 +72,20 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     t = time.perf_counter()
     timings["context"] = t - started
 
-    candidates, votes = count_candidates(
-        ego_context, cav_context, ego_heading, signs, params.sigma1_rad, params.sigma2,
-        params.sigma3 if params.consensus else None, None if reuse is None else ready.kept)
+    kept, sigma3 = None if reuse is None else ready.kept, params.sigma3 if params.consensus else None
+    voting_key = (params.sigma1_rad, sigma3)
+    voted_by = None if sigma3 is None else recall(kept, "voted_by", voting_key)
+    candidates, votes = count_candidates(ego_context, cav_context, ego_heading, signs, params.sigma1_rad,
+                                         params.sigma2, sigma3, kept, list_votes=voted_by is None)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
 
     n_pairs = len(ego) * len(cav)
-    voted_by = voted_by_member(votes, n_pairs) if params.consensus else PairSets.empty(n_pairs)
+    if sigma3 is None:
+        voted_by = PairSets.empty(n_pairs)
+    elif voted_by is None:
+        voted_by = voted_by_member(votes, n_pairs)
+        remember(kept, "voted_by", voting_key, voted_by)
     timings["voting_sets"] = time.perf_counter() - t
     return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates,
                 voted_by)

@@ -4,7 +4,10 @@ what follows it.
 
 Per input (the boxes, the initial pose and the heading mode; ``Prepared``): steps 1-2 (the CAV boxes
 in the ego frame, folded headings, the signs of eq. 6's frames), the context vectors of eq. 5-6,
-the sorted blocks that list candidate sets, and the grids of the join for the latest search radius.
+the sorted blocks that list candidate sets, and the grids of the join for the latest search radius;
+and, each keyed by exactly the thresholds it depends on, the latest card(L_ij) (sigma1, sigma2) and
+the latest voting sets (sigma1, sigma3): a sigma2 edit counts again without listing the votes, a
+sigma3 edit lists the votes without counting, a sigma1 edit does both (``recall``, ``remember``).
 A change of noise or frame changes the boxes, so it is a new input. ``Reuse`` keeps the ``FRAMES``
 inputs used last (fewer when they hold more than ``MOST_BYTES``) and forgets the least recently
 used one.
@@ -41,6 +44,30 @@ class Prepared:
     ego_context: Context
     cav_context: Context
     kept: dict = field(default_factory=dict, compare=False)
+
+    def passes(self, name: str) -> int:
+        """How many times the join's pass ``name`` (``"count"``: card(L_ij); ``"votes"``: the voting
+        quadruples) ran on this input (``ran``)."""
+        return self.kept.get("passes", {}).get(name, 0)
+
+
+def recall(kept: dict | None, name: str, key: tuple):
+    """What ``remember`` kept as ``name`` for exactly ``key`` (the thresholds it depends on), else None."""
+    found = None if kept is None else kept.get(name)
+    return found[1] if found is not None and found[0] == key else None
+
+
+def remember(kept: dict | None, name: str, key: tuple, value) -> None:
+    """Keep ``value`` as ``name`` for ``key``, replacing the one kept before."""
+    if kept is not None:
+        kept[name] = (key, value)
+
+
+def ran(kept: dict | None, name: str) -> None:
+    """Count one run of the pass ``name`` on the input of ``kept`` (``Prepared.passes``)."""
+    if kept is not None:
+        passes = kept.setdefault("passes", {})
+        passes[name] = passes.get(name, 0) + 1
 
 
 def prepare(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str) -> Prepared:

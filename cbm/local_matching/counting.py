@@ -1,36 +1,52 @@
 """Step 4 of local matching as one call: card(L_ij) of every anchor and the voting quadruples
 (paper eq. 7-8, Algorithm 1), from the grid (``grid``), the join (``join``) and the candidate
 sets listed on demand (``candidates``). Pair ids are ``i * Nc + j`` throughout.
+
+card(L_ij) depends on (sigma1, sigma2) only, the voting quadruples on (sigma1, sigma3) only: with
+``kept`` (``cbm.reuse.Prepared.kept``) the counts of the latest (sigma1, sigma2) are kept, and the
+join runs only the passes an edit changed.
 """
 from __future__ import annotations
 
 import numpy as np
 
 from ..context import Context
+from ..reuse import ran, recall, remember
 from .candidates import CandidateSets, member_lookup
 from .join import run_join
 
 MOST_PAIRS = 2**31 - 1
 """Most ego x CAV pairs: the voting quadruples are listed as 32-bit pair ids (half the memory)."""
+NOTHING = np.zeros(0, np.int64)
+"""The counters handed to a join that does not count."""
 
 
 def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
-                     sigma2: float, sigma3: float | None,
-                     kept: dict | None = None) -> tuple[CandidateSets, list[tuple[np.ndarray, np.ndarray]]]:
-    """card(L_ij) at sigma2 for every anchor, and (with ``sigma3``) the (anchor, member) rows of every
-    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join, as the
-    join's parts (``run_join``).
-    ``kept`` (``cbm.reuse.Prepared.kept``): the grids and sorted blocks built earlier for the same
-    contexts, read and filled."""
+                     sigma2: float, sigma3: float | None, kept: dict | None = None,
+                     list_votes: bool = True) -> tuple[CandidateSets, list[tuple[np.ndarray, np.ndarray]]]:
+    """card(L_ij) at sigma2 for every anchor, and (with ``sigma3`` and ``list_votes``) the (anchor,
+    member) rows of every quadruple within sigma3 (the voting sets of eq. 9 without their own pairs),
+    from one join, as the join's parts (``run_join``); ``sigma3`` None: the consensus is off.
+    ``kept`` (``cbm.reuse.Prepared.kept``): the grids, sorted blocks and counts built earlier for the
+    same contexts, read and filled; counts kept for this (sigma1, sigma2) are not counted again."""
     n_ego, n_cav = signs.shape
     if n_ego * n_cav > MOST_PAIRS:
         raise ValueError(f"cbm.match: {n_ego} x {n_cav} boxes make more than {MOST_PAIRS} pairs (the voting "
                          "sets keep pair ids in 32 bits)")
-    count2 = np.zeros(n_ego * n_cav, np.int64)
-    radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
-    votes = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2, -1.0 if sigma3 is None else sigma3,
-                     count2, kept)
-    count2 += count2 > 0
+    count2 = recall(kept, "count", (sigma1_rad, sigma2))
+    counting, listing = count2 is None, sigma3 is not None and list_votes
+    votes = []
+    if counting or listing:
+        counters = np.zeros(n_ego * n_cav, np.int64) if counting else NOTHING
+        radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
+        votes = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2 if counting else -1.0,
+                         sigma3 if listing else -1.0, counters, kept)
+        for name, done in (("count", counting), ("votes", listing)):
+            if done:
+                ran(kept, name)
+    if counting:
+        count2 = counters
+        count2 += count2 > 0
+        remember(kept, "count", (sigma1_rad, sigma2), count2)
     candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs)
     return candidates, votes
-

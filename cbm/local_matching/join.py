@@ -54,63 +54,119 @@ def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_sta
 
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
-          g_member, g_check, cos2_sigma1, radius, sigma2, sigma3, count2):
+          g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, count2):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
-    within sigma3 as (anchor, member) rows. A grid row with ``check``
+    within sigma3 as (anchor, member) rows. Each pass scans only the cells its own threshold's
+    window covers, and a negative threshold skips its pass: a sigma2 edit counts again without
+    listing the votes, a sigma3 edit lists them without counting. A grid row with ``check``
     s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
     time are visited column by column of the grid, so consecutive queries read the same few
-    columns (from the cache) and the chunk's counters stay in it too. The counting loop combines
-    the tests of ``grid.accepts`` without branches (the data decide no jump in it, so it runs at
-    full speed); the votes are listed in a second, narrower pass over the cells within sigma3 (a
-    branch in the counting loop would slow it down more than the second pass costs), also without
-    branches: every row is written and the count moves on only for an accepted one, in lists grown
-    beforehand to hold the whole window. A negative sigma3 lists nothing.
+    columns (from the cache) and the chunk's counters stay in it too. The counting pass tests no
+    sign (``_count_query``), the votes are listed in a second, narrower pass over the cells within
+    sigma3 (``_vote_query``).
     """
-    n_cav = signs.shape[1]
+    n_ego, n_cav = signs.shape
     vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
     order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
     column_start = np.empty(nx + 1, np.int64)
+    slots = np.zeros(ANCHORS_PER_CHUNK * 3 * n_cav if sigma2 >= 0.0 else 0, np.int32)
+    slot_row = np.empty(n_ego, np.int64)
     for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
+        last = min(chunk + ANCHORS_PER_CHUNK, len(ego_ids))
+        for n in range(chunk, last):
+            slot_row[ego_ids[n]] = (n - chunk) * 3 * n_cav
         for q in range(_by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order)):
             u = order[q]
-            i = u // per_anchor
-            sign_row = signs[i]
-            row = i * n_cav
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
-            z2 = zx * zx + zy * zy
-            zu, zv = zx + zy, zx - zy
-            k0, k1, c0, c1 = cells(zu, zv, radius, u0, v0, cell, nx, ny)
-            for k in range(k0, k1 + 1):
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-                    b, wx, wy = g_anchor[v], gx[v], gy[v]
-                    l1 = abs(zx - wx) + abs(zy - wy)
-                    dot = zx * wx + zy * wy
-                    squared_norms = z2 * (wx * wx + wy * wy)
-                    ok = (((g_check[v] == 0) | (sign_row[b] == g_check[v])) & (l1 <= radius)
-                          & (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms))
-                    count2[row + b] += ok & (l1 <= sigma2)
-            if sigma3 < 0.0:
-                continue
-            k0, k1, c0, c1 = cells(zu, zv, sigma3, u0, v0, cell, nx, ny)
-            most = n_votes
-            for k in range(k0, k1 + 1):
-                most += start[k * ny + c1 + 1] - start[k * ny + c0]
-            while most > len(vote_anchor):
-                vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
-            member_row = ego_member[u] * n_cav
-            for k in range(k0, k1 + 1):
-                for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-                    b, wx, wy = g_anchor[v], gx[v], gy[v]
-                    dot = zx * wx + zy * wy
-                    squared_norms = z2 * (wx * wx + wy * wy)
-                    vote_anchor[n_votes] = row + b
-                    vote_member[n_votes] = member_row + g_member[v]
-                    n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
-                                & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
-                                & (dot * dot >= cos2_sigma1 * squared_norms))
+            if sigma2 >= 0.0:
+                _count_query(zx, zy, slot_row[u // per_anchor], u0, v0, cell, nx, ny, start, gx, gy, g_slot,
+                             cos2_sigma1, sigma2, slots)
+            if sigma3 >= 0.0:
+                k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma3, u0, v0, cell, nx, ny)
+                most = n_votes + _window_rows(k0, k1, c0, c1, ny, start)
+                while most > len(vote_anchor):
+                    vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
+                n_votes = _vote_query(zx, zy, u // per_anchor, ego_member[u], signs, k0, k1, c0, c1, ny, start, gx,
+                                      gy, g_anchor, g_member, g_check, cos2_sigma1, sigma3, vote_anchor, vote_member,
+                                      n_votes)
+        if sigma2 >= 0.0:
+            _add_slots(ego_ids[chunk:last], signs, slots, count2)
     return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _count_query(zx, zy, slot_row, u0, v0, cell, nx, ny, start, gx, gy, g_slot, cos2_sigma1, sigma2, slots):
+    """Eq. 7 within sigma2 for one ego vector z against the rows of its window: each accepted row
+    adds 1 to its slot (``slots``), the row's anchor and sign (``_slots``) from ``slot_row`` on. The
+    loop tests no sign and takes no branch the data decide, so it runs at full speed; which slot
+    counts is settled per anchor pair afterwards (``_add_slots``)."""
+    z2 = zx * zx + zy * zy
+    k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma2, u0, v0, cell, nx, ny)
+    for k in range(k0, k1 + 1):
+        for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+            wx, wy = gx[v], gy[v]
+            dot = zx * wx + zy * wy
+            squared_norms = z2 * (wx * wx + wy * wy)
+            slots[slot_row + g_slot[v]] += ((abs(zx - wx) + abs(zy - wy) <= sigma2) & (squared_norms > 0.0)
+                                            & (dot * dot >= cos2_sigma1 * squared_norms))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _vote_query(zx, zy, i, member, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check,
+                cos2_sigma1, sigma3, vote_anchor, vote_member, n_votes):
+    """The quadruples within sigma3 of one ego vector z of anchor ``i`` (and ``member``) appended
+    as (anchor, member) pair ids, without branches: every row is written and the count moves on
+    only for an accepted one, in lists grown beforehand to hold the whole window, the cells c0..c1
+    of the columns k0..k1 (``_window_rows``). Returns the lists' new length."""
+    n_cav = signs.shape[1]
+    sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
+    z2 = zx * zx + zy * zy
+    for k in range(k0, k1 + 1):
+        for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
+            b, wx, wy = g_anchor[v], gx[v], gy[v]
+            dot = zx * wx + zy * wy
+            squared_norms = z2 * (wx * wx + wy * wy)
+            vote_anchor[n_votes] = row + b
+            vote_member[n_votes] = member_row + g_member[v]
+            n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
+                        & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
+                        & (dot * dot >= cos2_sigma1 * squared_norms))
+    return n_votes
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _window_rows(k0, k1, c0, c1, ny, start):
+    """The grid rows in the cells c0..c1 of the columns k0..k1 (``grid.cells``)."""
+    rows = 0
+    for k in range(k0, k1 + 1):
+        rows += start[k * ny + c1 + 1] - start[k * ny + c0]
+    return rows
+
+
+@numba.njit(cache=True, nogil=True)
+def _slots(g_anchor, g_check):
+    """Each grid row's slot among its anchor's three counters: ``3 b + check + 1`` (sign -1, fixed
+    sign, sign +1)."""
+    slot = np.empty(len(g_anchor), np.int32)
+    for v in range(len(g_anchor)):
+        slot[v] = 3 * g_anchor[v] + g_check[v] + 1
+    return slot
+
+
+@numba.njit(cache=True, nogil=True)
+def _add_slots(ego_ids, signs, slots, count2):
+    """card(L_ij) of the chunk's ego objects ``ego_ids`` from their slots: per anchor pair (i, b) the
+    rows of a fixed sign plus those turned by ``signs[i, b]``; the slots are zeroed for the next
+    chunk. A slot holds at most (Ne - 1)(Nc - 1) < 2^31 (``counting.MOST_PAIRS``): int32 suffices."""
+    n_cav = signs.shape[1]
+    for n in range(len(ego_ids)):
+        i, at = ego_ids[n], 3 * n * n_cav
+        for b in range(n_cav):
+            turned = slots[at + 3 * b + 2] if signs[i, b] > 0 else slots[at + 3 * b]
+            count2[i * n_cav + b] += slots[at + 3 * b + 1] + turned
+        slots[at:at + 3 * n_cav] = 0
 
 
 @numba.njit(cache=True, nogil=True)
@@ -127,8 +183,10 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
     at a time, then their ego objects are joined in parts; the votes come back as the parts'
     (anchor, member) rows, in a fixed order (not joined into one array: that would hold them twice).
-    ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
-    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
+    The grids are built for ``radius`` (at least both thresholds); a negative ``sigma2`` counts
+    nothing (``count2`` is not read), a negative ``sigma3`` lists nothing. ``kept`` holds the grids
+    between calls on the same contexts: a grid serves any radius (every vector of the cells a window
+    covers is tested exactly), kept while its cells suit the radius."""
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
     parallel = len(ego.vectors) >= PARALLEL_FROM
@@ -149,9 +207,10 @@ def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context,
     grids = _grids(batch, first, cav, signs, radius, run, kept)
     jobs = []
     for group, grid in zip(batch, grids):
+        slot = _slots(grid.anchor, grid.check) if sigma2 >= 0.0 else grid.anchor
         common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
-                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, math.cos(sigma1_rad) ** 2,
-                  radius, sigma2, sigma3, count2)
+                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, slot, math.cos(sigma1_rad) ** 2,
+                  sigma2, sigma3, count2)
         parts = np.array_split(group, THREADS) if parallel else [group]
         jobs += [run(_join, part, *common) for part in parts if len(part)]
     return [job.result() for job in jobs]
