@@ -55,7 +55,7 @@ class VectorGrid:
 def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
     sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
-    Two passes over the vectors: their extent, then a counting sort that turns them as it places them."""
+    Three passes over the vectors: their extent, then a counting sort that turns them as it places them."""
     sign = cav_sign.astype(np.int64)
     n, u0, v0, u1, v1 = _extent(cav.vectors, cav.anchor, sign)
     if n == 0:
@@ -98,63 +98,38 @@ def _extent(vectors, anchor, cav_sign):
 def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
-    row's sign. Sorted by column, then each column by cell: both passes count into small arrays
-    that stay in the cache, where one pass over all the cells would miss it on every row.
-    Returns (start, x, y, anchor, member, check). ``anchor`` and ``member`` are CAV objects, fewer
-    than 2^31 (``local_matching.MOST_PAIRS`` bounds Ne x Nc), so int32 holds them; ``check`` is
-    -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
-    source, turn, kx, ky = np.empty(n, np.int32), np.empty(n, np.int8), np.empty(n, np.int32), np.empty(n, np.int32)
-    column_start = np.zeros(nx + 1, np.int64)
+    row's sign. Two passes over the vectors: one counts the rows of each cell (``start`` shifted by
+    two, each row's cell kept in ``key``), one places each row at its cell's next free place
+    (``start`` shifted by one, so that it ends unshifted). Returns (start, x, y, anchor, member,
+    check). ``anchor`` and ``member`` are CAV objects, fewer than 2^31 (``local_matching.MOST_PAIRS``
+    bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
+    start, key = np.zeros(nx * ny + 2, np.int64), np.empty(n, np.int32)
     r = 0
     for v in range(len(vectors)):
         first, last, step = _turned_signs(cav_sign[anchor[v]])
         for sign in range(first, last, step):
             x, y = sign * vectors[v, 0], sign * vectors[v, 1]
-            source[r], turn[r] = v, sign
-            kx[r] = min(int(math.floor((x + y - u0) / cell)), nx - 1)
-            ky[r] = min(int(math.floor((x - y - v0) / cell)), ny - 1)
-            column_start[kx[r] + 1] += 1
+            k = (min(int(math.floor((x + y - u0) / cell)), nx - 1) * ny
+                 + min(int(math.floor((x - y - v0) / cell)), ny - 1))
+            key[r] = k
+            start[k + 2] += 1
             r += 1
-    for k in range(nx):
-        column_start[k + 1] += column_start[k]
-    by_column, fill = np.empty(n, np.int32), column_start[:-1].copy()
-    for r in range(n):
-        by_column[fill[kx[r]]] = r
-        fill[kx[r]] += 1
-    start = np.empty(nx * ny + 1, np.int64)
-    start[nx * ny] = n
+    for k in range(2, len(start)):
+        start[k] += start[k - 1]
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
-    cell_start = np.empty(ny + 1, np.int64)
-    for k in range(nx):
-        rows = by_column[column_start[k]:column_start[k + 1]]
-        _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, column_start[k], cell_start, gx, gy,
-                      g_anchor, g_member, g_check)
-        start[k * ny:(k + 1) * ny] = cell_start[:ny]
-    return start, gx, gy, g_anchor, g_member, g_check
-
-
-@numba.njit(cache=True, nogil=True)
-def _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, first, cell_start, gx, gy, g_anchor,
-                  g_member, g_check):
-    """The ``rows`` of one column (in their order) into their cells from grid row ``first`` on;
-    ``cell_start`` receives where each cell of the column starts."""
-    cell_start[:] = 0
-    for r in rows:
-        cell_start[ky[r] + 1] += 1
-    cell_start[0] = first
-    for c in range(len(cell_start) - 1):
-        cell_start[c + 1] += cell_start[c]
-    for r in rows:
-        row = cell_start[ky[r]]
-        cell_start[ky[r]] += 1
-        v, sign = source[r], turn[r]
-        gx[row], gy[row] = sign * vectors[v, 0], sign * vectors[v, 1]
-        g_anchor[row], g_member[row] = anchor[v], member[v]
-        g_check[row] = 0 if cav_sign[anchor[v]] != 0 else sign
-    for c in range(len(cell_start) - 1, 0, -1):
-        cell_start[c] = cell_start[c - 1]
-    cell_start[0] = first
+    r = 0
+    for v in range(len(vectors)):
+        fixed = cav_sign[anchor[v]]
+        first, last, step = _turned_signs(fixed)
+        for sign in range(first, last, step):
+            row = start[key[r] + 1]
+            start[key[r] + 1] = row + 1
+            gx[row], gy[row] = sign * vectors[v, 0], sign * vectors[v, 1]
+            g_anchor[row], g_member[row] = anchor[v], member[v]
+            g_check[row] = 0 if fixed != 0 else sign
+            r += 1
+    return start[:-1], gx, gy, g_anchor, g_member, g_check
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
