@@ -29,14 +29,39 @@ class SortedBlocks:
 
 
 def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
-    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``)."""
+    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``),
+    equal keys in their order in the context (a stable sort): numpy's quicksort orders the keys,
+    ``_gathered`` puts the equal ones back in order as it gathers the rows."""
     per_anchor = max(n_objects - 1, 0)
-    shape = (len(context.vectors) // max(per_anchor, 1), per_anchor)
-    key = (context.vectors[:, 0] + context.vectors[:, 1]).reshape(shape)
-    order = np.argsort(key, axis=1, kind="stable")
-    key, x, y, member = (np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
-                         for values in (key, context.vectors[:, 0], context.vectors[:, 1], context.member))
-    return SortedBlocks(key, x, y, member, per_anchor)
+    rows = len(context.vectors)
+    key = context.vectors[:, 0] + context.vectors[:, 1]
+    sorted_key, x, y, member = np.empty(rows), np.empty(rows), np.empty(rows), np.empty(rows, context.member.dtype)
+    if rows:
+        order = np.argsort(key.reshape(rows // per_anchor, per_anchor), axis=1)
+        _gathered(key, context.vectors, context.member, order, sorted_key, x, y, member)
+    return SortedBlocks(sorted_key, x, y, member, per_anchor)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gathered(key, vectors, member, order, sorted_key, x, y, sorted_member):
+    """Block by block (row ``b`` of ``order``, the order of the keys of rows ``b * per_anchor`` on),
+    the rows in order of their keys into ``sorted_key``, ``x``, ``y``, ``sorted_member``; each run
+    of equal keys in increasing row order first (``order`` is changed), as a stable sort leaves them."""
+    per_anchor = order.shape[1]
+    for b in range(order.shape[0]):
+        lo, block = b * per_anchor, order[b]
+        q = 0
+        while q < per_anchor:
+            end = q + 1
+            while end < per_anchor and key[lo + block[end]] == key[lo + block[q]]:
+                end += 1
+            if end - q > 1:
+                block[q:end] = np.sort(block[q:end])
+            for k in range(q, end):
+                row = lo + block[k]
+                sorted_key[lo + k], x[lo + k], y[lo + k] = key[row], vectors[row, 0], vectors[row, 1]
+                sorted_member[lo + k] = member[row]
+            q = end
 
 
 @numba.njit(cache=True, nogil=True)
