@@ -55,9 +55,10 @@ class VectorGrid:
 def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
     sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
-    Three passes over the vectors: their extent, then a counting sort that turns them as it places them."""
+    Two passes over the vectors (their extent comes from ``Context.bounds``): a counting sort that
+    turns them as it places them."""
     sign = cav_sign.astype(np.int64)
-    n, u0, v0, u1, v1 = _extent(cav.vectors, cav.anchor, sign)
+    n, u0, v0, u1, v1 = _extent(cav.bounds, sign, len(cav.vectors) // max(len(cav.bounds), 1))
     if n == 0:
         empty, ids = np.zeros(0), np.zeros(0, np.int32)
         return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), empty, empty.copy(), ids, ids.copy(),
@@ -80,17 +81,19 @@ def _turned_signs(fixed):
 
 
 @numba.njit(cache=True, nogil=True)
-def _extent(vectors, anchor, cav_sign):
+def _extent(bounds, cav_sign, per_anchor):
     """(rows, lowest u, lowest v, highest u, highest v) of the turned vectors in u = x + y, v = x - y:
-    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies."""
+    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies. From
+    each object's ``Context.bounds``: turned by -1, a vector's u and v change sign exactly."""
     n, u0, v0, u1, v1 = 0, np.inf, np.inf, -np.inf, -np.inf
-    for r in range(len(vectors)):
-        first, last, step = _turned_signs(cav_sign[anchor[r]])
-        for sign in range(first, last, step):
-            x, y = sign * vectors[r, 0], sign * vectors[r, 1]
-            u, v = x + y, x - y
-            u0, v0, u1, v1 = min(u0, u), min(v0, v), max(u1, u), max(v1, v)
-            n += 1
+    for a in range(len(bounds)):
+        if cav_sign[a] >= 0:
+            u0, u1, v0, v1 = min(u0, bounds[a, 0]), max(u1, bounds[a, 1]), min(v0, bounds[a, 2]), max(v1, bounds[a, 3])
+            n += per_anchor
+        if cav_sign[a] <= 0:
+            u0, u1 = min(u0, -bounds[a, 1]), max(u1, -bounds[a, 0])
+            v0, v1 = min(v0, -bounds[a, 3]), max(v1, -bounds[a, 2])
+            n += per_anchor
     return n, u0, v0, u1, v1
 
 
@@ -114,8 +117,10 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
             key[r] = k
             start[k + 2] += 1
             r += 1
+    total = 0
     for k in range(2, len(start)):
-        start[k] += start[k - 1]
+        total += start[k]
+        start[k] = total
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
     r = 0
