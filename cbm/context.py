@@ -25,8 +25,18 @@ def pair_signs(ego_heading: np.ndarray, cav_heading: np.ndarray, mode: HeadingMo
     """
     if mode == "fold":
         return np.ones((len(ego_heading), len(cav_heading)))
-    difference = np.abs(cav_heading[None, :] - ego_heading[:, None])
-    return np.where(difference <= np.pi / 2, 1.0, -1.0)
+    signs = np.empty((len(ego_heading), len(cav_heading)))
+    _fill_signs(np.asarray(ego_heading, dtype=float), np.asarray(cav_heading, dtype=float), signs)
+    return signs
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_signs(ego_heading, cav_heading, signs):
+    """``signs[i, j]`` = +1 where |cav_heading[j] - ego_heading[i]| <= pi / 2, else -1 (one pass,
+    no (Ne, Nc) temporaries)."""
+    for i in range(len(ego_heading)):
+        for j in range(len(cav_heading)):
+            signs[i, j] = 1.0 if abs(cav_heading[j] - ego_heading[i]) <= np.pi / 2 else -1.0
 
 
 @dataclass(frozen=True)

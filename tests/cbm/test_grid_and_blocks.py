@@ -5,7 +5,7 @@ import math
 import numpy as np
 import pytest
 
-from cbm.context import build_context
+from cbm.context import build_context, pair_signs
 from cbm.local_matching import build_grid, sorted_blocks
 
 
@@ -89,3 +89,13 @@ def test_context_rows_are_every_ordered_pair_in_the_anchors_frame(kind):
     d = xy[member] - xy[anchor]
     assert np.array_equal(context.anchor, anchor) and np.array_equal(context.member, member)
     assert np.array_equal(context.vectors, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1))
+
+
+def test_pair_signs_turn_the_cav_frame_past_a_quarter_turn_exactly_at_the_boundary():
+    ego = np.array([math.pi / 2, -math.pi / 2, 0.0, 0.3, -1.2])
+    cav = np.array([0.0, math.pi / 2, -math.pi / 2, 0.3 - math.pi / 2, 1.0, -0.9])
+    want = np.where(np.abs(cav[None, :] - ego[:, None]) <= np.pi / 2, 1.0, -1.0)
+    got = pair_signs(ego, cav, "align")
+    assert got.shape == (5, 6) and np.array_equal(got, want)
+    assert got[0, 0] == 1.0 and got[0, 2] == -1.0 and got[1, 1] == -1.0
+    assert np.array_equal(pair_signs(ego, cav, "fold"), np.ones((5, 6)))
