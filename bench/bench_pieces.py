@@ -26,9 +26,11 @@ PIECES = ("context", "grids", "blocks", "match")
 
 def _worker(root: Path, size: int, layout: str, count: int) -> dict:
     """Median ms per piece over ``count`` trials, with the ``cbm`` of ``root``."""
-    sys.path[:0] = [str(root), str(HERE / "tests"), str(HERE / "bench")]
+    sys.path[:0] = [str(HERE / "tests"), str(HERE / "bench")]
     from bench_match import trials_for
 
+    sys.path.insert(0, str(root))
+    import cbm
     from cbm import CBMParams, match
     from cbm.context import build_context, fold_heading, pair_signs
     from cbm.local_matching import build_grid, group_signs, heading_groups, sorted_blocks
@@ -55,6 +57,8 @@ def _worker(root: Path, size: int, layout: str, count: int) -> dict:
         started = time.perf_counter()
         match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
         times["match"].append(time.perf_counter() - started)
+    if not Path(cbm.__file__).resolve().is_relative_to(root):
+        sys.exit(f"bench_pieces: error: cbm came from {cbm.__file__}, not from {root}")
     return {piece: 1000 * float(np.median(values)) for piece, values in times.items()}
 
 
