@@ -70,16 +70,6 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     return VectorGrid(u0, v0, cell, nx, ny, *_place(cav.vectors, cav.anchor, cav.member, sign, n, u0, v0, cell, nx, ny))
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _turned_signs(fixed):
-    """The signs a CAV object's vectors take in the grid (first, last, step): its fixed sign, or both."""
-    if fixed > 0:
-        return 1, 2, 2
-    if fixed < 0:
-        return -1, -2, -2
-    return 1, -2, -2
-
-
 @numba.njit(cache=True, nogil=True)
 def _extent(bounds, cav_sign, per_anchor):
     """(rows, lowest u, lowest v, highest u, highest v) of the turned vectors in u = x + y, v = x - y:
@@ -101,22 +91,17 @@ def _extent(bounds, cav_sign, per_anchor):
 def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
-    row's sign. Two passes over the vectors: one counts the rows of each cell (``start`` shifted by
-    two, each row's cell kept in ``key``), one places each row at its cell's next free place
+    row's sign. The vectors come anchor by anchor, ``len(vectors) // len(cav_sign)`` each (as
+    ``build_context`` stacks them). Two passes over them: ``_cells`` finds each row's cell, whose
+    rows are counted (``start`` shifted by two); then each row goes to its cell's next free place
     (``start`` shifted by one, so that it ends unshifted). Returns (start, x, y, anchor, member,
     check). ``anchor`` and ``member`` are CAV objects, fewer than 2^31 (``local_matching.MOST_PAIRS``
     bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
-    start, key = np.zeros(nx * ny + 2, np.int64), np.empty(n, np.int32)
-    r = 0
-    for v in range(len(vectors)):
-        first, last, step = _turned_signs(cav_sign[anchor[v]])
-        for sign in range(first, last, step):
-            x, y = sign * vectors[v, 0], sign * vectors[v, 1]
-            k = (min(int(math.floor((x + y - u0) / cell)), nx - 1) * ny
-                 + min(int(math.floor((x - y - v0) / cell)), ny - 1))
-            key[r] = k
-            start[k + 2] += 1
-            r += 1
+    per_anchor = len(vectors) // len(cav_sign)
+    key = _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny)
+    start = np.zeros(nx * ny + 2, np.int64)
+    for r in range(n):
+        start[key[r] + 2] += 1
     total = 0
     for k in range(2, len(start)):
         total += start[k]
@@ -124,17 +109,52 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
     r = 0
-    for v in range(len(vectors)):
-        fixed = cav_sign[anchor[v]]
-        first, last, step = _turned_signs(fixed)
-        for sign in range(first, last, step):
-            row = start[key[r] + 1]
-            start[key[r] + 1] = row + 1
-            gx[row], gy[row] = sign * vectors[v, 0], sign * vectors[v, 1]
-            g_anchor[row], g_member[row] = anchor[v], member[v]
-            g_check[row] = 0 if fixed != 0 else sign
-            r += 1
+    for a in range(len(cav_sign)):
+        s = cav_sign[a]
+        for v in range(a * per_anchor, (a + 1) * per_anchor):
+            x, y, b, m = vectors[v, 0], vectors[v, 1], anchor[v], member[v]
+            if s != 0:
+                r = _put(r, key, start, s * x, s * y, b, m, 0, gx, gy, g_anchor, g_member, g_check)
+            else:
+                r = _put(r, key, start, x, y, b, m, 1, gx, gy, g_anchor, g_member, g_check)
+                r = _put(r, key, start, -x, -y, b, m, -1, gx, gy, g_anchor, g_member, g_check)
     return start[:-1], gx, gy, g_anchor, g_member, g_check
+
+
+@numba.njit(cache=True, nogil=True)
+def _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny):
+    """The cell of each of the ``n`` turned rows, in their order: a fixed sign's rows in one loop per
+    anchor (which the compiler vectorises), a varying sign's as +1 then -1."""
+    key = np.empty(n, np.int32)
+    r = 0
+    for a in range(len(cav_sign)):
+        lo, s = a * per_anchor, cav_sign[a]
+        if s != 0:
+            for v in range(lo, lo + per_anchor):
+                key[r + v - lo] = _cell(s * vectors[v, 0], s * vectors[v, 1], u0, v0, cell, nx, ny)
+            r += per_anchor
+            continue
+        for v in range(lo, lo + per_anchor):
+            key[r] = _cell(vectors[v, 0], vectors[v, 1], u0, v0, cell, nx, ny)
+            key[r + 1] = _cell(-vectors[v, 0], -vectors[v, 1], u0, v0, cell, nx, ny)
+            r += 2
+    return key
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cell(x, y, u0, v0, cell, nx, ny):
+    """The column-major cell of the vector (x, y) in the grid of corner (u0, v0)."""
+    return (min(int(math.floor((x + y - u0) / cell)), nx - 1) * ny
+            + min(int(math.floor((x - y - v0) / cell)), ny - 1))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _put(r, key, start, x, y, b, m, check, gx, gy, g_anchor, g_member, g_check):
+    """Row ``r`` (vector (x, y) of anchor ``b`` to member ``m``) at its cell's next free place; r + 1."""
+    row = start[key[r] + 1]
+    start[key[r] + 1] = row + 1
+    gx[row], gy[row], g_anchor[row], g_member[row], g_check[row] = x, y, b, m, check
+    return r + 1
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
