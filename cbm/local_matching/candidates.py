@@ -46,22 +46,31 @@ def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
 def _gathered(key, vectors, member, order, sorted_key, x, y, sorted_member):
     """Block by block (row ``b`` of ``order``, the order of the keys of rows ``b * per_anchor`` on),
     the rows in order of their keys into ``sorted_key``, ``x``, ``y``, ``sorted_member``; each run
-    of equal keys in increasing row order first (``order`` is changed), as a stable sort leaves them."""
+    of equal keys in increasing row order (``order`` is changed), as a stable sort leaves them."""
     per_anchor = order.shape[1]
     for b in range(order.shape[0]):
         lo, block = b * per_anchor, order[b]
-        q = 0
-        while q < per_anchor:
-            end = q + 1
-            while end < per_anchor and key[lo + block[end]] == key[lo + block[q]]:
-                end += 1
-            if end - q > 1:
-                block[q:end] = np.sort(block[q:end])
-            for k in range(q, end):
-                row = lo + block[k]
-                sorted_key[lo + k], x[lo + k], y[lo + k] = key[row], vectors[row, 0], vectors[row, 1]
-                sorted_member[lo + k] = member[row]
-            q = end
+        run, last = 0, np.nan
+        for q in range(per_anchor):
+            row = lo + block[q]
+            if key[row] != last:
+                if q - run > 1:
+                    _in_row_order(key, vectors, member, lo, block, run, q, sorted_key, x, y, sorted_member)
+                run, last = q, key[row]
+            sorted_key[lo + q], x[lo + q], y[lo + q], sorted_member[lo + q] = (key[row], vectors[row, 0],
+                                                                               vectors[row, 1], member[row])
+        if per_anchor - run > 1:
+            _in_row_order(key, vectors, member, lo, block, run, per_anchor, sorted_key, x, y, sorted_member)
+
+
+@numba.njit(cache=True, nogil=True)
+def _in_row_order(key, vectors, member, lo, block, first, last, sorted_key, x, y, sorted_member):
+    """The run ``first:last`` of equal keys of the block at ``lo`` gathered again in row order."""
+    block[first:last] = np.sort(block[first:last])
+    for q in range(first, last):
+        row = lo + block[q]
+        sorted_key[lo + q], x[lo + q], y[lo + q], sorted_member[lo + q] = (key[row], vectors[row, 0],
+                                                                           vectors[row, 1], member[row])
 
 
 @numba.njit(cache=True, nogil=True)
