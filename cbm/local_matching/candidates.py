@@ -13,6 +13,7 @@ import numpy as np
 
 from ..context import Context
 from .grid import MARGIN, accepts
+from .join import PARALLEL_FROM, POOL
 
 
 @dataclass(frozen=True)
@@ -142,9 +143,19 @@ def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad
     blocks are taken from ``kept`` when an earlier call on the same contexts put them there."""
     blocks = None if kept is None else kept.get("blocks")
     if blocks is None:
-        blocks = (sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav))
+        blocks = _both_blocks(ego, cav, n_ego, n_cav)
         if kept is not None:
             kept["blocks"] = blocks
     e, c = blocks
     return (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
             math.cos(sigma1_rad) ** 2, sigma2)
+
+
+def _both_blocks(ego: Context, cav: Context, n_ego: int, n_cav: int) -> tuple[SortedBlocks, SortedBlocks]:
+    """Both agents' sorted blocks; from ``PARALLEL_FROM`` context vectors on, the ego's on ``POOL``
+    while the CAV's are sorted here (numpy's sort and ``_gathered`` run without the interpreter lock)."""
+    if min(len(ego.vectors), len(cav.vectors)) < PARALLEL_FROM:
+        return sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav)
+    ego_blocks = POOL.submit(sorted_blocks, ego, n_ego)
+    cav_blocks = sorted_blocks(cav, n_cav)
+    return ego_blocks.result(), cav_blocks
