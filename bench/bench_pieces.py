@@ -3,10 +3,10 @@
 On a machine shared with other work only ratios measured in the same session mean anything, so
 this runs a worker process per checkout, alternately, ``--rounds`` times, each worker timing on
 bench_match's trials (``trials_for``, same seeds; per trial the fastest of ``--repeats`` runs): the
-contexts (``build_context`` of both agents), the heading groups' grids (``build_grid``, one after
-another), the sorted blocks (``sorted_blocks`` of both agents) and ``match``. Prints, per scene and
-piece, the median over rounds (each round's value the median over its trials) of both checkouts
-and their ratio.
+context step (``cbm.reuse.prepare``: the signs and both agents' contexts), the heading groups'
+grids (``build_grid``, one after another), the sorted blocks (``sorted_blocks`` of both agents) and
+``match``. Prints, per scene and piece, the median over rounds (each round's value the median over
+its trials) of both checkouts and their ratio.
 
     python bench/bench_pieces.py --base OTHER_CHECKOUT [--rounds 5] [--sizes 100 300] [--layouts street dense]
 """
@@ -36,6 +36,7 @@ def _worker(root: Path, size: int, layout: str, count: int, repeats: int) -> dic
     from cbm import CBMParams, match
     from cbm.context import build_context, fold_heading, pair_signs
     from cbm.local_matching import build_grid, group_signs, heading_groups, sorted_blocks
+    from cbm.reuse import prepare
 
     params = CBMParams()
     trials = trials_for(size, count, layout)
@@ -49,8 +50,7 @@ def _worker(root: Path, size: int, layout: str, count: int, repeats: int) -> dic
         ego, cav = build_context(ego_boxes[:, :2], ego_heading), build_context(cav_boxes[:, :2], cav_heading)
         groups = heading_groups(ego_heading, signs)
         return {
-            "context": lambda: (build_context(ego_boxes[:, :2], ego_heading),
-                                build_context(cav_boxes[:, :2], cav_heading)),
+            "context": lambda: prepare(ego_boxes, cav_boxes, trial.init, params.heading),
             "grids": lambda: [build_grid(cav, group_signs(signs, group), params.sigma2) for group in groups],
             "blocks": lambda: (sorted_blocks(ego, len(ego_boxes)), sorted_blocks(cav, len(cav_boxes))),
             "match": lambda: match(ego_boxes, cav_boxes, trial.init, params),
