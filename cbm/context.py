@@ -25,8 +25,18 @@ def pair_signs(ego_heading: np.ndarray, cav_heading: np.ndarray, mode: HeadingMo
     """
     if mode == "fold":
         return np.ones((len(ego_heading), len(cav_heading)))
-    difference = np.abs(cav_heading[None, :] - ego_heading[:, None])
-    return np.where(difference <= np.pi / 2, 1.0, -1.0)
+    signs = np.empty((len(ego_heading), len(cav_heading)))
+    _fill_signs(np.asarray(ego_heading, dtype=float), np.asarray(cav_heading, dtype=float), signs)
+    return signs
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_signs(ego_heading, cav_heading, signs):
+    """``signs[i, j]`` = +1 where |cav_heading[j] - ego_heading[i]| <= pi / 2, else -1 (one pass,
+    no (Ne, Nc) temporaries)."""
+    for i in range(len(ego_heading)):
+        for j in range(len(cav_heading)):
+            signs[i, j] = 1.0 if abs(cav_heading[j] - ego_heading[i]) <= np.pi / 2 else -1.0
 
 
 @dataclass(frozen=True)
@@ -39,6 +49,9 @@ class Context:
     """(M,) index of the neighbour the vector points to (i' in eq. 5)."""
     vectors: np.ndarray
     """(M, 2) the context vectors z_ii' (columns of P_i in eq. 6)."""
+    bounds: np.ndarray
+    """(N, 4) per object i, the lowest and highest u = x + y, then v = x - y, of its context vectors
+    (+inf, -inf without any): the extent of any grid of them (``local_matching.grid``) in O(N)."""
 
 
 def build_context(xy: np.ndarray, heading: np.ndarray) -> Context:
@@ -46,20 +59,26 @@ def build_context(xy: np.ndarray, heading: np.ndarray) -> Context:
     anchor by anchor."""
     rows = len(xy) * (len(xy) - 1)
     anchor, member, vectors = np.empty(rows, np.int64), np.empty(rows, np.int64), np.empty((rows, 2))
-    _fill_context(np.ascontiguousarray(xy, dtype=float), np.cos(heading), np.sin(heading), anchor, member, vectors)
-    return Context(anchor=anchor, member=member, vectors=vectors)
+    bounds = np.empty((len(xy), 4))
+    _fill_context(np.ascontiguousarray(xy, dtype=float), np.cos(heading), np.sin(heading), anchor, member, vectors,
+                  bounds)
+    return Context(anchor=anchor, member=member, vectors=vectors, bounds=bounds)
 
 
 @numba.njit(cache=True, nogil=True)
-def _fill_context(xy, c, s, anchor, member, vectors):
-    """``vectors[k] = R(theta_i)^T (p_i' - p_i)`` for every ordered pair (i, i'), i != i'."""
+def _fill_context(xy, c, s, anchor, member, vectors, bounds):
+    """``vectors[k] = R(theta_i)^T (p_i' - p_i)`` for every ordered pair (i, i'), i != i', and each
+    anchor's ``bounds`` of u = x + y and v = x - y over its vectors."""
     k = 0
     for i in range(len(xy)):
+        u0, u1, v0, v1 = np.inf, -np.inf, np.inf, -np.inf
         for m in range(len(xy)):
             if m == i:
                 continue
             dx, dy = xy[m, 0] - xy[i, 0], xy[m, 1] - xy[i, 1]
             anchor[k], member[k] = i, m
-            vectors[k, 0] = c[i] * dx + s[i] * dy
-            vectors[k, 1] = -s[i] * dx + c[i] * dy
+            x, y = c[i] * dx + s[i] * dy, -s[i] * dx + c[i] * dy
+            vectors[k, 0], vectors[k, 1] = x, y
+            u0, u1, v0, v1 = min(u0, x + y), max(u1, x + y), min(v0, x - y), max(v1, x - y)
             k += 1
+        bounds[i, 0], bounds[i, 1], bounds[i, 2], bounds[i, 3] = u0, u1, v0, v1

@@ -13,6 +13,7 @@ import numpy as np
 
 from ..context import Context
 from .grid import MARGIN, accepts
+from .join import PARALLEL_FROM, POOL
 
 
 @dataclass(frozen=True)
@@ -29,14 +30,48 @@ class SortedBlocks:
 
 
 def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
-    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``)."""
+    """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``),
+    equal keys in their order in the context (a stable sort): numpy's quicksort orders the keys,
+    ``_gathered`` puts the equal ones back in order as it gathers the rows."""
     per_anchor = max(n_objects - 1, 0)
-    shape = (len(context.vectors) // max(per_anchor, 1), per_anchor)
-    key = (context.vectors[:, 0] + context.vectors[:, 1]).reshape(shape)
-    order = np.argsort(key, axis=1, kind="stable")
-    key, x, y, member = (np.ascontiguousarray(np.take_along_axis(values.reshape(shape), order, axis=1).ravel())
-                         for values in (key, context.vectors[:, 0], context.vectors[:, 1], context.member))
-    return SortedBlocks(key, x, y, member, per_anchor)
+    rows = len(context.vectors)
+    key = context.vectors[:, 0] + context.vectors[:, 1]
+    sorted_key, x, y, member = np.empty(rows), np.empty(rows), np.empty(rows), np.empty(rows, context.member.dtype)
+    if rows:
+        order = np.argsort(key.reshape(rows // per_anchor, per_anchor), axis=1)
+        _gathered(key, context.vectors, context.member, order, sorted_key, x, y, member)
+    return SortedBlocks(sorted_key, x, y, member, per_anchor)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gathered(key, vectors, member, order, sorted_key, x, y, sorted_member):
+    """Block by block (row ``b`` of ``order``, the order of the keys of rows ``b * per_anchor`` on),
+    the rows in order of their keys into ``sorted_key``, ``x``, ``y``, ``sorted_member``; each run
+    of equal keys in increasing row order (``order`` is changed), as a stable sort leaves them."""
+    per_anchor = order.shape[1]
+    for b in range(order.shape[0]):
+        lo, block = b * per_anchor, order[b]
+        run, last = 0, np.nan
+        for q in range(per_anchor):
+            row = lo + block[q]
+            if key[row] != last:
+                if q - run > 1:
+                    _in_row_order(key, vectors, member, lo, block, run, q, sorted_key, x, y, sorted_member)
+                run, last = q, key[row]
+            sorted_key[lo + q], x[lo + q], y[lo + q], sorted_member[lo + q] = (key[row], vectors[row, 0],
+                                                                               vectors[row, 1], member[row])
+        if per_anchor - run > 1:
+            _in_row_order(key, vectors, member, lo, block, run, per_anchor, sorted_key, x, y, sorted_member)
+
+
+@numba.njit(cache=True, nogil=True)
+def _in_row_order(key, vectors, member, lo, block, first, last, sorted_key, x, y, sorted_member):
+    """The run ``first:last`` of equal keys of the block at ``lo`` gathered again in row order."""
+    block[first:last] = np.sort(block[first:last])
+    for q in range(first, last):
+        row = lo + block[q]
+        sorted_key[lo + q], x[lo + q], y[lo + q], sorted_member[lo + q] = (key[row], vectors[row, 0],
+                                                                           vectors[row, 1], member[row])
 
 
 @numba.njit(cache=True, nogil=True)
@@ -108,9 +143,19 @@ def member_lookup(ego: Context, cav: Context, n_ego: int, n_cav: int, sigma1_rad
     blocks are taken from ``kept`` when an earlier call on the same contexts put them there."""
     blocks = None if kept is None else kept.get("blocks")
     if blocks is None:
-        blocks = (sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav))
+        blocks = _both_blocks(ego, cav, n_ego, n_cav)
         if kept is not None:
             kept["blocks"] = blocks
     e, c = blocks
     return (e.key, e.x, e.y, e.member, e.per_anchor, c.key, c.x, c.y, c.member, c.per_anchor, n_cav,
             math.cos(sigma1_rad) ** 2, sigma2)
+
+
+def _both_blocks(ego: Context, cav: Context, n_ego: int, n_cav: int) -> tuple[SortedBlocks, SortedBlocks]:
+    """Both agents' sorted blocks; from ``PARALLEL_FROM`` context vectors on, the ego's on ``POOL``
+    while the CAV's are sorted here (numpy's sort and ``_gathered`` run without the interpreter lock)."""
+    if min(len(ego.vectors), len(cav.vectors)) < PARALLEL_FROM:
+        return sorted_blocks(ego, n_ego), sorted_blocks(cav, n_cav)
+    ego_blocks = POOL.submit(sorted_blocks, ego, n_ego)
+    cav_blocks = sorted_blocks(cav, n_cav)
+    return ego_blocks.result(), cav_blocks

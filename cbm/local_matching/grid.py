@@ -55,9 +55,10 @@ class VectorGrid:
 def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
     sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
-    Two passes over the vectors: their extent, then a counting sort that turns them as it places them."""
+    Two passes over the vectors (their extent comes from ``Context.bounds``): a counting sort that
+    turns them as it places them."""
     sign = cav_sign.astype(np.int64)
-    n, u0, v0, u1, v1 = _extent(cav.vectors, cav.anchor, sign)
+    n, u0, v0, u1, v1 = _extent(cav.bounds, sign, len(cav.vectors) // max(len(cav.bounds), 1))
     if n == 0:
         empty, ids = np.zeros(0), np.zeros(0, np.int32)
         return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), empty, empty.copy(), ids, ids.copy(),
@@ -69,28 +70,20 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     return VectorGrid(u0, v0, cell, nx, ny, *_place(cav.vectors, cav.anchor, cav.member, sign, n, u0, v0, cell, nx, ny))
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _turned_signs(fixed):
-    """The signs a CAV object's vectors take in the grid (first, last, step): its fixed sign, or both."""
-    if fixed > 0:
-        return 1, 2, 2
-    if fixed < 0:
-        return -1, -2, -2
-    return 1, -2, -2
-
-
 @numba.njit(cache=True, nogil=True)
-def _extent(vectors, anchor, cav_sign):
+def _extent(bounds, cav_sign, per_anchor):
     """(rows, lowest u, lowest v, highest u, highest v) of the turned vectors in u = x + y, v = x - y:
-    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies."""
+    one row per vector of a CAV object with a fixed sign, two (sign +1 and -1) where it varies. From
+    each object's ``Context.bounds``: turned by -1, a vector's u and v change sign exactly."""
     n, u0, v0, u1, v1 = 0, np.inf, np.inf, -np.inf, -np.inf
-    for r in range(len(vectors)):
-        first, last, step = _turned_signs(cav_sign[anchor[r]])
-        for sign in range(first, last, step):
-            x, y = sign * vectors[r, 0], sign * vectors[r, 1]
-            u, v = x + y, x - y
-            u0, v0, u1, v1 = min(u0, u), min(v0, v), max(u1, u), max(v1, v)
-            n += 1
+    for a in range(len(bounds)):
+        if cav_sign[a] >= 0:
+            u0, u1, v0, v1 = min(u0, bounds[a, 0]), max(u1, bounds[a, 1]), min(v0, bounds[a, 2]), max(v1, bounds[a, 3])
+            n += per_anchor
+        if cav_sign[a] <= 0:
+            u0, u1 = min(u0, -bounds[a, 1]), max(u1, -bounds[a, 0])
+            v0, v1 = min(v0, -bounds[a, 3]), max(v1, -bounds[a, 2])
+            n += per_anchor
     return n, u0, v0, u1, v1
 
 
@@ -98,63 +91,70 @@ def _extent(vectors, anchor, cav_sign):
 def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
-    row's sign. Sorted by column, then each column by cell: both passes count into small arrays
-    that stay in the cache, where one pass over all the cells would miss it on every row.
-    Returns (start, x, y, anchor, member, check). ``anchor`` and ``member`` are CAV objects, fewer
-    than 2^31 (``local_matching.MOST_PAIRS`` bounds Ne x Nc), so int32 holds them; ``check`` is
-    -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
-    source, turn, kx, ky = np.empty(n, np.int32), np.empty(n, np.int8), np.empty(n, np.int32), np.empty(n, np.int32)
-    column_start = np.zeros(nx + 1, np.int64)
-    r = 0
-    for v in range(len(vectors)):
-        first, last, step = _turned_signs(cav_sign[anchor[v]])
-        for sign in range(first, last, step):
-            x, y = sign * vectors[v, 0], sign * vectors[v, 1]
-            source[r], turn[r] = v, sign
-            kx[r] = min(int(math.floor((x + y - u0) / cell)), nx - 1)
-            ky[r] = min(int(math.floor((x - y - v0) / cell)), ny - 1)
-            column_start[kx[r] + 1] += 1
-            r += 1
-    for k in range(nx):
-        column_start[k + 1] += column_start[k]
-    by_column, fill = np.empty(n, np.int32), column_start[:-1].copy()
+    row's sign. The vectors come anchor by anchor, ``len(vectors) // len(cav_sign)`` each (as
+    ``build_context`` stacks them). Two passes over them: ``_cells`` finds each row's cell, whose
+    rows are counted (``start`` shifted by two); then each row goes to its cell's next free place
+    (``start`` shifted by one, so that it ends unshifted). Returns (start, x, y, anchor, member,
+    check). ``anchor`` and ``member`` are CAV objects, fewer than 2^31 (``local_matching.MOST_PAIRS``
+    bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
+    per_anchor = len(vectors) // len(cav_sign)
+    key = _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny)
+    start = np.zeros(nx * ny + 2, np.int64)
     for r in range(n):
-        by_column[fill[kx[r]]] = r
-        fill[kx[r]] += 1
-    start = np.empty(nx * ny + 1, np.int64)
-    start[nx * ny] = n
+        start[key[r] + 2] += 1
+    total = 0
+    for k in range(2, len(start)):
+        total += start[k]
+        start[k] = total
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
-    cell_start = np.empty(ny + 1, np.int64)
-    for k in range(nx):
-        rows = by_column[column_start[k]:column_start[k + 1]]
-        _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, column_start[k], cell_start, gx, gy,
-                      g_anchor, g_member, g_check)
-        start[k * ny:(k + 1) * ny] = cell_start[:ny]
-    return start, gx, gy, g_anchor, g_member, g_check
+    r = 0
+    for a in range(len(cav_sign)):
+        s = cav_sign[a]
+        for v in range(a * per_anchor, (a + 1) * per_anchor):
+            x, y, b, m = vectors[v, 0], vectors[v, 1], anchor[v], member[v]
+            if s != 0:
+                r = _put(r, key, start, s * x, s * y, b, m, 0, gx, gy, g_anchor, g_member, g_check)
+            else:
+                r = _put(r, key, start, x, y, b, m, 1, gx, gy, g_anchor, g_member, g_check)
+                r = _put(r, key, start, -x, -y, b, m, -1, gx, gy, g_anchor, g_member, g_check)
+    return start[:-1], gx, gy, g_anchor, g_member, g_check
 
 
 @numba.njit(cache=True, nogil=True)
-def _place_column(vectors, anchor, member, cav_sign, source, turn, ky, rows, first, cell_start, gx, gy, g_anchor,
-                  g_member, g_check):
-    """The ``rows`` of one column (in their order) into their cells from grid row ``first`` on;
-    ``cell_start`` receives where each cell of the column starts."""
-    cell_start[:] = 0
-    for r in rows:
-        cell_start[ky[r] + 1] += 1
-    cell_start[0] = first
-    for c in range(len(cell_start) - 1):
-        cell_start[c + 1] += cell_start[c]
-    for r in rows:
-        row = cell_start[ky[r]]
-        cell_start[ky[r]] += 1
-        v, sign = source[r], turn[r]
-        gx[row], gy[row] = sign * vectors[v, 0], sign * vectors[v, 1]
-        g_anchor[row], g_member[row] = anchor[v], member[v]
-        g_check[row] = 0 if cav_sign[anchor[v]] != 0 else sign
-    for c in range(len(cell_start) - 1, 0, -1):
-        cell_start[c] = cell_start[c - 1]
-    cell_start[0] = first
+def _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny):
+    """The cell of each of the ``n`` turned rows, in their order: a fixed sign's rows in one loop per
+    anchor (which the compiler vectorises), a varying sign's as +1 then -1."""
+    key = np.empty(n, np.int32)
+    r = 0
+    for a in range(len(cav_sign)):
+        lo, s = a * per_anchor, cav_sign[a]
+        if s != 0:
+            for v in range(lo, lo + per_anchor):
+                key[r + v - lo] = _cell(s * vectors[v, 0], s * vectors[v, 1], u0, v0, cell, nx, ny)
+            r += per_anchor
+            continue
+        for v in range(lo, lo + per_anchor):
+            key[r] = _cell(vectors[v, 0], vectors[v, 1], u0, v0, cell, nx, ny)
+            key[r + 1] = _cell(-vectors[v, 0], -vectors[v, 1], u0, v0, cell, nx, ny)
+            r += 2
+    return key
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _cell(x, y, u0, v0, cell, nx, ny):
+    """The column-major cell of the vector (x, y) in the grid of corner (u0, v0)."""
+    return (min(int(math.floor((x + y - u0) / cell)), nx - 1) * ny
+            + min(int(math.floor((x - y - v0) / cell)), ny - 1))
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _put(r, key, start, x, y, b, m, check, gx, gy, g_anchor, g_member, g_check):
+    """Row ``r`` (vector (x, y) of anchor ``b`` to member ``m``) at its cell's next free place; r + 1."""
+    row = start[key[r] + 1]
+    start[key[r] + 1] = row + 1
+    gx[row], gy[row], g_anchor[row], g_member[row], g_check[row] = x, y, b, m, check
+    return r + 1
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
