@@ -16,6 +16,7 @@ from __future__ import annotations
 import argparse
 import importlib.util
 import sys
+import tempfile
 from pathlib import Path
 from types import ModuleType
 
@@ -24,17 +25,27 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests"), str(ROOT / "bench")]
 STEPS = ("context", "local_matching", "voting_sets", "consensus_selection", "estimate", "reassociate", "total")
+OTHER_CACHE = Path(tempfile.gettempdir()) / "cbm-bench-steps-kernels"
+"""Where the other checkout's kernels are cached (compiled on the first run, loaded after)."""
 ROUNDING = 1e-9
 """Largest difference of the two checkouts' transforms taken as rounding (``test_match_reference``)."""
 
 
 def other_cbm(checkout: Path) -> ModuleType:
-    """``checkout``'s ``cbm`` package, imported as ``cbm_other`` (its modules import each other relatively)."""
+    """``checkout``'s ``cbm`` package, imported as ``cbm_other`` (its modules import each other
+    relatively). Its kernels are cached in ``OTHER_CACHE``, never next to its sources: a kernel
+    cached under the name ``cbm_other`` would not load where that checkout runs as ``cbm``."""
+    import numba
+
     spec = importlib.util.spec_from_file_location("cbm_other", checkout / "cbm" / "__init__.py",
                                                   submodule_search_locations=[str(checkout / "cbm")])
     module = importlib.util.module_from_spec(spec)
     sys.modules["cbm_other"] = module
-    spec.loader.exec_module(module)
+    own, numba.config.CACHE_DIR = numba.config.CACHE_DIR, str(OTHER_CACHE)
+    try:
+        spec.loader.exec_module(module)
+    finally:
+        numba.config.CACHE_DIR = own
     return module
 
 
