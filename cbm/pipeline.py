@@ -17,7 +17,7 @@ from .inputs import checked_boxes, checked_transform
 from .local_matching import CandidateSets, count_candidates
 from .params import CBMParams
 from .result import MatchResult
-from .reuse import Reuse, prepare, recall, remember
+from .reuse import Prepared, Reuse, prepare, recall, remember
 from .selection import select
 
 
@@ -28,20 +28,40 @@ class Sets:
     params: CBMParams
     ego_boxes: np.ndarray
     """(Ne, 7) ego boxes."""
-    cav_boxes: np.ndarray
-    """(Nc, 7) CAV boxes pre-transformed into the ego frame by ``init`` (step 1)."""
-    ego_heading: np.ndarray
-    """(Ne,) folded ego headings (step 2)."""
-    cav_heading: np.ndarray
-    """(Nc,) folded CAV headings after ``init`` (step 2)."""
-    signs: np.ndarray
-    """(Ne, Nc) +1 or -1: how the CAV frame is turned against each ego frame (step 2)."""
-    ego_context: Context
-    cav_context: Context
+    prepared: Prepared
+    """Steps 1-2 and the context vectors (eq. 5-6) of this input (``cbm.reuse.prepare``)."""
     candidates: CandidateSets
     """L_ij of every anchor (eq. 8) by pair id ``i * Nc + j``: sizes, and members on demand."""
     voted_by: PairSets
     """Row m: the pairs whose voting set holds pair m (empty when consensus is off)."""
+
+    @property
+    def cav_boxes(self) -> np.ndarray:
+        """(Nc, 7) CAV boxes pre-transformed into the ego frame by ``init`` (step 1)."""
+        return self.prepared.cav_boxes
+
+    @property
+    def ego_heading(self) -> np.ndarray:
+        """(Ne,) folded ego headings (step 2)."""
+        return self.prepared.ego_heading
+
+    @property
+    def cav_heading(self) -> np.ndarray:
+        """(Nc,) folded CAV headings after ``init`` (step 2)."""
+        return self.prepared.cav_heading
+
+    @property
+    def signs(self) -> np.ndarray:
+        """(Ne, Nc) +1 or -1: how the CAV frame is turned against each ego frame (step 2)."""
+        return self.prepared.signs
+
+    @property
+    def ego_context(self) -> Context:
+        return self.prepared.ego_context
+
+    @property
+    def cav_context(self) -> Context:
+        return self.prepared.cav_context
 
     @property
     def ego_xy(self) -> np.ndarray:
@@ -67,16 +87,14 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     timings = {} if timings is None else timings
     started = time.perf_counter()
     ready = prepare(ego, cav, init, params.heading) if reuse is None else reuse.prepared(ego, cav, init, params.heading)
-    cav_in_ego, ego_heading, cav_heading, signs = ready.cav_boxes, ready.ego_heading, ready.cav_heading, ready.signs
-    ego_context, cav_context = ready.ego_context, ready.cav_context
     t = time.perf_counter()
     timings["context"] = t - started
 
     kept, sigma3 = None if reuse is None else ready.kept, params.sigma3 if params.consensus else None
     voting_key = (params.sigma1_rad, sigma3)
     voted_by = None if sigma3 is None else recall(kept, "voted_by", voting_key)
-    candidates, votes = count_candidates(ego_context, cav_context, ego_heading, signs, params.sigma1_rad,
-                                         params.sigma2, sigma3, kept, list_votes=voted_by is None)
+    candidates, votes = count_candidates(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
+                                         params.sigma1_rad, params.sigma2, sigma3, kept, list_votes=voted_by is None)
     timings["local_matching"] = time.perf_counter() - t
     t = time.perf_counter()
 
@@ -87,8 +105,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
         voted_by = voted_by_member(votes, n_pairs)
         remember(kept, "voted_by", voting_key, voted_by)
     timings["voting_sets"] = time.perf_counter() - t
-    return Sets(params, ego, cav_in_ego, ego_heading, cav_heading, signs, ego_context, cav_context, candidates,
-                voted_by)
+    return Sets(params, ego, ready, candidates, voted_by)
 
 
 def checked_inputs(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None,
