@@ -110,10 +110,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
     Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
     position in ``order`` where the visit stopped. ``width`` is the largest card(L_ij).
     """
-    scratch = np.zeros((3, width), np.bool_)
-    ego_count, cav_count = np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64)
-    voter_here = np.zeros(len(candidate_count), np.bool_)
-    out, candidates = np.empty(width, np.int64), np.empty(width + 1, np.int64)
+    scratch, ego_count, cav_count, voter_here, out, candidates = _work_arrays(width, n_ego, n_cav,
+                                                                              len(candidate_count))
     visited = np.empty(len(order), np.int64)
     sizes = np.empty(len(order), np.int64)
     offsets = np.zeros(len(order) + 1, np.int64)

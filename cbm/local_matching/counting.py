@@ -41,9 +41,10 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
         radius = sigma2 if sigma3 is None else max(sigma2, sigma3)
         votes = run_join(ego, cav, ego_heading, signs, sigma1_rad, radius, sigma2 if counting else -1.0,
                          sigma3 if listing else -1.0, counters, kept)
-        for name, done in (("count", counting), ("votes", listing)):
-            if done:
-                ran(kept, name)
+        if counting:
+            ran(kept, "count")
+        if listing:
+            ran(kept, "votes")
     if counting:
         count2 = counters
         count2 += count2 > 0

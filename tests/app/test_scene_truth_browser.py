@@ -49,6 +49,18 @@ def settled_camera(tab):
     return camera
 
 
+def opened_at(browser, server: ExplorerServer, find) -> tuple:
+    """(page, tab, camera, frame): the first screen opened, its camera settled, then moved to the
+    frame ``find(settings, camera)`` picks."""
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    camera = settled_camera(tab)
+    frame = find(tab.last.settings, camera)
+    if frame != tab.last.frame_index:
+        ui.go_to_frame(page, tab, frame)
+    return page, tab, camera, frame
+
+
 def tilt(camera) -> float:
     """Degrees between the camera's line of sight and straight down."""
     sight = np.asarray(camera.look_at, float) - np.asarray(camera.position, float)
@@ -159,12 +171,8 @@ def frame_with_an_overlapping_wrong_pair(explorer: Explorer, settings: Settings,
 def test_a_wrong_pair_whose_boxes_overlap_is_marked_on_its_boxes(browser, explorer: Explorer, tmp_path) -> None:
     settings = read(SHIPPED_DIR / "stress.toml", True).apply(Settings(frame=0))
     with running(explorer, settings, tmp_path) as server:
-        page = ui.open_first_screen(browser, server)
-        tab = ui.session(server, 1)
-        camera = settled_camera(tab)
-        frame = frame_with_an_overlapping_wrong_pair(explorer, tab.last.settings, camera)
-        if frame != tab.last.frame_index:
-            ui.go_to_frame(page, tab, frame)
+        page, tab, camera, frame = opened_at(browser, server, lambda settings, camera:
+                                             frame_with_an_overlapping_wrong_pair(explorer, settings, camera))
         ui.wait_until(lambda: ui.header(page) == f"Frame {frame}", 60)
         outcome, drawing = tab.last, tab.last_drawing
         assert outcome.metrics.n_matched > outcome.metrics.n_correct
@@ -234,12 +242,8 @@ def test_a_click_on_a_third_cavs_box_names_that_cav(browser, explorer: Explorer,
     settings = Settings(frame=10)
     settings = dataclasses.replace(settings, cavs=3, scenario=dataclasses.replace(settings.scenario, sensor_range=25.0))
     with running(explorer, settings, tmp_path) as server:
-        page = ui.open_first_screen(browser, server)
-        tab = ui.session(server, 1)
-        camera = settled_camera(tab)
-        frame = frame_with_cav3_boxes_in_view(explorer, tab.last.settings, camera)
-        if frame != tab.last.frame_index:
-            ui.go_to_frame(page, tab, frame)
+        page, tab, camera, frame = opened_at(browser, server, lambda settings, camera:
+                                             frame_with_cav3_boxes_in_view(explorer, settings, camera))
         ui.close_notifications(page)
         outcome, drawing = tab.last, tab.last_drawing
         boxes, rows = drawing.objects["cav_3"]
