@@ -80,70 +80,70 @@ RULE_CODES = {None: 0, "paper": 1, "released": 2}
 
 
 @numba.njit(cache=True, nogil=True)
-def _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, alone):
-    """alone[r - lo] for rows lo..hi-1: kept, and its ego and CAV objects occur once among the kept rows."""
-    for row in range(lo, hi):
-        if kept[row - lo]:
-            ego_count[member[row] // n_cav] += 1
-            cav_count[member[row] % n_cav] += 1
-    for row in range(lo, hi):
-        i, j = member[row] // n_cav, member[row] % n_cav
-        alone[row - lo] = kept[row - lo] and ego_count[i] == 1 and cav_count[j] == 1
-    for row in range(lo, hi):
-        ego_count[member[row] // n_cav] = 0
-        cav_count[member[row] % n_cav] = 0
+def _alone(ego, cav, size, kept, ego_count, cav_count, alone):
+    """alone[r] for rows 0..size-1 (pair of ego object ``ego[r]`` and CAV object ``cav[r]``): kept, and
+    its ego and CAV objects occur once among the kept rows."""
+    for row in range(size):
+        if kept[row]:
+            ego_count[ego[row]] += 1
+            cav_count[cav[row]] += 1
+    for row in range(size):
+        alone[row] = kept[row] and ego_count[ego[row]] == 1 and cav_count[cav[row]] == 1
+    for row in range(size):
+        ego_count[ego[row]] = 0
+        cav_count[cav[row]] = 0
 
 
 @numba.njit(cache=True, nogil=True)
-def _voted(member, lo, hi, is_voter, voted_start, voted_by, needed, voter_here, enough):
-    """enough[r] for rows lo..hi-1: at least ``needed`` voters of the set hold the row's pair in their
+def _voted(member, size, is_voter, voted_start, voted_by, needed, voter_here, enough):
+    """enough[r] for rows 0..size-1: at least ``needed`` voters of the set hold the row's pair in their
     voting set. ``voted_by[voted_start[m]:voted_start[m + 1]]`` are the pairs whose voting set holds
     pair m; the scan stops at the vote it needs. With ``needed`` 1 (the released rule) a voter's own
     row is taken as enough unscanned: that rule keeps the voters whatever their votes."""
-    for row in range(lo, hi):
-        voter_here[member[row]] = is_voter[row - lo]
-    for row in range(lo, hi):
+    for row in range(size):
+        voter_here[member[row]] = is_voter[row]
+    for row in range(size):
         count = 0
-        enough[row - lo] = needed == 1 and is_voter[row - lo]
+        enough[row] = needed == 1 and is_voter[row]
         m = member[row]
-        if enough[row - lo]:
+        if enough[row]:
             continue
         for k in range(voted_start[m], voted_start[m + 1]):
             if voter_here[voted_by[k]]:
                 count += 1
                 if count >= needed:
-                    enough[row - lo] = True
+                    enough[row] = True
                     break
-    for row in range(lo, hi):
+    for row in range(size):
         voter_here[member[row]] = False
 
 
 @numba.njit(cache=True, nogil=True)
-def final_set(member, size, voted_start, voted_by, rule, n_cav, scratch, ego_count, cav_count, voter_here, out):
-    """L^(2) of the candidate set ``member[:size]`` into ``out``; returns its size.
+def final_set(member, ego, cav, size, voted_start, voted_by, rule, scratch, ego_count, cav_count, voter_here, out):
+    """L^(2) of the candidate set ``member[:size]`` (pair ids; ``ego`` and ``cav`` their objects):
+    the rows it keeps, in order, into ``out``; returns how many.
 
     Consensus (eq. 9-10) by ``rule`` (0 off, 1 paper, 2 released), then the one-to-one rule (eq. 11).
     ``scratch`` is a (3, max set size) bool work array; the count arrays and ``voter_here`` must be
     zero/False and are left so.
     """
-    lo, hi = 0, size
     everyone, lone, kept = scratch[0], scratch[1], scratch[2]
     for row in range(size):
         everyone[row] = True
     if rule == 1:
-        _voted(member, lo, hi, everyone, voted_start, voted_by, 2, voter_here, kept)
+        _voted(member, size, everyone, voted_start, voted_by, 2, voter_here, kept)
     elif rule == 2:
-        _alone(member, lo, hi, everyone, n_cav, ego_count, cav_count, lone)
-        _voted(member, lo, hi, lone, voted_start, voted_by, 1, voter_here, kept)
+        _alone(ego, cav, size, everyone, ego_count, cav_count, lone)
+        _voted(member, size, lone, voted_start, voted_by, 1, voter_here, kept)
         for row in range(size):
             kept[row] = kept[row] or lone[row]
     else:
         for row in range(size):
             kept[row] = True
-    _alone(member, lo, hi, kept, n_cav, ego_count, cav_count, lone)
+    _alone(ego, cav, size, kept, ego_count, cav_count, lone)
     kept_size = 0
-    for row in range(lo, hi):
-        if lone[row - lo]:
-            out[kept_size] = member[row]
+    for row in range(size):
+        if lone[row]:
+            out[kept_size] = row
             kept_size += 1
     return kept_size

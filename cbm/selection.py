@@ -66,39 +66,40 @@ class Selection:
 
 
 @numba.njit(cache=True, nogil=True)
-def _one_to_one_bound(member, size, n_cav, ego_count, cav_count):
-    """min(distinct ego objects, distinct CAV objects) among ``member[:size]``: the most pairs a
-    one-to-one subset of them can hold. The count arrays must be zero and are left so."""
+def _one_to_one_bound(ego, cav, size, ego_count, cav_count):
+    """min(distinct ego objects, distinct CAV objects) among the pairs ``ego[:size]``, ``cav[:size]``:
+    the most pairs a one-to-one subset of them can hold. The count arrays must be zero and are left so."""
     distinct_ego, distinct_cav = 0, 0
     for row in range(size):
-        i, j = member[row] // n_cav, member[row] % n_cav
-        distinct_ego += ego_count[i] == 0
-        distinct_cav += cav_count[j] == 0
-        ego_count[i], cav_count[j] = 1, 1
+        distinct_ego += ego_count[ego[row]] == 0
+        distinct_cav += cav_count[cav[row]] == 0
+        ego_count[ego[row]], cav_count[cav[row]] = 1, 1
     for row in range(size):
-        ego_count[member[row] // n_cav], cav_count[member[row] % n_cav] = 0, 0
+        ego_count[ego[row]], cav_count[cav[row]] = 0, 0
     return min(distinct_ego, distinct_cav)
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
-                   candidates, scratch, ego_count, cav_count, voter_here, out):
-    """card(L^(2)) of one anchor, 0 when its pairs are farther apart than the limit on average (their
-    distances computed from the ``centres``, ego and CAV, as needed), and
-    0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always filtered): L^(2)
-    is a one-to-one subset of L_ij (eq. 10-11 only remove members), so ``_one_to_one_bound`` bounds it."""
+def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond, work):
+    """card(L^(2)) of one anchor, its members into ``work``'s ``out``; 0 when its pairs are farther
+    apart than the limit on average (their distances computed from the ``centres``, ego and CAV, as
+    needed), and 0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always
+    filtered): L^(2) is a one-to-one subset of L_ij (eq. 10-11 only remove members), so
+    ``_one_to_one_bound`` bounds it. ``work`` comes from ``_work_arrays``."""
+    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of = work
     i, j = anchor // n_cav, anchor % n_cav
-    listed = members_into(i, j, signs[i, j], *lookup, candidates)
-    if beyond >= 0 and _one_to_one_bound(candidates, listed, n_cav, ego_count, cav_count) <= beyond:
+    listed = members_into(i, j, signs[i, j], *lookup, candidates, ego_of, cav_of)
+    if beyond >= 0 and _one_to_one_bound(ego_of, cav_of, listed, ego_count, cav_count) <= beyond:
         return 0
-    size = final_set(candidates, listed, voted_start, voted_by, rule, n_cav, scratch, ego_count,
-                     cav_count, voter_here, out)
+    size = final_set(candidates, ego_of, cav_of, listed, voted_start, voted_by, rule, scratch, ego_count, cav_count,
+                     voter_here, out)
     ego_xy, cav_xy = centres
     total = 0.0
     for k in range(size):
-        e, c = out[k] // n_cav, out[k] % n_cav
-        dx, dy = ego_xy[e, 0] - cav_xy[c, 0], ego_xy[e, 1] - cav_xy[c, 1]
+        row = out[k]
+        dx, dy = ego_xy[ego_of[row], 0] - cav_xy[cav_of[row], 0], ego_xy[ego_of[row], 1] - cav_xy[cav_of[row], 1]
         total += math.sqrt(dx * dx + dy * dy)
+        out[k] = candidates[row]
     return size if size == 0 or total / size <= limit else 0
 
 
@@ -110,8 +111,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
     Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
     position in ``order`` where the visit stopped. ``width`` is the largest card(L_ij).
     """
-    scratch, ego_count, cav_count, voter_here, out, candidates = _work_arrays(width, n_ego, n_cav,
-                                                                              len(candidate_count))
+    work = _work_arrays(width, n_ego, n_cav, len(candidate_count))
+    out = work[4]
     visited = np.empty(len(order), np.int64)
     sizes = np.empty(len(order), np.int64)
     offsets = np.zeros(len(order) + 1, np.int64)
@@ -121,8 +122,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
-                              limit, -1, candidates, scratch, ego_count, cav_count, voter_here, out)
+        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, -1,
+                              work)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -139,9 +140,11 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
 
 @numba.njit(cache=True, nogil=True)
 def _work_arrays(width, n_ego, n_cav, n_pairs):
-    """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates."""
+    """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates and
+    their ego and CAV objects."""
     return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
-            np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64))
+            np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64),
+            np.empty(width + 1, np.int64), np.empty(width + 1, np.int64))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -149,11 +152,10 @@ def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted
                      limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
     ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
-    scratch, ego_count, cav_count, voter_here, out, candidates = work
     size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
-                          candidates, scratch, ego_count, cav_count, voter_here, out)
+                          work)
     for k in range(size):
-        if excluded[out[k]]:
+        if excluded[work[4][k]]:
             return 0
     return size
 

@@ -76,8 +76,10 @@ def _in_row_order(key, vectors, member, lo, block, first, last, sorted_key, x, y
 
 @numba.njit(cache=True, nogil=True)
 def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1,
-                 sigma2, out):
-    """The members of L_ij (eq. 8) into ``out``, the anchor pair last; returns how many.
+                 sigma2, out, ego_of, cav_of):
+    """The members of L_ij (eq. 8) into ``out`` as pair ids and into ``ego_of`` and ``cav_of`` as
+    their ego and CAV objects (so that no consumer divides a pair id), the anchor pair last; returns
+    how many.
 
     Both anchors' blocks are sorted by ``x + y``, so the CAV vectors (turned by ``sign``) whose key
     lies within sigma2 of an ego vector's form a window that only slides forward: O(N) per anchor
@@ -97,10 +99,12 @@ def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_
             v = lo_j + k if sign > 0 else hi_j - 1 - k
             if accepts(zx, zy, sign * cx[v], sign * cy[v], cos2_sigma1, sigma2) >= 0.0:
                 out[size] = e_member[u] * n_cav + c_member[v]
+                ego_of[size], cav_of[size] = e_member[u], c_member[v]
                 size += 1
             k += 1
     if size:
         out[size] = i * n_cav + j
+        ego_of[size], cav_of[size] = i, j
         size += 1
     return size
 
@@ -118,7 +122,7 @@ class CandidateSets:
     count: np.ndarray
     """(Ne * Nc,) card(L_ij), the anchor pair included when the set is not empty."""
     lookup: tuple
-    """``members_into``'s arguments after (i, j, sign) and before ``out``."""
+    """``members_into``'s arguments after (i, j, sign) and before its outputs."""
     signs: np.ndarray
     """(Ne, Nc) how the CAV frame is turned against each ego frame (``cbm.context.pair_signs``)."""
 
@@ -131,8 +135,8 @@ class CandidateSets:
         """Pair ids of L_ij for ``anchor = i * Nc + j``, in increasing order."""
         n_cav = self.signs.shape[1]
         i, j = divmod(int(anchor), n_cav)
-        out = np.empty(int(self.count[anchor]) + 1, np.int64)
-        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out)
+        out, ego_of, cav_of = (np.empty(int(self.count[anchor]) + 1, np.int64) for _ in range(3))
+        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out, ego_of, cav_of)
         return np.sort(out[:size])
 
 
