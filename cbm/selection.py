@@ -12,6 +12,7 @@ least-squares rigid fit of the set, then the set's centroids (see ``tie_break_ke
 """
 from __future__ import annotations
 
+import contextlib
 import math
 from dataclasses import dataclass
 
@@ -20,7 +21,7 @@ import numpy as np
 
 from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
-from .local_matching import POOL, THREADS, CandidateSets, members_into
+from .local_matching import NO_LISTING, POOL, THREADS, CandidateSets, listed_into
 
 RIVAL_CHUNK = 128
 """Anchors handed to the threads at a time in the runner-up search."""
@@ -47,7 +48,7 @@ class Visit:
         at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
         if len(at) == 0:
             return set_of(anchor, L, self.common)
-        pairs = _as_pairs(self.members[self.offsets[at[0]]:self.offsets[at[0] + 1]], self.common[6])
+        pairs = _as_pairs(self.members[self.offsets[at[0]]:self.offsets[at[0] + 1]], self.common[N_CAV])
         return pairs[np.argsort(pairs[:, 0], kind="stable")]
 
 
@@ -80,15 +81,16 @@ def _one_to_one_bound(ego, cav, size, ego_count, cav_count):
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond, work):
+def _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
+                   work):
     """card(L^(2)) of one anchor, its members into ``work``'s ``out``; 0 when its pairs are farther
     apart than the limit on average (their distances computed from the ``centres``, ego and CAV, as
     needed), and 0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always
     filtered): L^(2) is a one-to-one subset of L_ij (eq. 10-11 only remove members), so
     ``_one_to_one_bound`` bounds it. ``work`` comes from ``_work_arrays``."""
-    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of = work
+    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of, distance = work
     i, j = anchor // n_cav, anchor % n_cav
-    listed = members_into(i, j, signs[i, j], *lookup, candidates, ego_of, cav_of)
+    listed = listed_into(i, j, signs[i, j], lookup, listing, candidates, ego_of, cav_of, distance)
     if beyond >= 0 and _one_to_one_bound(ego_of, cav_of, listed, ego_count, cav_count) <= beyond:
         return 0
     size = final_set(candidates, ego_of, cav_of, listed, voted_start, voted_by, rule, scratch, ego_count, cav_count,
@@ -104,7 +106,7 @@ def _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_
 
 
 @numba.njit(cache=True)
-def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
+def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
                   centres, limit):
     """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
 
@@ -122,8 +124,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, -1,
-                              work)
+        size = _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres,
+                              limit, -1, work)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -141,19 +143,19 @@ def _largest_sets(order, candidate_count, width, signs, lookup, voted_start, vot
 @numba.njit(cache=True, nogil=True)
 def _work_arrays(width, n_ego, n_cav, n_pairs):
     """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates and
-    their ego and CAV objects."""
+    their ego and CAV objects and distances."""
     return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
             np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64),
-            np.empty(width + 1, np.int64), np.empty(width + 1, np.int64))
+            np.empty(width + 1, np.int64), np.empty(width + 1, np.int64), np.empty(width + 1))
 
 
 @numba.njit(cache=True, nogil=True)
-def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
-                     limit, work):
+def _rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
+                     centres, limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
     ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
-    size = _filtered_size(anchor, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
-                          work)
+    size = _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres, limit,
+                          beyond, work)
     for k in range(size):
         if excluded[work[4][k]]:
             return 0
@@ -161,21 +163,21 @@ def _rival_free_size(anchor, beyond, excluded, signs, lookup, voted_start, voted
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_sizes(anchors, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav, centres,
-                 limit):
+def _filtered_sizes(anchors, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
+                    centres, limit):
     """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
     an ``excluded`` pair."""
     work = _work_arrays(width, n_ego, n_cav, len(excluded))
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
-        sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, voted_start, voted_by, rule, n_ego,
-                                    n_cav, centres, limit, work)
+        sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, listing, voted_start, voted_by, rule,
+                                    n_ego, n_cav, centres, limit, work)
     return sizes
 
 
 @numba.njit(cache=True, nogil=True)
-def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_start, voted_by, rule, n_ego, n_cav,
-                   centres, limit):
+def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego,
+                   n_cav, centres, limit):
     """The largest of ``best`` and the sizes ``_filtered_sizes`` gives ``anchors`` (by decreasing
     card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
     the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
@@ -186,8 +188,8 @@ def _largest_rival(anchors, count, best, width, excluded, signs, lookup, voted_s
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:
             break
-        best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, voted_start, voted_by, rule,
-                                          n_ego, n_cav, centres, limit, work))
+        best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, listing, voted_start, voted_by,
+                                          rule, n_ego, n_cav, centres, limit, work))
     return best
 
 
@@ -201,7 +203,7 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
     thread); each run stops at the first anchor whose card(L_ij) cannot beat the largest size it has
     seen (``_largest_rival``), so the largest of the halves' answers is the chunk's."""
-    rule = common[4]
+    rule = common[RULE]
     for chunk in range(first, len(order), RIVAL_CHUNK):
         anchors = order[chunk:chunk + RIVAL_CHUNK]
         anchors = anchors[L.count[anchors] > runner_up]
@@ -212,7 +214,8 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
             continue
-        jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *common)
+        reading = (*common[:LISTING], _read_only(common[LISTING]), *common[LISTING + 1:])
+        jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *reading)
                 for part in np.array_split(anchors, THREADS) if len(part)]
         runner_up = max(int(job.result()) for job in jobs)
     return runner_up
@@ -257,10 +260,27 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
 
 def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray,
                      cav_xy: np.ndarray, distance_limit: float) -> tuple:
-    """The arguments the visiting kernels share, after their own."""
+    """The arguments the visiting kernels share, after their own (``LISTING``, ``RULE``, ``N_CAV``:
+    where the listing's arguments, the rule and Nc are). The kernels add the anchors they list to
+    the listing: the caller holds its lock (``listing_held``)."""
     centres = (np.ascontiguousarray(ego_xy, dtype=float), np.ascontiguousarray(cav_xy, dtype=float))
-    return (L.signs, L.lookup, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy), centres,
-            float(distance_limit))
+    listing = (NO_LISTING if L.listing is None else L.listing).arguments(L.lookup[-1])
+    return (L.signs, L.lookup, listing, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy),
+            centres, float(distance_limit))
+
+
+LISTING, RULE, N_CAV = 2, 5, 7
+
+
+def _read_only(listing: tuple) -> tuple:
+    """``Listing.arguments`` that list the anchors not in the listing without adding them (for
+    kernels running on two threads at once)."""
+    return (*listing[:-1], False)
+
+
+def listing_held(L: CandidateSets):
+    """The lock of ``L``'s listing, held while kernels list into it (a no-op without one)."""
+    return contextlib.nullcontext() if L.listing is None else L.listing.lock
 
 
 def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, rule: str | None,
@@ -270,8 +290,9 @@ def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, ru
     if len(anchors) == 0:
         return np.zeros(0, np.int64)
     nowhere = np.zeros(len(L.count), bool)
-    return _filtered_sizes(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
-                                                                        distance_limit))
+    with listing_held(L):
+        return _filtered_sizes(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
+                                                                            distance_limit))
 
 
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
@@ -284,18 +305,18 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
         return empty
     order = by_count_descending(candidate_count)
     common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
-    visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, L.width, *common)
-    best = int(sizes.max(initial=0))
-    if best == 0:
-        return empty
-    k_win = _tie_broken(np.flatnonzero(sizes == best), visited, members, offsets, ego_xy, cav_xy)
-    winner = members[offsets[k_win]:offsets[k_win + 1]]
-    in_winner = np.zeros(n_ego * n_cav, dtype=bool)
-    in_winner[winner] = True
-    set_of_member = np.repeat(np.arange(len(sizes)), sizes)
-    shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
-    runner_up = int(sizes[~shares].max(initial=0))
-    runner_up = strongest_rival(order, stop, L, runner_up, in_winner, common)
+    with listing_held(L):
+        visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, L.width, *common)
+        best = int(sizes.max(initial=0))
+        if best == 0:
+            return empty
+        k_win = _tie_broken(np.flatnonzero(sizes == best), visited, members, offsets, ego_xy, cav_xy)
+        winner = members[offsets[k_win]:offsets[k_win + 1]]
+        in_winner = np.zeros(n_ego * n_cav, dtype=bool)
+        in_winner[winner] = True
+        set_of_member = np.repeat(np.arange(len(sizes)), sizes)
+        shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
+        runner_up = strongest_rival(order, stop, L, int(sizes[~shares].max(initial=0)), in_winner, common)
     pairs = _as_pairs(winner, n_cav)
     return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
@@ -323,8 +344,9 @@ def _tie_broken(tied: np.ndarray, visited: np.ndarray, members: np.ndarray, offs
 
 def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
     """(K, 2) pairs of one anchor's filtered set L^(2) (eq. 12), sorted by ego index."""
-    _, _, _, members, _ = _largest_sets(np.array([anchor], np.int64), L.count, L.width, *common)
-    pairs = _as_pairs(members, common[6])
+    with listing_held(L):
+        _, _, _, members, _ = _largest_sets(np.array([anchor], np.int64), L.count, L.width, *common)
+    pairs = _as_pairs(members, common[N_CAV])
     return pairs[np.argsort(pairs[:, 0], kind="stable")]
 
 
@@ -350,7 +372,8 @@ def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: 
     if len(rest) == 0:
         return found
     nowhere = np.zeros(len(L.count), bool)
-    sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
+    with listing_held(L):
+        sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
     return _distinct_largest(np.concatenate([order[:known], rest]), sizes, first, k,
                              lambda anchor: visit.set_of(anchor, L))
 

@@ -10,14 +10,18 @@ For an anchor pair (i, j) a candidate (i', j') is accepted when the context vect
 - ``join``: the output-sensitive join that counts card(L_ij) for every anchor and lists only the
   quadruples within sigma3 (the voting sets of the consensus), in parallel and in a fixed order;
 - ``candidates``: the members of one L_ij when the selection asks for them (``CandidateSets``);
+- ``listing``: the members listed so far, kept per input and sigma1 and read again after a sigma2
+  edit (``Listing``);
 - ``counting``: the three as one call (``count_candidates``).
 
 Pair ids are ``i * Nc + j`` throughout.
 """
-from .candidates import CandidateSets, SortedBlocks, member_lookup, members_into, sorted_blocks
+from .candidates import NO_LISTING, CandidateSets, Listing, SortedBlocks, member_lookup, members_into, sorted_blocks
 from .counting import MOST_PAIRS, count_candidates
 from .grid import MARGIN, VectorGrid, build_grid, group_signs, heading_groups
 from .join import POOL, THREADS
+from .listing import listed_into
 
-__all__ = ["MARGIN", "MOST_PAIRS", "POOL", "THREADS", "CandidateSets", "SortedBlocks", "VectorGrid", "build_grid",
-           "count_candidates", "group_signs", "heading_groups", "member_lookup", "members_into", "sorted_blocks"]
+__all__ = ["MARGIN", "MOST_PAIRS", "NO_LISTING", "POOL", "THREADS", "CandidateSets", "Listing", "SortedBlocks",
+           "VectorGrid", "build_grid", "count_candidates", "group_signs", "heading_groups", "listed_into",
+           "member_lookup", "members_into", "sorted_blocks"]

@@ -6,7 +6,8 @@ by a window sliding over both anchors' vectors sorted by x + y, O(N) per anchor 
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+import threading
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -76,10 +77,10 @@ def _in_row_order(key, vectors, member, lo, block, first, last, sorted_key, x, y
 
 @numba.njit(cache=True, nogil=True)
 def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1,
-                 sigma2, out, ego_of, cav_of):
-    """The members of L_ij (eq. 8) into ``out`` as pair ids and into ``ego_of`` and ``cav_of`` as
-    their ego and CAV objects (so that no consumer divides a pair id), the anchor pair last; returns
-    how many.
+                 sigma2, out, ego_of, cav_of, distance):
+    """The members of L_ij (eq. 8) into ``out`` as pair ids, into ``ego_of`` and ``cav_of`` as their
+    ego and CAV objects (so that no consumer divides a pair id) and into ``distance`` as their L1
+    distance (eq. 7), the anchor pair last (distance 0); returns how many.
 
     Both anchors' blocks are sorted by ``x + y``, so the CAV vectors (turned by ``sign``) whose key
     lies within sigma2 of an ego vector's form a window that only slides forward: O(N) per anchor
@@ -97,14 +98,15 @@ def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_
             if _turned(c_key, lo_j, hi_j, k, sign) > zk + sigma2 + MARGIN:
                 break
             v = lo_j + k if sign > 0 else hi_j - 1 - k
-            if accepts(zx, zy, sign * cx[v], sign * cy[v], cos2_sigma1, sigma2) >= 0.0:
+            l1 = accepts(zx, zy, sign * cx[v], sign * cy[v], cos2_sigma1, sigma2)
+            if l1 >= 0.0:
                 out[size] = e_member[u] * n_cav + c_member[v]
-                ego_of[size], cav_of[size] = e_member[u], c_member[v]
+                ego_of[size], cav_of[size], distance[size] = e_member[u], c_member[v], l1
                 size += 1
             k += 1
     if size:
         out[size] = i * n_cav + j
-        ego_of[size], cav_of[size] = i, j
+        ego_of[size], cav_of[size], distance[size] = i, j, 0.0
         size += 1
     return size
 
@@ -113,6 +115,35 @@ def members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_
 def _turned(key, lo, hi, k, sign):
     """The k-th smallest key of the block lo..hi-1 after turning its vectors by ``sign``."""
     return key[lo + k] if sign > 0 else -key[hi - 1 - k]
+
+
+@dataclass(frozen=True)
+class Listing:
+    """The members of L_ij of the anchors listed so far at ``sigma2`` (``listing.listed_into``): anchor a's are rows
+    ``at[a]:at[a] + length[a]`` of ``ego``, ``cav`` (their objects) and ``distance`` (their L1
+    distance of eq. 7), without the anchor pair; ``at[a]`` is -1 for an anchor not listed. ``fill``
+    holds the rows in use. ``lock`` is held by whoever lists into it."""
+
+    sigma2: float
+    width: int
+    """The largest card(L_ij) at ``sigma2``: the room a kernel needs for one set listed there."""
+    at: np.ndarray
+    length: np.ndarray
+    ego: np.ndarray
+    cav: np.ndarray
+    distance: np.ndarray
+    fill: np.ndarray
+    lock: threading.RLock = field(default_factory=threading.RLock, compare=False)
+
+    def arguments(self, sigma2: float, writable: bool = True) -> tuple:
+        """``listed_into``'s ``listing`` argument for a call at ``sigma2`` (at most ``self.sigma2``);
+        ``writable`` False: anchors not yet listed are listed but not kept (for threads running at once)."""
+        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.sigma2, sigma2, writable)
+
+
+NO_LISTING = Listing(0.0, 1, np.zeros(0, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32),
+                     np.zeros(0, np.int32), np.zeros(0), np.zeros(1, np.int64))
+"""The listing of a call that keeps nothing (no ``kept``): every anchor is listed at its own sigma2."""
 
 
 @dataclass(frozen=True)
@@ -125,18 +156,23 @@ class CandidateSets:
     """``members_into``'s arguments after (i, j, sign) and before its outputs."""
     signs: np.ndarray
     """(Ne, Nc) how the CAV frame is turned against each ego frame (``cbm.context.pair_signs``)."""
+    listing: Listing | None = None
+    """The members listed so far for these contexts and sigma1, if kept."""
 
     @property
     def width(self) -> int:
-        """The largest card(L_ij) (at least 1): the room a kernel needs for any one set."""
-        return max(1, int(self.count.max())) if len(self.count) else 1
+        """The largest card(L_ij) (at least 1), or the listing's when larger: the room a kernel needs
+        for any one set, as listed."""
+        largest = max(1, int(self.count.max())) if len(self.count) else 1
+        return largest if self.listing is None else max(largest, self.listing.width)
 
     def members(self, anchor: int) -> np.ndarray:
         """Pair ids of L_ij for ``anchor = i * Nc + j``, in increasing order."""
         n_cav = self.signs.shape[1]
         i, j = divmod(int(anchor), n_cav)
         out, ego_of, cav_of = (np.empty(int(self.count[anchor]) + 1, np.int64) for _ in range(3))
-        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out, ego_of, cav_of)
+        size = members_into(i, j, float(self.signs[i, j]), *self.lookup, out, ego_of, cav_of,
+                            np.empty(len(out)))
         return np.sort(out[:size])
 
 

@@ -14,6 +14,7 @@ from ..context import Context
 from ..reuse import ran, recall, remember
 from .candidates import CandidateSets, member_lookup
 from .join import run_join
+from .listing import listing_for
 
 MOST_PAIRS = 2**31 - 1
 """Most ego x CAV pairs: the voting quadruples are listed as 32-bit pair ids (half the memory)."""
@@ -49,5 +50,6 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
         count2 = counters
         count2 += count2 > 0
         remember(kept, "count", (sigma1_rad, sigma2), count2)
-    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs)
+    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs,
+                               listing_for(kept, sigma1_rad, sigma2, count2))
     return candidates, votes
