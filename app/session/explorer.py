@@ -6,7 +6,9 @@ outcome from one ``Settings`` value, reproducibly: the trial comes from the one 
 """
 from __future__ import annotations
 
+import threading
 import time
+from collections import OrderedDict
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -27,6 +29,10 @@ from evaluation.trials import frame_cav_inputs, frame_inputs
 from loaders import Sequence, is_vehicle
 
 from .settings import MAX_CAVS, Settings
+
+TRIALS_KEPT = 8
+"""Trials an ``Explorer`` keeps (with their oracle limit): a threshold or method edit, or the
+pinned baseline, recomputes on a trial already made."""
 
 
 @dataclass(frozen=True)
@@ -140,6 +146,8 @@ class Explorer:
         self.map_segments = _map_segments(sequence)
         self.reuse = Reuse()
         """What CBM built for the last few inputs that a threshold edit does not change (``cbm.reuse``)."""
+        self._trials: OrderedDict[tuple, tuple[FrameInputs, Trial, TrialMetrics]] = OrderedDict()
+        self._trials_lock = threading.Lock()
 
     def __len__(self) -> int:
         return len(self.sequence)
@@ -163,16 +171,34 @@ class Explorer:
         scenario = settings.scenario
         return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range)
 
+    def trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, TrialMetrics]:
+        """Frame ``index``'s trial inputs and trial under ``settings`` (its scenario and CAV choice, all
+        the trial depends on), and what the oracle reaches on it (``Outcome.limit``): made once and
+        kept for the ``TRIALS_KEPT`` used last; ``ValueError`` when the frame makes no trial."""
+        key = (index, settings.cav, settings.scenario)
+        with self._trials_lock:
+            found = self._trials.get(key)
+            if found is not None:
+                self._trials.move_to_end(key)
+                return found
+        inputs = self.trial_inputs(settings, index)
+        trial = inputs.build(settings.scenario, settings.scenario.seed)
+        made = inputs, trial, evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init,
+                                                    true_pairs=trial.gt_pairs), trial)
+        with self._trials_lock:
+            self._trials[key] = made
+            while len(self._trials) > TRIALS_KEPT:
+                self._trials.popitem(last=False)
+        return made
+
     def compute(self, settings: Settings) -> Outcome:
         """Trial, method result, metrics and diagnosis for ``settings``."""
         started = time.perf_counter()
         index = min(max(settings.frame, 0), len(self.sequence) - 1)
-        inputs = self.trial_inputs(settings, index)
-        trial = inputs.build(settings.scenario, settings.scenario.seed)
+        inputs, trial, limit = self.trial(settings, index)
         others = self.other_cavs(settings, index) if settings.cavs > 1 else ()
         result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
-        limit = evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=trial.gt_pairs), trial)
         world_to_ego = se2.inverse(trial.ego_pose)
         objects = inputs.trial
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),

@@ -81,6 +81,23 @@ def test_recompute_is_reproducible_and_follows_the_settings(explorer: Explorer) 
     assert c.frame_index == 40 and not np.allclose(a.trial.ego_pose, c.trial.ego_pose)
 
 
+def test_an_edit_recomputes_on_the_kept_trial_and_gives_what_a_fresh_explorer_gives() -> None:
+    kept = Explorer(loaders.open("synthetic:60"))
+    base = Settings()
+    edits = [base, base.with_params("cbm", sigma2=2.0), dataclasses.replace(base, method="icp"),
+             base.with_scenario(sigma_p=0.6), base.with_params("cbm", sigma2=2.0), dataclasses.replace(base, frame=3)]
+    outcomes = [kept.compute(settings) for settings in edits]
+    assert outcomes[1].trial is outcomes[0].trial and outcomes[2].trial is outcomes[0].trial
+    assert outcomes[3].trial is not outcomes[0].trial and outcomes[4].trial is outcomes[0].trial
+    for settings, outcome in zip(edits, outcomes):
+        fresh = Explorer(loaders.open("synthetic:60")).compute(settings)
+        assert np.array_equal(outcome.result.pairs, fresh.result.pairs)
+        assert np.array_equal(outcome.result.transform, fresh.result.transform)
+        timeless = [dataclasses.replace(metrics, runtime_s=0.0)
+                    for metrics in (outcome.metrics, fresh.metrics, outcome.limit, fresh.limit)]
+        assert timeless[0] == timeless[1] and timeless[2] == timeless[3]
+
+
 def test_every_method_runs(explorer: Explorer) -> None:
     for method in ("cbm", "cbm-no-consensus", "icp", "ricp", "vips"):
         outcome = explorer.compute(dataclasses.replace(Settings(), method=method))
