@@ -80,7 +80,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
             if sigma3 >= 0.0:
-                most = n_votes + _window_rows(k0, k1, c0, c1, ny, start)
+                most = n_votes + _column_rows(k0, k1, ny, start)
                 while most > len(vote_anchor):
                     vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
             n_votes = _query(zx, zy, u // per_anchor, ego_member[u], slot_row[u // per_anchor], signs, k0, k1, c0, c1,
@@ -99,7 +99,8 @@ def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy
     anchor and sign (``_slots``) from ``slot_row`` on, without a branch: which slot counts is
     settled per anchor pair afterwards (``_add_slots``). The few rows within sigma3 whose sign
     holds against anchor ``i`` (``check`` 0 or ``signs[i, b]``) are appended as (anchor, member)
-    pair ids, in the order of the rows. Returns the lists' new length."""
+    pair ids, in the order of the rows, to lists grown beforehand to hold the rows of the whole
+    columns (``_column_rows``). Returns the lists' new length."""
     n_cav = signs.shape[1]
     sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
     z2 = zx * zx + zy * zy
@@ -120,12 +121,10 @@ def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _window_rows(k0, k1, c0, c1, ny, start):
-    """The grid rows in the cells c0..c1 of the columns k0..k1 (``grid.cells``)."""
-    rows = 0
-    for k in range(k0, k1 + 1):
-        rows += start[k * ny + c1 + 1] - start[k * ny + c0]
-    return rows
+def _column_rows(k0, k1, ny, start):
+    """The grid rows of the whole columns k0..k1 (``grid.cells``; none when k1 < k0): a bound on the
+    rows of any window in them, read from two offsets."""
+    return start[(k1 + 1) * ny] - start[k0 * ny] if k1 >= k0 else 0
 
 
 @numba.njit(cache=True, nogil=True)
