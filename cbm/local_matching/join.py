@@ -71,6 +71,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
     column_start = np.empty(nx + 1, np.int64)
     slots = np.zeros(ANCHORS_PER_CHUNK * 3 * n_cav, np.int32)
     slot_row = np.empty(n_ego, np.int64)
+    widest = _widest_column(nx, ny, start)
     for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
         last = min(chunk + ANCHORS_PER_CHUNK, len(ego_ids))
         for n in range(chunk, last):
@@ -80,7 +81,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
             if sigma3 >= 0.0:
-                most = n_votes + _column_rows(k0, k1, ny, start)
+                most = n_votes + (k1 - k0 + 1) * widest
                 while most > len(vote_anchor):
                     vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
             n_votes = _query(zx, zy, u // per_anchor, ego_member[u], slot_row[u // per_anchor], signs, k0, k1, c0, c1,
@@ -99,8 +100,8 @@ def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy
     anchor and sign (``_slots``) from ``slot_row`` on, without a branch: which slot counts is
     settled per anchor pair afterwards (``_add_slots``). The few rows within sigma3 whose sign
     holds against anchor ``i`` (``check`` 0 or ``signs[i, b]``) are appended as (anchor, member)
-    pair ids, in the order of the rows, to lists grown beforehand to hold the rows of the whole
-    columns (``_column_rows``). Returns the lists' new length."""
+    pair ids, in the order of the rows, to lists grown beforehand to hold as many rows as k1 - k0 + 1
+    columns can (``_widest_column``). Returns the lists' new length."""
     n_cav = signs.shape[1]
     sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
     z2 = zx * zx + zy * zy
@@ -120,11 +121,13 @@ def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy
     return n_votes
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _column_rows(k0, k1, ny, start):
-    """The grid rows of the whole columns k0..k1 (``grid.cells``; none when k1 < k0): a bound on the
-    rows of any window in them, read from two offsets."""
-    return start[(k1 + 1) * ny] - start[k0 * ny] if k1 >= k0 else 0
+@numba.njit(cache=True, nogil=True)
+def _widest_column(nx, ny, start):
+    """The most grid rows one column holds: ``k`` columns of a window hold at most ``k`` times as many."""
+    widest = 0
+    for k in range(nx):
+        widest = max(widest, start[(k + 1) * ny] - start[k * ny])
+    return widest
 
 
 @numba.njit(cache=True, nogil=True)
