@@ -25,6 +25,8 @@ CELLS_PER_ROW = 4
 MARGIN = 1e-6
 """Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
 each vector in the window is then tested exactly."""
+MOST_ROWS = 2**31 - 1
+"""Most grid rows (twice the CAV context vectors at most): the grid's offsets are int32."""
 HEADING_GROUPS = 4
 """Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
 
@@ -55,13 +57,15 @@ class VectorGrid:
 def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
     sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
-    Two passes over the vectors (their extent comes from ``Context.bounds``): a counting sort that
-    turns them as it places them."""
+    A counting sort that turns the vectors as it places them (their extent comes from
+    ``Context.bounds``)."""
+    if 2 * len(cav.vectors) > MOST_ROWS:
+        raise ValueError(f"cbm.match: {len(cav.vectors)} CAV context vectors make more grid rows than {MOST_ROWS}")
     sign = cav_sign.astype(np.int64)
     n, u0, v0, u1, v1 = _extent(cav.bounds, sign, len(cav.vectors) // max(len(cav.bounds), 1))
     if n == 0:
         empty, ids = np.zeros(0), np.zeros(0, np.int32)
-        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int64), empty, empty.copy(), ids, ids.copy(),
+        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int32), empty, empty.copy(), ids, ids.copy(),
                           np.zeros(0, np.int8))
     width, height = u1 - u0, v1 - v0
     most_cells = min(MAX_CELLS, CELLS_PER_ROW * n + 1)
@@ -92,33 +96,50 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
     row's sign. The vectors come anchor by anchor, ``len(vectors) // len(cav_sign)`` each (as
-    ``build_context`` stacks them). Two passes over them: ``_cells`` finds each row's cell, whose
-    rows are counted (``start`` shifted by two); then each row goes to its cell's next free place
-    (``start`` shifted by one, so that it ends unshifted). Returns (start, x, y, anchor, member,
-    check). ``anchor`` and ``member`` are CAV objects, fewer than 2^31 (``local_matching.MOST_PAIRS``
-    bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1 (int8): 25 bytes a row instead of 40."""
+    ``build_context`` stacks them). Three passes over them: ``_cells`` finds each row's cell, whose
+    rows are counted (``start`` shifted by two); each row's source (twice its vector's index, plus 1
+    for the turn by -1 of a varying sign) goes to its cell's next free place (``start`` shifted by
+    one, so that it ends unshifted); then ``_written`` writes the rows in order from their sources,
+    one random write a row instead of five. Returns (start, x, y, anchor, member, check). Offsets and
+    sources fit int32 (``MOST_ROWS``)."""
     per_anchor = len(vectors) // len(cav_sign)
     key = _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny)
-    start = np.zeros(nx * ny + 2, np.int64)
+    start = np.zeros(nx * ny + 2, np.int32)
     for r in range(n):
         start[key[r] + 2] += 1
     total = 0
     for k in range(2, len(start)):
         total += start[k]
         start[k] = total
-    gx, gy = np.empty(n), np.empty(n)
-    g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
+    source = np.empty(n, np.int32)
     r = 0
     for a in range(len(cav_sign)):
-        s = cav_sign[a]
         for v in range(a * per_anchor, (a + 1) * per_anchor):
-            x, y, b, m = vectors[v, 0], vectors[v, 1], anchor[v], member[v]
-            if s != 0:
-                r = _put(r, key, start, s * x, s * y, b, m, 0, gx, gy, g_anchor, g_member, g_check)
-            else:
-                r = _put(r, key, start, x, y, b, m, 1, gx, gy, g_anchor, g_member, g_check)
-                r = _put(r, key, start, -x, -y, b, m, -1, gx, gy, g_anchor, g_member, g_check)
-    return start[:-1], gx, gy, g_anchor, g_member, g_check
+            for turn in range(1 if cav_sign[a] != 0 else 2):
+                source[start[key[r] + 1]] = 2 * v + turn
+                start[key[r] + 1] += 1
+                r += 1
+    return (start[:-1],) + _written(source, vectors, anchor, member, cav_sign)
+
+
+@numba.njit(cache=True, nogil=True)
+def _written(source, vectors, anchor, member, cav_sign):
+    """The grid's rows (x, y, anchor, member, check) in the order of their sources (``_place``): the
+    vector turned by its anchor's sign, or where the sign varies by +1 (even source) or -1 (odd),
+    ``check`` then that sign. ``anchor`` and ``member`` are CAV objects, fewer than 2^31
+    (``local_matching.MOST_PAIRS`` bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1
+    (int8): 25 bytes a row instead of 40."""
+    n = len(source)
+    gx, gy = np.empty(n), np.empty(n)
+    g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
+    for row in range(n):
+        v, turn = source[row] >> 1, source[row] & 1
+        b = anchor[v]
+        fixed = cav_sign[b]
+        sign = fixed if fixed != 0 else 1 - 2 * turn
+        gx[row], gy[row], g_anchor[row], g_member[row] = sign * vectors[v, 0], sign * vectors[v, 1], b, member[v]
+        g_check[row] = 0 if fixed != 0 else sign
+    return gx, gy, g_anchor, g_member, g_check
 
 
 @numba.njit(cache=True, nogil=True)
@@ -146,15 +167,6 @@ def _cell(x, y, u0, v0, cell, nx, ny):
     """The column-major cell of the vector (x, y) in the grid of corner (u0, v0)."""
     return (min(int(math.floor((x + y - u0) / cell)), nx - 1) * ny
             + min(int(math.floor((x - y - v0) / cell)), ny - 1))
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _put(r, key, start, x, y, b, m, check, gx, gy, g_anchor, g_member, g_check):
-    """Row ``r`` (vector (x, y) of anchor ``b`` to member ``m``) at its cell's next free place; r + 1."""
-    row = start[key[r] + 1]
-    start[key[r] + 1] = row + 1
-    gx[row], gy[row], g_anchor[row], g_member[row], g_check[row] = x, y, b, m, check
-    return r + 1
 
 
 @numba.njit(cache=True, nogil=True, inline="always")

@@ -58,21 +58,20 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
-    within sigma3 as (anchor, member) rows. Each pass scans only the cells its own threshold's
-    window covers, and a negative threshold skips its pass: a sigma2 edit counts again without
-    listing the votes, a sigma3 edit lists them without counting. A grid row with ``check``
-    s counts only where ``signs[i, j] == s``. The ego vectors of ``ANCHORS_PER_CHUNK`` objects at a
-    time are visited column by column of the grid, so consecutive queries read the same few
-    columns (from the cache) and the chunk's counters stay in it too. The counting pass tests no
-    sign (``_count_query``), the votes are listed in a second, narrower pass over the cells within
-    sigma3 (``_vote_query``).
+    within sigma3 as (anchor, member) rows. One pass scans the cells of the wider threshold's window
+    (``_query``); a negative threshold skips its test: a sigma2 edit counts again without listing
+    the votes, a sigma3 edit lists them without counting. The ego vectors of ``ANCHORS_PER_CHUNK``
+    objects at a time are visited column by column of the grid, so consecutive queries read the
+    same few columns (from the cache) and the chunk's counters stay in it too.
     """
     n_ego, n_cav = signs.shape
+    counting, radius = sigma2 >= 0.0, max(sigma2, sigma3)
     vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
     order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
     column_start = np.empty(nx + 1, np.int64)
-    slots = np.zeros(ANCHORS_PER_CHUNK * 3 * n_cav if sigma2 >= 0.0 else 0, np.int32)
+    slots = np.zeros(ANCHORS_PER_CHUNK * 3 * n_cav, np.int32)
     slot_row = np.empty(n_ego, np.int64)
+    widest = _widest_column(nx, ny, start)
     for chunk in range(0, len(ego_ids), ANCHORS_PER_CHUNK):
         last = min(chunk + ANCHORS_PER_CHUNK, len(ego_ids))
         for n in range(chunk, last):
@@ -80,69 +79,55 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
         for q in range(_by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_start, order)):
             u = order[q]
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
-            if sigma2 >= 0.0:
-                _count_query(zx, zy, slot_row[u // per_anchor], u0, v0, cell, nx, ny, start, gx, gy, g_slot,
-                             cos2_sigma1, sigma2, slots)
+            k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
             if sigma3 >= 0.0:
-                k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma3, u0, v0, cell, nx, ny)
-                most = n_votes + _window_rows(k0, k1, c0, c1, ny, start)
+                most = n_votes + (k1 - k0 + 1) * widest
                 while most > len(vote_anchor):
                     vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
-                n_votes = _vote_query(zx, zy, u // per_anchor, ego_member[u], signs, k0, k1, c0, c1, ny, start, gx,
-                                      gy, g_anchor, g_member, g_check, cos2_sigma1, sigma3, vote_anchor, vote_member,
-                                      n_votes)
-        if sigma2 >= 0.0:
+            n_votes = _query(zx, zy, u // per_anchor, ego_member[u], slot_row[u // per_anchor], signs, k0, k1, c0, c1,
+                             ny, start, gx, gy, g_anchor, g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3,
+                             slots, vote_anchor, vote_member, n_votes)
+        if counting:
             _add_slots(ego_ids[chunk:last], signs, slots, count2)
     return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _count_query(zx, zy, slot_row, u0, v0, cell, nx, ny, start, gx, gy, g_slot, cos2_sigma1, sigma2, slots):
-    """Eq. 7 within sigma2 for one ego vector z against the rows of its window: each accepted row
-    adds 1 to its slot (``slots``), the row's anchor and sign (``_slots``) from ``slot_row`` on. The
-    loop tests no sign and takes no branch the data decide, so it runs at full speed; which slot
-    counts is settled per anchor pair afterwards (``_add_slots``)."""
-    z2 = zx * zx + zy * zy
-    k0, k1, c0, c1 = cells(zx + zy, zx - zy, sigma2, u0, v0, cell, nx, ny)
-    for k in range(k0, k1 + 1):
-        for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-            wx, wy = gx[v], gy[v]
-            dot = zx * wx + zy * wy
-            squared_norms = z2 * (wx * wx + wy * wy)
-            slots[slot_row + g_slot[v]] += ((abs(zx - wx) + abs(zy - wy) <= sigma2) & (squared_norms > 0.0)
-                                            & (dot * dot >= cos2_sigma1 * squared_norms))
-
-
-@numba.njit(cache=True, nogil=True, inline="always")
-def _vote_query(zx, zy, i, member, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check,
-                cos2_sigma1, sigma3, vote_anchor, vote_member, n_votes):
-    """The quadruples within sigma3 of one ego vector z of anchor ``i`` (and ``member``) appended
-    as (anchor, member) pair ids, without branches: every row is written and the count moves on
-    only for an accepted one, in lists grown beforehand to hold the whole window, the cells c0..c1
-    of the columns k0..k1 (``_window_rows``). Returns the lists' new length."""
+def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check,
+           g_slot, cos2_sigma1, sigma2, sigma3, slots, vote_anchor, vote_member, n_votes):
+    """Eq. 7 for one ego vector z of anchor ``i`` (and ``member``) against the rows of the cells
+    c0..c1 of the columns k0..k1. Each row within sigma2 adds 1 to its slot (``slots``), the row's
+    anchor and sign (``_slots``) from ``slot_row`` on, without a branch: which slot counts is
+    settled per anchor pair afterwards (``_add_slots``). The few rows within sigma3 whose sign
+    holds against anchor ``i`` (``check`` 0 or ``signs[i, b]``) are appended as (anchor, member)
+    pair ids, in the order of the rows, to lists grown beforehand to hold as many rows as k1 - k0 + 1
+    columns can (``_widest_column``). Returns the lists' new length."""
     n_cav = signs.shape[1]
     sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
     z2 = zx * zx + zy * zy
     for k in range(k0, k1 + 1):
         for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-            b, wx, wy = g_anchor[v], gx[v], gy[v]
+            wx, wy = gx[v], gy[v]
             dot = zx * wx + zy * wy
             squared_norms = z2 * (wx * wx + wy * wy)
-            vote_anchor[n_votes] = row + b
-            vote_member[n_votes] = member_row + g_member[v]
-            n_votes += (((g_check[v] == 0) | (sign_row[b] == g_check[v]))
-                        & (abs(zx - wx) + abs(zy - wy) <= sigma3) & (squared_norms > 0.0)
-                        & (dot * dot >= cos2_sigma1 * squared_norms))
+            l1 = abs(zx - wx) + abs(zy - wy)
+            angle = (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms)
+            slots[slot_row + g_slot[v]] += (l1 <= sigma2) & angle
+            if (l1 <= sigma3) & angle:
+                b = g_anchor[v]
+                vote_anchor[n_votes] = row + b
+                vote_member[n_votes] = member_row + g_member[v]
+                n_votes += (g_check[v] == 0) | (sign_row[b] == g_check[v])
     return n_votes
 
 
-@numba.njit(cache=True, nogil=True, inline="always")
-def _window_rows(k0, k1, c0, c1, ny, start):
-    """The grid rows in the cells c0..c1 of the columns k0..k1 (``grid.cells``)."""
-    rows = 0
-    for k in range(k0, k1 + 1):
-        rows += start[k * ny + c1 + 1] - start[k * ny + c0]
-    return rows
+@numba.njit(cache=True, nogil=True)
+def _widest_column(nx, ny, start):
+    """The most grid rows one column holds: ``k`` columns of a window hold at most ``k`` times as many."""
+    widest = 0
+    for k in range(nx):
+        widest = max(widest, start[(k + 1) * ny] - start[k * ny])
+    return widest
 
 
 @numba.njit(cache=True, nogil=True)
@@ -207,7 +192,7 @@ def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context,
     grids = _grids(batch, first, cav, signs, radius, run, kept)
     jobs = []
     for group, grid in zip(batch, grids):
-        slot = _slots(grid.anchor, grid.check) if sigma2 >= 0.0 else grid.anchor
+        slot = _slots(grid.anchor, grid.check)
         common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
                   grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, slot, math.cos(sigma1_rad) ** 2,
                   sigma2, sigma3, count2)
