@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.spatial import cKDTree
 
 from . import se2
 from .estimate import Fit
@@ -76,15 +75,95 @@ def size_mismatch(ego: np.ndarray, cav: np.ndarray) -> np.ndarray:
 def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     """Candidate pairs (i, j) whose centres lie within ``gate`` and whose sizes agree within
     ``SIZE_GATE``, and their costs: the negative log-likelihood of one object seen twice,
-    ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``."""
-    found = cKDTree(ego[:, :2]).sparse_distance_matrix(cKDTree(cav[:, :2]), gate, output_type="ndarray")
-    i, j, d = found["i"].astype(np.intp), found["j"].astype(np.intp), found["v"]
-    mismatch = size_mismatch(ego[i], cav[j])
-    keep = mismatch <= SIZE_GATE
-    i, j, d, mismatch = i[keep], j[keep], d[keep], mismatch[keep]
-    cost = ((d / sigma) ** 2 + (axis_difference(ego[i, 6], cav[j, 6]) / HEADING_SIGMA) ** 2
-            + (mismatch / SIZE_SIGMA) ** 2)
-    return np.stack([i, j], axis=1), cost
+    ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``; sorted
+    by ego index, then CAV index. (The size mismatch's logarithm is numpy's, as ``size_mismatch``.)"""
+    i, j, d, ratios = near_pairs(ego, cav, gate)
+    return scored_pairs(ego, cav, i, j, d, np.hypot(*np.log(ratios).T), sigma)
+
+
+@numba.njit(cache=True, nogil=True)
+def near_pairs(ego, cav, gate):
+    """(i, j, d, size ratios) of the ego and CAV boxes whose centres lie within ``gate``: ``d^2 =
+    (x_e - x_c)^2 + (y_e - y_c)^2 <= gate^2`` summed in that order, as a k-d tree's distance matrix
+    reads it, and ``d`` its square root; sorted by ego index, then CAV index. The ratios are
+    ``l_e / l_c`` and ``w_e / w_c`` of the sizes at least ``SMALLEST_SIZE`` (``size_mismatch``).
+    The CAV centres sorted by x bound each ego box's search to the window within the gate in x;
+    a first pass counts each ego box's pairs, a second writes them."""
+    gate2 = gate * gate
+    order = np.argsort(cav[:, 0])
+    xs = cav[order, 0]
+    start, at = np.empty(len(ego), np.intp), np.zeros(len(ego) + 1, np.intp)
+    j, d = np.empty(0, np.intp), np.empty(0)
+    for e in range(len(ego)):
+        start[e] = _window_start(xs, ego[e, 0], gate2)
+        at[e + 1] = at[e] + _within(ego, cav, order, xs, e, start[e], gate2, j, d, -1)
+    n = at[len(ego)]
+    i, j, d = np.empty(n, np.intp), np.empty(n, np.intp), np.empty(n)
+    for e in range(len(ego)):
+        _within(ego, cav, order, xs, e, start[e], gate2, j, d, at[e])
+        _sort_by_cav(j, d, at[e], at[e + 1])
+        i[at[e]:at[e + 1]] = e
+    ratios = np.empty((n, 2))
+    for k in range(n):
+        for c in range(2):
+            ratios[k, c] = max(ego[i[k], 3 + c], SMALLEST_SIZE) / max(cav[j[k], 3 + c], SMALLEST_SIZE)
+    return i, j, d, ratios
+
+
+@numba.njit(cache=True, nogil=True)
+def _window_start(xs, x, gate2):
+    """The first index of the increasing ``xs`` not left of ``x`` by more than the gate
+    (``(x - xs[k])^2 > gate2``, the test of the distance's first term)."""
+    lo, hi = 0, len(xs)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if xs[mid] < x and (x - xs[mid]) * (x - xs[mid]) > gate2:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(cache=True, nogil=True)
+def _within(ego, cav, order, xs, e, k, gate2, j, d, at):
+    """How many CAV boxes lie within the gate of ego box ``e``, scanning ``order`` from ``k`` until
+    ``xs`` is right of it by more than the gate; written to ``j[at:]``, ``d[at:]`` unless ``at < 0``."""
+    ex, ey, n = ego[e, 0], ego[e, 1], 0
+    while k < len(xs) and not (xs[k] > ex and (ex - xs[k]) * (ex - xs[k]) > gate2):
+        dx, dy = ex - cav[order[k], 0], ey - cav[order[k], 1]
+        square = dx * dx + dy * dy
+        if square <= gate2:
+            if at >= 0:
+                j[at + n], d[at + n] = order[k], math.sqrt(square)
+            n += 1
+        k += 1
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def _sort_by_cav(j, d, lo, hi):
+    """Insertion sort of one ego box's few candidates ``j[lo:hi]`` (distinct), ``d`` alongside."""
+    for a in range(lo + 1, hi):
+        jj, dd, b = j[a], d[a], a
+        while b > lo and j[b - 1] > jj:
+            j[b], d[b] = j[b - 1], d[b - 1]
+            b -= 1
+        j[b], d[b] = jj, dd
+
+
+@numba.njit(cache=True, nogil=True)
+def scored_pairs(ego, cav, i, j, d, mismatch, sigma):
+    """The candidates ``(i, j)`` at distance ``d`` whose ``mismatch`` is at most ``SIZE_GATE``, as
+    (K, 2) pairs, and their costs (``gated_pairs``), each term as numpy evaluates it elementwise."""
+    keep = np.flatnonzero(mismatch <= SIZE_GATE)
+    pairs, cost = np.empty((len(keep), 2), np.intp), np.empty(len(keep))
+    for n in range(len(keep)):
+        k = keep[n]
+        pairs[n, 0], pairs[n, 1] = i[k], j[k]
+        turn = abs((ego[i[k], 6] - cav[j[k], 6] + math.pi) % (2.0 * math.pi) - math.pi)
+        a, b, c = d[k] / sigma, min(turn, math.pi - turn) / HEADING_SIGMA, mismatch[k] / SIZE_SIGMA
+        cost[n] = a * a + b * b + c * c
+    return pairs, cost
 
 
 def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> np.ndarray:
