@@ -100,21 +100,30 @@ Refit = Callable[[np.ndarray, np.ndarray], Fit]
 
 
 def refine(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, refit: Refit, floor: float,
-           widest: float, density: float, guided: bool) -> tuple[np.ndarray, np.ndarray, float]:
-    """Steps 1-2 for one set of pairs and its robust ``fit``: (pairs, correction, sigma) after the
-    guided re-association (when ``guided``: the eq. 13 winner's, as without verification) and the
-    noise-aware re-association with least squares on the pairs kept."""
+           widest: float, density: float, guided: bool) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Steps 1-3 for one set of pairs and its robust ``fit``: (pairs, correction, sigma, score) after
+    the guided re-association (when ``guided``: the eq. 13 winner's, as without verification) and
+    the noise-aware re-association with least squares on the pairs kept. Once the pairs settle, the
+    last round's evidence of them is their score (the same pose, noise and pairs: ``score``)."""
     current = reassociate(ego, cav, pairs, fit, widest, refit).pairs if guided else pairs
     T, sigma = least_squares(ego, cav, current, floor)
     for _ in range(MAX_ROUNDS):
         moved = se2.apply_boxes(T, cav)
         found = gated_assignment(ego, moved, widest * sigma, sigma)
-        found = found[evidence(ego, moved, found, sigma, density, current) > 0]
-        if len(found) < 2 or np.array_equal(found, current):
+        weight = evidence(ego, moved, found, sigma, density, current)
+        found, weight = found[weight > 0], weight[weight > 0]
+        if np.array_equal(found, current):
+            return current, T, sigma, float(weight.sum())
+        if len(found) < 2:
             break
         current = found
         T, sigma = least_squares(ego, cav, current, floor)
-    return current, T, sigma
+    return current, T, sigma, score(ego, cav, current, T, sigma, density)
+
+
+def score(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, T: np.ndarray, sigma: float, density: float) -> float:
+    """Step 3: the summed evidence of ``pairs`` under the correction ``T`` and noise ``sigma``."""
+    return float(evidence(ego, se2.apply_boxes(T, cav), pairs, sigma, density, pairs).sum())
 
 
 def least_squares(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, floor: float) -> tuple[np.ndarray, float]:
@@ -127,10 +136,9 @@ def least_squares(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, floor: fl
 
 def hypothesis(ego: np.ndarray, cav: np.ndarray, anchor: int, pairs: np.ndarray, fit: Fit, refit: Refit,
                floor: float, widest: float, density: float, guided: bool) -> Hypothesis:
-    """One anchor's set and its robust fit refined (``refine``) and scored (step 3)."""
-    found, T, sigma = refine(ego, cav, pairs, fit, refit, floor, widest, density, guided)
-    score = evidence(ego, se2.apply_boxes(T, cav), found, sigma, density, found).sum()
-    return Hypothesis(anchor, pairs, found, T, sigma, float(score))
+    """One anchor's set and its robust fit refined and scored (``refine``)."""
+    found, T, sigma, evidence_sum = refine(ego, cav, pairs, fit, refit, floor, widest, density, guided)
+    return Hypothesis(anchor, pairs, found, T, sigma, evidence_sum)
 
 
 def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float, density: float,
