@@ -177,23 +177,45 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    rows, cols = candidates[:, 0], candidates[:, 1]
-    n_rows, n_cols = np.count_nonzero(np.bincount(rows)), np.count_nonzero(np.bincount(cols))
-    if n_rows * n_cols <= DENSE_BLOCK:
-        group, size = np.zeros(len(candidates), np.int64), np.array([len(candidates)])
-    else:
-        group, size = connected_groups(rows, cols, len(ego), len(cav))
-    alone = size[group] == 1
-    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), len(ego),
-                                                                      len(cav), _UNPAIRED)
-    pairs = [candidates[alone]]
-    for g in np.flatnonzero(size > 1):
+    partner, groups, row_ids, row_at, col_ids, col_at, blocks, block_at = assignment_blocks(
+        candidates, cost, len(ego), len(cav), DENSE_BLOCK, _UNPAIRED)
+    for g in groups:
         block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
         r, c = linear_sum_assignment(block)
         inside = block[r, c] < _UNPAIRED
-        pairs.append(np.stack([row_ids[row_at[g] + r[inside]], col_ids[col_at[g] + c[inside]]], axis=1))
-    pairs = np.concatenate(pairs)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+        partner[row_ids[row_at[g] + r[inside]]] = col_ids[col_at[g] + c[inside]]
+    rows = np.flatnonzero(partner >= 0)
+    return np.stack([rows, partner[rows]], axis=1)
+
+
+@numba.njit(cache=True, nogil=True)
+def assignment_blocks(candidates, cost, n_ego, n_cav, dense_block, unpaired):
+    """What ``gated_assignment`` solves: the CAV partner of each ego box in a group of one candidate
+    (-1 elsewhere), the groups of more to assign, and every group's dense block (``dense_blocks``).
+    All candidates are one group while their distinct ego boxes times CAV boxes are at most
+    ``dense_block``, else the connected groups (``connected_groups``)."""
+    rows, cols = candidates[:, 0], candidates[:, 1]
+    if _distinct(rows, n_ego) * _distinct(cols, n_cav) <= dense_block:
+        group, size = np.zeros(len(rows), np.int64), np.full(1, len(rows), np.int64)
+    else:
+        group, size = connected_groups(rows, cols, n_ego, n_cav)
+    partner = np.full(n_ego, -1, np.intp)
+    for k in range(len(rows)):
+        if size[group[k]] == 1:
+            partner[rows[k]] = cols[k]
+    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), n_ego,
+                                                                      n_cav, unpaired)
+    return partner, np.flatnonzero(size > 1), row_ids, row_at, col_ids, col_at, blocks, block_at
+
+
+@numba.njit(cache=True, nogil=True)
+def _distinct(values, n):
+    """How many distinct ``values`` in ``[0, n)`` there are."""
+    seen, count = np.zeros(n, np.bool_), 0
+    for value in values:
+        if not seen[value]:
+            seen[value], count = True, count + 1
+    return count
 
 
 @numba.njit(cache=True, nogil=True)
