@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import se2
-from .estimate import Fit, least_squares_fit, residuals
+from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, axis_difference, gated_assignment, reassociate
 from .selection import Visit, anchor_sets
@@ -130,7 +130,7 @@ def least_squares(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, floor: fl
     """The least-squares correction of ``pairs`` (eq. 14 with every weight 1: the efficient fit once
     the gate has cleaned them) and the noise sigma of its residuals (``cbm.gates.scene_sigma``)."""
     src, dst = cav[pairs[:, 1], :2], ego[pairs[:, 0], :2]
-    T = least_squares_fit(src, dst, floor).transform
+    T = weighted_procrustes(src, dst)
     return T, scene_sigma(residuals(T, src, dst), floor)
 
 
