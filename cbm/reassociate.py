@@ -91,16 +91,16 @@ def near_pairs(ego, cav, gate):
     a first pass counts each ego box's pairs, a second writes them."""
     gate2 = gate * gate
     order = np.argsort(cav[:, 0])
-    xs = cav[order, 0]
+    xs, ys = cav[order, 0], cav[order, 1]
     start, at = np.empty(len(ego), np.intp), np.zeros(len(ego) + 1, np.intp)
     j, d = np.empty(0, np.intp), np.empty(0)
     for e in range(len(ego)):
         start[e] = _window_start(xs, ego[e, 0], gate2)
-        at[e + 1] = at[e] + _within(ego, cav, order, xs, e, start[e], gate2, j, d, -1)
+        at[e + 1] = at[e] + _within(ego[e, 0], ego[e, 1], xs, ys, order, start[e], gate2, j, d, -1)
     n = at[len(ego)]
     i, j, d = np.empty(n, np.intp), np.empty(n, np.intp), np.empty(n)
     for e in range(len(ego)):
-        _within(ego, cav, order, xs, e, start[e], gate2, j, d, at[e])
+        _within(ego[e, 0], ego[e, 1], xs, ys, order, start[e], gate2, j, d, at[e])
         _sort_by_cav(j, d, at[e], at[e + 1])
         i[at[e]:at[e + 1]] = e
     ratios = np.empty((n, 2))
@@ -125,12 +125,13 @@ def _window_start(xs, x, gate2):
 
 
 @numba.njit(cache=True, nogil=True)
-def _within(ego, cav, order, xs, e, k, gate2, j, d, at):
-    """How many CAV boxes lie within the gate of ego box ``e``, scanning ``order`` from ``k`` until
-    ``xs`` is right of it by more than the gate; written to ``j[at:]``, ``d[at:]`` unless ``at < 0``."""
-    ex, ey, n = ego[e, 0], ego[e, 1], 0
+def _within(ex, ey, xs, ys, order, k, gate2, j, d, at):
+    """How many of the CAV centres ``(xs, ys)`` (sorted by x; ``order`` their indices) lie within the
+    gate of the ego centre ``(ex, ey)``, scanning from ``k`` until ``xs`` is right of it by more than
+    the gate; written to ``j[at:]``, ``d[at:]`` unless ``at < 0``."""
+    n = 0
     while k < len(xs) and not (xs[k] > ex and (ex - xs[k]) * (ex - xs[k]) > gate2):
-        dx, dy = ex - cav[order[k], 0], ey - cav[order[k], 1]
+        dx, dy = ex - xs[k], ey - ys[k]
         square = dx * dx + dy * dy
         if square <= gate2:
             if at >= 0:
