@@ -271,10 +271,16 @@ def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, floa
     smallest, and that residual. It stands while fewer than half of the pairs are wrong. The pairs
     are put in order of their distances from the centroids first (``by_centroid_distance``), so the
     answer depends neither on the input order nor on where either frame lies."""
-    order = by_centroid_distance(src, dst)
     a, b = hypothesis_pairs(len(src))
-    c, s, tx, ty, median = _least_median(src[order], dst[order], a, b, len(src) // 2)
+    c, s, tx, ty, median = _ordered_least_median(src, dst, a, b)
     return np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]]), math.sqrt(median)
+
+
+@numba.njit(cache=True, nogil=True)
+def _ordered_least_median(src, dst, a, b):
+    """``_least_median`` of the pairs in ``by_centroid_distance`` order, at index ``K // 2`` counted from 0."""
+    order = by_centroid_distance(src, dst)
+    return _least_median(src[order], dst[order], a, b, len(src) // 2)
 
 
 @numba.njit(cache=True, nogil=True)
