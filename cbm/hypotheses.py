@@ -154,7 +154,18 @@ def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float
 
 def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two corrections differ by less than ``SAME_POSE_M`` and ``SAME_POSE_DEG``."""
-    d = se2.inverse(a) @ b
+    return _small(se2.inverse(a) @ b)
+
+
+def near_any(a: np.ndarray, poses: list[np.ndarray]) -> bool:
+    """Whether ``a`` is the same pose as one of ``poses`` (``same_pose``, ``a`` inverted once)."""
+    inverse = se2.inverse(a)
+    return any(_small(inverse @ pose) for pose in poses)
+
+
+def _small(d: np.ndarray) -> bool:
+    """Whether the transform ``d`` between two corrections moves by less than ``SAME_POSE_M`` and
+    turns by less than ``SAME_POSE_DEG``."""
     return (float(np.hypot(*se2.translation_of(d))) < SAME_POSE_M
             and abs(math.degrees(float(se2.yaw_of(d)))) < SAME_POSE_DEG)
 
@@ -186,7 +197,7 @@ def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, wides
         if len(pairs) < 2:
             continue
         fit = winner_fit if anchor == winner else refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])
-        if any(same_pose(fit.transform, pose) for pose in poses):
+        if near_any(fit.transform, poses):
             continue
         found.append(hypothesis(ego, cav, anchor, pairs, fit, refit, floor, widest, density, anchor == winner))
         poses += [fit.transform, found[-1].correction]
