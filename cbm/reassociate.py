@@ -76,7 +76,9 @@ def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> 
     """Candidate pairs (i, j) whose centres lie within ``gate`` and whose sizes agree within
     ``SIZE_GATE``, and their costs: the negative log-likelihood of one object seen twice,
     ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``; sorted
-    by ego index, then CAV index. (The size mismatch's logarithm is numpy's, as ``size_mismatch``.)"""
+    by ego index, then CAV index. (The size mismatch's logarithm is numpy's, as ``size_mismatch``;
+    the kernels read C-ordered boxes, so another layout compiles nothing new.)"""
+    ego, cav = np.ascontiguousarray(ego, dtype=float), np.ascontiguousarray(cav, dtype=float)
     i, j, d, ratios = near_pairs(ego, cav, gate)
     return scored_pairs(ego, cav, i, j, d, np.hypot(*np.log(ratios).T), sigma)
 
