@@ -176,6 +176,8 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     A small problem is one dense block for ``linear_sum_assignment``; a large one splits into the
     connected groups of candidates that share no box, each solved on its own (a lone candidate is
     its own answer), so the work follows the groups' sizes rather than the product of the box counts.
+    A block whose rows each take their own least cost is answered without the solver
+    (``row_minima``: the answer the solver gives it).
     """
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
@@ -208,7 +210,45 @@ def assignment_blocks(candidates, cost, n_ego, n_cav, dense_block, unpaired):
             partner[rows[k]] = cols[k]
     row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), n_ego,
                                                                       n_cav, unpaired)
-    return partner, np.flatnonzero(size > 1), row_ids, row_at, col_ids, col_at, blocks, block_at
+    left = np.zeros(len(size), np.bool_)
+    for g in np.flatnonzero(size > 1):
+        n_rows, n_cols = row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g]
+        best = row_minima(blocks[block_at[g]:block_at[g + 1]], n_rows, n_cols)
+        if best[0] < 0:
+            left[g] = True
+            continue
+        for k in range(len(best)):
+            ego_at, cav_at = (best[k], k) if n_cols < n_rows else (k, best[k])
+            partner[row_ids[row_at[g] + ego_at]] = col_ids[col_at[g] + cav_at]
+    return partner, np.flatnonzero(left), row_ids, row_at, col_ids, col_at, blocks, block_at
+
+
+@numba.njit(cache=True, nogil=True)
+def row_minima(block, n_rows, n_cols):
+    """``linear_sum_assignment`` of the (n_rows, n_cols) ``block`` (row by row) when each row takes
+    the column of its least cost: per row of the block as the solver reads it (transposed when
+    taller than wide), its column; -1 first when that does not hold. The solver (shortest
+    augmenting paths, Crouse 2016) takes the rows in order; while every row's least cost is unique
+    and in a column no earlier row took, each path is that one step and leaves the duals of the
+    columns at 0, so the next row reads its own costs as they are. Unique is tested on the costs
+    less the block's least one, which some releases of the solver read (unique there is unique
+    in the costs themselves)."""
+    tall = n_cols < n_rows
+    n, m = (n_cols, n_rows) if tall else (n_rows, n_cols)
+    lowest = block.min()
+    best, taken = np.full(n, -1, np.intp), np.zeros(m, np.bool_)
+    for i in range(n):
+        least = np.inf
+        for j in range(m):
+            least = min(least, block[j * n_cols + i] if tall else block[i * n_cols + j])
+        for j in range(m):
+            if (block[j * n_cols + i] if tall else block[i * n_cols + j]) - lowest == least - lowest:
+                if best[i] >= 0 or taken[j]:
+                    best[0] = -1
+                    return best
+                best[i] = j
+        taken[best[i]] = True
+    return best
 
 
 @numba.njit(cache=True, nogil=True)

@@ -150,6 +150,31 @@ def test_gated_pairs_are_the_k_d_trees_to_the_last_bit(seed):
             np.testing.assert_array_equal(plain[1], found[1])
 
 
+@pytest.mark.parametrize("seed", range(4))
+def test_blocks_whose_rows_take_their_own_least_cost_are_answered_as_the_solver_does(seed):
+    """``row_minima`` against ``linear_sum_assignment`` on blocks wide and tall, sparse and full,
+    with costs drawn from few values (ties) or many: whenever it answers, the solver agrees."""
+    from scipy.optimize import linear_sum_assignment
+
+    rng = np.random.default_rng(seed)
+    answered = 0
+    for _ in range(400):
+        n_rows, n_cols = rng.integers(1, 9, 2)
+        values = rng.choice([0.0, 1.0, 2.0, 3.5], (n_rows, n_cols)) if rng.random() < 0.3 else \
+            rng.uniform(0.0, 30.0, (n_rows, n_cols))
+        block = np.where(rng.random((n_rows, n_cols)) < rng.uniform(0.2, 1.0), values, 1e6)
+        best = module.row_minima(block.ravel(), n_rows, n_cols)
+        if best[0] < 0:
+            continue
+        answered += 1
+        r, c = linear_sum_assignment(block)
+        expected = r[np.argsort(c)] if n_cols < n_rows else c
+        np.testing.assert_array_equal(best, expected)
+        with interpreted():
+            np.testing.assert_array_equal(module.row_minima(block.ravel(), n_rows, n_cols), best)
+    assert answered > 50
+
+
 def test_refinement_adds_true_pairs_cbm_missed():
     own, refined, kept, right = [], [], 0, 0
     for seed in range(8):
