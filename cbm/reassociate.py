@@ -182,9 +182,9 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    partner, groups, row_ids, row_at, col_ids, col_at, blocks, block_at = assignment_blocks(
+    partner, left, row_ids, row_at, col_ids, col_at, blocks, block_at = assignment_blocks(
         candidates, cost, len(ego), len(cav), DENSE_BLOCK, _UNPAIRED)
-    for g in groups:
+    for g in range(left):
         block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
         r, c = linear_sum_assignment(block)
         inside = block[r, c] < _UNPAIRED
@@ -204,51 +204,58 @@ def assignment_blocks(candidates, cost, n_ego, n_cav, dense_block, unpaired):
         group, size = np.zeros(len(rows), np.int64), np.full(1, len(rows), np.int64)
     else:
         group, size = connected_groups(rows, cols, n_ego, n_cav)
-    partner = np.full(n_ego, -1, np.intp)
-    for k in range(len(rows)):
-        if size[group[k]] == 1:
-            partner[rows[k]] = cols[k]
-    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), n_ego,
-                                                                      n_cav, unpaired)
-    left = np.zeros(len(size), np.bool_)
-    for g in np.flatnonzero(size > 1):
-        n_rows, n_cols = row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g]
-        best = row_minima(blocks[block_at[g]:block_at[g + 1]], n_rows, n_cols)
-        if best[0] < 0:
-            left[g] = True
-            continue
-        for k in range(len(best)):
-            ego_at, cav_at = (best[k], k) if n_cols < n_rows else (k, best[k])
-            partner[row_ids[row_at[g] + ego_at]] = col_ids[col_at[g] + cav_at]
-    return partner, np.flatnonzero(left), row_ids, row_at, col_ids, col_at, blocks, block_at
+    partner, solved = row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, unpaired)
+    keep = np.flatnonzero(~solved[group])
+    number = np.cumsum(~solved) - 1
+    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(
+        rows[keep], cols[keep], cost[keep], number[group[keep]], number[-1] + 1, n_ego, n_cav, unpaired)
+    return partner, number[-1] + 1, row_ids, row_at, col_ids, col_at, blocks, block_at
 
 
 @numba.njit(cache=True, nogil=True)
-def row_minima(block, n_rows, n_cols):
-    """``linear_sum_assignment`` of the (n_rows, n_cols) ``block`` (row by row) when each row takes
-    the column of its least cost: per row of the block as the solver reads it (transposed when
-    taller than wide), its column; -1 first when that does not hold. The solver (shortest
-    augmenting paths, Crouse 2016) takes the rows in order; while every row's least cost is unique
-    and in a column no earlier row took, each path is that one step and leaves the duals of the
-    columns at 0, so the next row reads its own costs as they are. Unique is tested on the costs
-    less the block's least one, which some releases of the solver read (unique there is unique
-    in the costs themselves)."""
+def row_minima(rows, cols, cost, group, n_groups, n_ego, n_cav, unpaired):
+    """The groups' answers that need no solver: (CAV partner of each ego box or -1, whether each
+    group is answered). A group of one candidate is; so is a group whose dense block has each row
+    take the column of its least cost, as ``linear_sum_assignment`` would answer it. The solver
+    (shortest augmenting paths, Crouse 2016) reads the block transposed when it is taller than
+    wide and takes the rows in order; while every row's least cost is unique and in a column no
+    earlier row took, each path is that one step and leaves the duals of the columns at 0, so the
+    next row reads its own costs as they are. Unique is tested on the costs less the group's least
+    one, which some releases of the solver read (unique there is unique in the costs themselves),
+    and against the ``unpaired`` entries too."""
+    n_rows, n_cols = _group_counts(rows, group, n_groups, n_ego), _group_counts(cols, group, n_groups, n_cav)
+    lowest = np.full(n_groups, np.inf)
+    for k in range(len(rows)):
+        lowest[group[k]] = min(lowest[group[k]], cost[k])
     tall = n_cols < n_rows
-    n, m = (n_cols, n_rows) if tall else (n_rows, n_cols)
-    lowest = block.min()
-    best, taken = np.full(n, -1, np.intp), np.zeros(m, np.bool_)
-    for i in range(n):
-        least = np.inf
-        for j in range(m):
-            least = min(least, block[j * n_cols + i] if tall else block[i * n_cols + j])
-        for j in range(m):
-            if (block[j * n_cols + i] if tall else block[i * n_cols + j]) - lowest == least - lowest:
-                if best[i] >= 0 or taken[j]:
-                    best[0] = -1
-                    return best
-                best[i] = j
-        taken[best[i]] = True
-    return best
+    least = np.full(n_ego + n_cav, np.inf)
+    for k in range(len(rows)):
+        row = n_ego + cols[k] if tall[group[k]] else rows[k]
+        least[row] = min(least[row], cost[k])
+    best, solved = np.full(n_ego + n_cav, -1, np.intp), np.ones(n_groups, np.bool_)
+    for k in range(len(rows)):
+        g = group[k]
+        row, column = (n_ego + cols[k], rows[k]) if tall[g] else (rows[k], n_ego + cols[k])
+        if cost[k] - lowest[g] == least[row] - lowest[g]:
+            unique = best[row] < 0 and best[column] < 0 and least[row] - lowest[g] < unpaired - lowest[g]
+            solved[g] = solved[g] and unique
+            best[row], best[column] = column, row
+    partner = np.full(n_ego, -1, np.intp)
+    for k in range(len(rows)):
+        if solved[group[k]] and best[rows[k]] == n_ego + cols[k]:
+            partner[rows[k]] = cols[k]
+    return partner, solved
+
+
+@numba.njit(cache=True, nogil=True)
+def _group_counts(values, group, n_groups, n):
+    """How many distinct ``values`` in ``[0, n)`` each group holds."""
+    counts, seen = np.zeros(n_groups, np.int64), np.zeros(n, np.bool_)
+    for k in range(len(values)):
+        if not seen[values[k]]:
+            seen[values[k]] = True
+            counts[group[k]] += 1
+    return counts
 
 
 @numba.njit(cache=True, nogil=True)

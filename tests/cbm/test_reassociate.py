@@ -151,28 +151,47 @@ def test_gated_pairs_are_the_k_d_trees_to_the_last_bit(seed):
 
 
 @pytest.mark.parametrize("seed", range(4))
-def test_blocks_whose_rows_take_their_own_least_cost_are_answered_as_the_solver_does(seed):
-    """``row_minima`` against ``linear_sum_assignment`` on blocks wide and tall, sparse and full,
-    with costs drawn from few values (ties) or many: whenever it answers, the solver agrees."""
+def test_groups_whose_rows_take_their_own_least_cost_are_answered_as_the_solver_does(seed):
+    """``row_minima`` against ``linear_sum_assignment`` of each group's dense block, on groups wide
+    and tall, sparse and full, with costs drawn from few values (ties) or many: whenever it
+    answers a group, the solver agrees; the lone candidates are always answered."""
     from scipy.optimize import linear_sum_assignment
 
     rng = np.random.default_rng(seed)
     answered = 0
-    for _ in range(400):
-        n_rows, n_cols = rng.integers(1, 9, 2)
-        values = rng.choice([0.0, 1.0, 2.0, 3.5], (n_rows, n_cols)) if rng.random() < 0.3 else \
-            rng.uniform(0.0, 30.0, (n_rows, n_cols))
-        block = np.where(rng.random((n_rows, n_cols)) < rng.uniform(0.2, 1.0), values, 1e6)
-        best = module.row_minima(block.ravel(), n_rows, n_cols)
-        if best[0] < 0:
-            continue
-        answered += 1
-        r, c = linear_sum_assignment(block)
-        expected = r[np.argsort(c)] if n_cols < n_rows else c
-        np.testing.assert_array_equal(best, expected)
-        with interpreted():
-            np.testing.assert_array_equal(module.row_minima(block.ravel(), n_rows, n_cols), best)
+    for case in range(300):
+        n_ego, n_cav = rng.integers(1, 12, 2)
+        candidates = np.unique(np.stack([rng.integers(0, n_ego, 12), rng.integers(0, n_cav, 12)], axis=1), axis=0)
+        few = rng.random() < 0.3
+        cost = rng.choice([0.0, 1.0, 2.0, 3.5], len(candidates)) if few else rng.uniform(0.0, 30.0, len(candidates))
+        rows, cols = candidates[:, 0], candidates[:, 1]
+        group, size = module.connected_groups(rows, cols, n_ego, n_cav)
+        if rng.random() < 0.5:
+            group, size = np.zeros(len(rows), np.int64), np.array([len(rows)])
+        partner, solved = module.row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, 1e6)
+        for g in np.flatnonzero(solved):
+            mine = candidates[group == g]
+            ego_ids, r_of = np.unique(mine[:, 0], return_inverse=True)
+            cav_ids, c_of = np.unique(mine[:, 1], return_inverse=True)
+            block = np.full((len(ego_ids), len(cav_ids)), 1e6)
+            block[r_of, c_of] = cost[group == g]
+            r, c = linear_sum_assignment(block)
+            np.testing.assert_array_equal(partner[ego_ids], _partners(ego_ids, cav_ids[c], ego_ids[r]))
+            answered += size[g] > 1
+        assert solved[size == 1].all()
+        if case < 20:
+            with interpreted():
+                plain = module.row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, 1e6)
+            np.testing.assert_array_equal(plain[0], partner)
+            np.testing.assert_array_equal(plain[1], solved)
     assert answered > 50
+
+
+def _partners(ego_ids, cav_of, paired):
+    """Each of ``ego_ids``'s CAV partner (-1 if unpaired) given the ``paired`` ego ids' ``cav_of``."""
+    out = np.full(len(ego_ids), -1)
+    out[np.searchsorted(ego_ids, paired)] = cav_of
+    return out
 
 
 def test_refinement_adds_true_pairs_cbm_missed():
