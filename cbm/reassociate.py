@@ -195,10 +195,10 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
 
 @numba.njit(cache=True, nogil=True)
 def assignment_blocks(candidates, cost, n_ego, n_cav, dense_block, unpaired):
-    """What ``gated_assignment`` solves: the CAV partner of each ego box in a group of one candidate
-    (-1 elsewhere), the groups of more to assign, and every group's dense block (``dense_blocks``).
-    All candidates are one group while their distinct ego boxes times CAV boxes are at most
-    ``dense_block``, else the connected groups (``connected_groups``)."""
+    """What ``gated_assignment`` solves: the CAV partner of each ego box in a group answered without
+    the solver (``row_minima``; -1 elsewhere), how many groups are left to it, and their dense
+    blocks (``dense_blocks``). All candidates are one group while their distinct ego boxes times
+    CAV boxes are at most ``dense_block``, else the connected groups (``connected_groups``)."""
     rows, cols = candidates[:, 0], candidates[:, 1]
     if _distinct(rows, n_ego) * _distinct(cols, n_cav) <= dense_block:
         group, size = np.zeros(len(rows), np.int64), np.full(1, len(rows), np.int64)
