@@ -269,13 +269,43 @@ def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, floa
     """Least median of squares (Rousseeuw, JASA 1984) over rigid fits through two pairs
     (``hypothesis_pairs``): the fit whose ``h``-th smallest residual, ``h = floor(K/2) + 1``, is
     smallest, and that residual. It stands while fewer than half of the pairs are wrong. The pairs
-    are put in order of their distances from the centroids first, so the answer depends neither on
-    the input order nor on where either frame lies."""
-    order = np.lexsort((np.linalg.norm(src - src.mean(axis=0), axis=1), np.linalg.norm(dst - dst.mean(axis=0), axis=1)))
-    src, dst = src[order], dst[order]
+    are put in order of their distances from the centroids first (``by_centroid_distance``), so the
+    answer depends neither on the input order nor on where either frame lies."""
     a, b = hypothesis_pairs(len(src))
-    c, s, tx, ty, median = _least_median(src, dst, a, b, len(src) // 2)
+    c, s, tx, ty, median = _ordered_least_median(src, dst, a, b)
     return np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]]), math.sqrt(median)
+
+
+@numba.njit(cache=True, nogil=True)
+def _ordered_least_median(src, dst, a, b):
+    """``_least_median`` of the pairs in ``by_centroid_distance`` order, at index ``K // 2`` counted from 0."""
+    order = by_centroid_distance(src, dst)
+    return _least_median(src[order], dst[order], a, b, len(src) // 2)
+
+
+@numba.njit(cache=True, nogil=True)
+def by_centroid_distance(src, dst):
+    """The pairs' order by their ``dst`` point's distance from the ``dst`` centroid, then their
+    ``src`` point's from the ``src`` centroid, then their index: ``np.lexsort`` of the two distances
+    as numpy computes them (the centroid a sum row after row over K, each distance
+    ``sqrt(dx * dx + dy * dy)``)."""
+    to_src, to_dst = _centroid_distances(src), _centroid_distances(dst)
+    order = np.argsort(to_src, kind="mergesort")
+    return order[np.argsort(to_dst[order], kind="mergesort")]
+
+
+@numba.njit(cache=True, nogil=True)
+def _centroid_distances(points):
+    """Each (K, 2) point's distance from their centroid (``by_centroid_distance``)."""
+    mx, my = 0.0, 0.0
+    for k in range(len(points)):
+        mx, my = mx + points[k, 0], my + points[k, 1]
+    mx, my = mx / len(points), my / len(points)
+    out = np.empty(len(points))
+    for k in range(len(points)):
+        dx, dy = points[k, 0] - mx, points[k, 1] - my
+        out[k] = math.sqrt(dx * dx + dy * dy)
+    return out
 
 
 def least_median_sigma(median: float, k: int) -> float:

@@ -31,7 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import se2
-from .estimate import Fit, least_squares_fit, residuals
+from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, axis_difference, gated_assignment, reassociate
 from .selection import Visit, anchor_sets
@@ -100,37 +100,45 @@ Refit = Callable[[np.ndarray, np.ndarray], Fit]
 
 
 def refine(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, refit: Refit, floor: float,
-           widest: float, density: float, guided: bool) -> tuple[np.ndarray, np.ndarray, float]:
-    """Steps 1-2 for one set of pairs and its robust ``fit``: (pairs, correction, sigma) after the
-    guided re-association (when ``guided``: the eq. 13 winner's, as without verification) and the
-    noise-aware re-association with least squares on the pairs kept."""
+           widest: float, density: float, guided: bool) -> tuple[np.ndarray, np.ndarray, float, float]:
+    """Steps 1-3 for one set of pairs and its robust ``fit``: (pairs, correction, sigma, score) after
+    the guided re-association (when ``guided``: the eq. 13 winner's, as without verification) and
+    the noise-aware re-association with least squares on the pairs kept. Once the pairs settle, the
+    last round's evidence of them is their score (the same pose, noise and pairs: ``score``)."""
     current = reassociate(ego, cav, pairs, fit, widest, refit).pairs if guided else pairs
     T, sigma = least_squares(ego, cav, current, floor)
     for _ in range(MAX_ROUNDS):
         moved = se2.apply_boxes(T, cav)
         found = gated_assignment(ego, moved, widest * sigma, sigma)
-        found = found[evidence(ego, moved, found, sigma, density, current) > 0]
-        if len(found) < 2 or np.array_equal(found, current):
+        weight = evidence(ego, moved, found, sigma, density, current)
+        found, weight = found[weight > 0], weight[weight > 0]
+        if np.array_equal(found, current):
+            return current, T, sigma, float(weight.sum())
+        if len(found) < 2:
             break
         current = found
         T, sigma = least_squares(ego, cav, current, floor)
-    return current, T, sigma
+    return current, T, sigma, score(ego, cav, current, T, sigma, density)
+
+
+def score(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, T: np.ndarray, sigma: float, density: float) -> float:
+    """Step 3: the summed evidence of ``pairs`` under the correction ``T`` and noise ``sigma``."""
+    return float(evidence(ego, se2.apply_boxes(T, cav), pairs, sigma, density, pairs).sum())
 
 
 def least_squares(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, floor: float) -> tuple[np.ndarray, float]:
     """The least-squares correction of ``pairs`` (eq. 14 with every weight 1: the efficient fit once
     the gate has cleaned them) and the noise sigma of its residuals (``cbm.gates.scene_sigma``)."""
     src, dst = cav[pairs[:, 1], :2], ego[pairs[:, 0], :2]
-    T = least_squares_fit(src, dst, floor).transform
+    T = weighted_procrustes(src, dst)
     return T, scene_sigma(residuals(T, src, dst), floor)
 
 
 def hypothesis(ego: np.ndarray, cav: np.ndarray, anchor: int, pairs: np.ndarray, fit: Fit, refit: Refit,
                floor: float, widest: float, density: float, guided: bool) -> Hypothesis:
-    """One anchor's set and its robust fit refined (``refine``) and scored (step 3)."""
-    found, T, sigma = refine(ego, cav, pairs, fit, refit, floor, widest, density, guided)
-    score = evidence(ego, se2.apply_boxes(T, cav), found, sigma, density, found).sum()
-    return Hypothesis(anchor, pairs, found, T, sigma, float(score))
+    """One anchor's set and its robust fit refined and scored (``refine``)."""
+    found, T, sigma, evidence_sum = refine(ego, cav, pairs, fit, refit, floor, widest, density, guided)
+    return Hypothesis(anchor, pairs, found, T, sigma, evidence_sum)
 
 
 def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float, density: float,
@@ -146,7 +154,18 @@ def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float
 
 def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two corrections differ by less than ``SAME_POSE_M`` and ``SAME_POSE_DEG``."""
-    d = se2.inverse(a) @ b
+    return _small(se2.inverse(a) @ b)
+
+
+def near_any(a: np.ndarray, poses: list[np.ndarray]) -> bool:
+    """Whether ``a`` is the same pose as one of ``poses`` (``same_pose``, ``a`` inverted once)."""
+    inverse = se2.inverse(a)
+    return any(_small(inverse @ pose) for pose in poses)
+
+
+def _small(d: np.ndarray) -> bool:
+    """Whether the transform ``d`` between two corrections moves by less than ``SAME_POSE_M`` and
+    turns by less than ``SAME_POSE_DEG``."""
     return (float(np.hypot(*se2.translation_of(d))) < SAME_POSE_M
             and abs(math.degrees(float(se2.yaw_of(d)))) < SAME_POSE_DEG)
 
@@ -178,7 +197,7 @@ def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, wides
         if len(pairs) < 2:
             continue
         fit = winner_fit if anchor == winner else refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])
-        if any(same_pose(fit.transform, pose) for pose in poses):
+        if near_any(fit.transform, poses):
             continue
         found.append(hypothesis(ego, cav, anchor, pairs, fit, refit, floor, widest, density, anchor == winner))
         poses += [fit.transform, found[-1].correction]

@@ -22,7 +22,6 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 from scipy.optimize import linear_sum_assignment
-from scipy.spatial import cKDTree
 
 from . import se2
 from .estimate import Fit
@@ -76,15 +75,98 @@ def size_mismatch(ego: np.ndarray, cav: np.ndarray) -> np.ndarray:
 def gated_pairs(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> tuple[np.ndarray, np.ndarray]:
     """Candidate pairs (i, j) whose centres lie within ``gate`` and whose sizes agree within
     ``SIZE_GATE``, and their costs: the negative log-likelihood of one object seen twice,
-    ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``."""
-    found = cKDTree(ego[:, :2]).sparse_distance_matrix(cKDTree(cav[:, :2]), gate, output_type="ndarray")
-    i, j, d = found["i"].astype(np.intp), found["j"].astype(np.intp), found["v"]
-    mismatch = size_mismatch(ego[i], cav[j])
-    keep = mismatch <= SIZE_GATE
-    i, j, d, mismatch = i[keep], j[keep], d[keep], mismatch[keep]
-    cost = ((d / sigma) ** 2 + (axis_difference(ego[i, 6], cav[j, 6]) / HEADING_SIGMA) ** 2
-            + (mismatch / SIZE_SIGMA) ** 2)
-    return np.stack([i, j], axis=1), cost
+    ``(d / sigma)^2 + (axis difference / HEADING_SIGMA)^2 + (size mismatch / SIZE_SIGMA)^2``; sorted
+    by ego index, then CAV index. (The size mismatch's logarithm is numpy's, as ``size_mismatch``;
+    the kernels read C-ordered boxes, so another layout compiles nothing new.)"""
+    ego, cav = np.ascontiguousarray(ego, dtype=float), np.ascontiguousarray(cav, dtype=float)
+    i, j, d, ratios = near_pairs(ego, cav, gate)
+    return scored_pairs(ego, cav, i, j, d, np.hypot(*np.log(ratios).T), sigma)
+
+
+@numba.njit(cache=True, nogil=True)
+def near_pairs(ego, cav, gate):
+    """(i, j, d, size ratios) of the ego and CAV boxes whose centres lie within ``gate``: ``d^2 =
+    (x_e - x_c)^2 + (y_e - y_c)^2 <= gate^2`` summed in that order, as a k-d tree's distance matrix
+    reads it, and ``d`` its square root; sorted by ego index, then CAV index. The ratios are
+    ``l_e / l_c`` and ``w_e / w_c`` of the sizes at least ``SMALLEST_SIZE`` (``size_mismatch``).
+    The CAV centres sorted by x bound each ego box's search to the window within the gate in x;
+    a first pass counts each ego box's pairs, a second writes them."""
+    gate2 = gate * gate
+    order = np.argsort(cav[:, 0])
+    xs, ys = cav[order, 0], cav[order, 1]
+    start, at = np.empty(len(ego), np.intp), np.zeros(len(ego) + 1, np.intp)
+    j, d = np.empty(0, np.intp), np.empty(0)
+    for e in range(len(ego)):
+        start[e] = _window_start(xs, ego[e, 0], gate2)
+        at[e + 1] = at[e] + _within(ego[e, 0], ego[e, 1], xs, ys, order, start[e], gate2, j, d, -1)
+    n = at[len(ego)]
+    i, j, d = np.empty(n, np.intp), np.empty(n, np.intp), np.empty(n)
+    for e in range(len(ego)):
+        _within(ego[e, 0], ego[e, 1], xs, ys, order, start[e], gate2, j, d, at[e])
+        _sort_by_cav(j, d, at[e], at[e + 1])
+        i[at[e]:at[e + 1]] = e
+    ratios = np.empty((n, 2))
+    for k in range(n):
+        for c in range(2):
+            ratios[k, c] = max(ego[i[k], 3 + c], SMALLEST_SIZE) / max(cav[j[k], 3 + c], SMALLEST_SIZE)
+    return i, j, d, ratios
+
+
+@numba.njit(cache=True, nogil=True)
+def _window_start(xs, x, gate2):
+    """The first index of the increasing ``xs`` not left of ``x`` by more than the gate
+    (``(x - xs[k])^2 > gate2``, the test of the distance's first term)."""
+    lo, hi = 0, len(xs)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if xs[mid] < x and (x - xs[mid]) * (x - xs[mid]) > gate2:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@numba.njit(cache=True, nogil=True)
+def _within(ex, ey, xs, ys, order, k, gate2, j, d, at):
+    """How many of the CAV centres ``(xs, ys)`` (sorted by x; ``order`` their indices) lie within the
+    gate of the ego centre ``(ex, ey)``, scanning from ``k`` until ``xs`` is right of it by more than
+    the gate; written to ``j[at:]``, ``d[at:]`` unless ``at < 0``."""
+    n = 0
+    while k < len(xs) and not (xs[k] > ex and (ex - xs[k]) * (ex - xs[k]) > gate2):
+        dx, dy = ex - xs[k], ey - ys[k]
+        square = dx * dx + dy * dy
+        if square <= gate2:
+            if at >= 0:
+                j[at + n], d[at + n] = order[k], math.sqrt(square)
+            n += 1
+        k += 1
+    return n
+
+
+@numba.njit(cache=True, nogil=True)
+def _sort_by_cav(j, d, lo, hi):
+    """Insertion sort of one ego box's few candidates ``j[lo:hi]`` (distinct), ``d`` alongside."""
+    for a in range(lo + 1, hi):
+        jj, dd, b = j[a], d[a], a
+        while b > lo and j[b - 1] > jj:
+            j[b], d[b] = j[b - 1], d[b - 1]
+            b -= 1
+        j[b], d[b] = jj, dd
+
+
+@numba.njit(cache=True, nogil=True)
+def scored_pairs(ego, cav, i, j, d, mismatch, sigma):
+    """The candidates ``(i, j)`` at distance ``d`` whose ``mismatch`` is at most ``SIZE_GATE``, as
+    (K, 2) pairs, and their costs (``gated_pairs``), each term as numpy evaluates it elementwise."""
+    keep = np.flatnonzero(mismatch <= SIZE_GATE)
+    pairs, cost = np.empty((len(keep), 2), np.intp), np.empty(len(keep))
+    for n in range(len(keep)):
+        k = keep[n]
+        pairs[n, 0], pairs[n, 1] = i[k], j[k]
+        turn = abs((ego[i[k], 6] - cav[j[k], 6] + math.pi) % (2.0 * math.pi) - math.pi)
+        a, b, c = d[k] / sigma, min(turn, math.pi - turn) / HEADING_SIGMA, mismatch[k] / SIZE_SIGMA
+        cost[n] = a * a + b * b + c * c
+    return pairs, cost
 
 
 def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float) -> np.ndarray:
@@ -94,27 +176,96 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     A small problem is one dense block for ``linear_sum_assignment``; a large one splits into the
     connected groups of candidates that share no box, each solved on its own (a lone candidate is
     its own answer), so the work follows the groups' sizes rather than the product of the box counts.
+    A block whose rows each take their own least cost is answered without the solver
+    (``row_minima``: the answer the solver gives it).
     """
     candidates, cost = gated_pairs(ego, cav, gate, sigma)
     if len(candidates) == 0:
         return np.zeros((0, 2), dtype=np.intp)
-    rows, cols = candidates[:, 0], candidates[:, 1]
-    n_rows, n_cols = np.count_nonzero(np.bincount(rows)), np.count_nonzero(np.bincount(cols))
-    if n_rows * n_cols <= DENSE_BLOCK:
-        group, size = np.zeros(len(candidates), np.int64), np.array([len(candidates)])
-    else:
-        group, size = connected_groups(rows, cols, len(ego), len(cav))
-    alone = size[group] == 1
-    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(rows, cols, cost, group, len(size), len(ego),
-                                                                      len(cav), _UNPAIRED)
-    pairs = [candidates[alone]]
-    for g in np.flatnonzero(size > 1):
+    partner, left, row_ids, row_at, col_ids, col_at, blocks, block_at = assignment_blocks(
+        candidates, cost, len(ego), len(cav), DENSE_BLOCK, _UNPAIRED)
+    for g in range(left):
         block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
         r, c = linear_sum_assignment(block)
         inside = block[r, c] < _UNPAIRED
-        pairs.append(np.stack([row_ids[row_at[g] + r[inside]], col_ids[col_at[g] + c[inside]]], axis=1))
-    pairs = np.concatenate(pairs)
-    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+        partner[row_ids[row_at[g] + r[inside]]] = col_ids[col_at[g] + c[inside]]
+    rows = np.flatnonzero(partner >= 0)
+    return np.stack([rows, partner[rows]], axis=1)
+
+
+@numba.njit(cache=True, nogil=True)
+def assignment_blocks(candidates, cost, n_ego, n_cav, dense_block, unpaired):
+    """What ``gated_assignment`` solves: the CAV partner of each ego box in a group answered without
+    the solver (``row_minima``; -1 elsewhere), how many groups are left to it, and their dense
+    blocks (``dense_blocks``). All candidates are one group while their distinct ego boxes times
+    CAV boxes are at most ``dense_block``, else the connected groups (``connected_groups``)."""
+    rows, cols = candidates[:, 0], candidates[:, 1]
+    if _distinct(rows, n_ego) * _distinct(cols, n_cav) <= dense_block:
+        group, size = np.zeros(len(rows), np.int64), np.full(1, len(rows), np.int64)
+    else:
+        group, size = connected_groups(rows, cols, n_ego, n_cav)
+    partner, solved = row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, unpaired)
+    keep = np.flatnonzero(~solved[group])
+    number = np.cumsum(~solved) - 1
+    row_ids, row_at, col_ids, col_at, blocks, block_at = dense_blocks(
+        rows[keep], cols[keep], cost[keep], number[group[keep]], number[-1] + 1, n_ego, n_cav, unpaired)
+    return partner, number[-1] + 1, row_ids, row_at, col_ids, col_at, blocks, block_at
+
+
+@numba.njit(cache=True, nogil=True)
+def row_minima(rows, cols, cost, group, n_groups, n_ego, n_cav, unpaired):
+    """The groups' answers that need no solver: (CAV partner of each ego box or -1, whether each
+    group is answered). A group of one candidate is; so is a group whose dense block has each row
+    take the column of its least cost, as ``linear_sum_assignment`` would answer it. The solver
+    (shortest augmenting paths, Crouse 2016) reads the block transposed when it is taller than
+    wide and takes the rows in order; while every row's least cost is unique and in a column no
+    earlier row took, each path is that one step and leaves the duals of the columns at 0, so the
+    next row reads its own costs as they are. Unique is tested on the costs less the group's least
+    one, which some releases of the solver read (unique there is unique in the costs themselves),
+    and against the ``unpaired`` entries too."""
+    n_rows, n_cols = _group_counts(rows, group, n_groups, n_ego), _group_counts(cols, group, n_groups, n_cav)
+    lowest = np.full(n_groups, np.inf)
+    for k in range(len(rows)):
+        lowest[group[k]] = min(lowest[group[k]], cost[k])
+    tall = n_cols < n_rows
+    least = np.full(n_ego + n_cav, np.inf)
+    for k in range(len(rows)):
+        row = n_ego + cols[k] if tall[group[k]] else rows[k]
+        least[row] = min(least[row], cost[k])
+    best, solved = np.full(n_ego + n_cav, -1, np.intp), np.ones(n_groups, np.bool_)
+    for k in range(len(rows)):
+        g = group[k]
+        row, column = (n_ego + cols[k], rows[k]) if tall[g] else (rows[k], n_ego + cols[k])
+        if cost[k] - lowest[g] == least[row] - lowest[g]:
+            unique = best[row] < 0 and best[column] < 0 and least[row] - lowest[g] < unpaired - lowest[g]
+            solved[g] = solved[g] and unique
+            best[row], best[column] = column, row
+    partner = np.full(n_ego, -1, np.intp)
+    for k in range(len(rows)):
+        if solved[group[k]] and best[rows[k]] == n_ego + cols[k]:
+            partner[rows[k]] = cols[k]
+    return partner, solved
+
+
+@numba.njit(cache=True, nogil=True)
+def _group_counts(values, group, n_groups, n):
+    """How many distinct ``values`` in ``[0, n)`` each group holds."""
+    counts, seen = np.zeros(n_groups, np.int64), np.zeros(n, np.bool_)
+    for k in range(len(values)):
+        if not seen[values[k]]:
+            seen[values[k]] = True
+            counts[group[k]] += 1
+    return counts
+
+
+@numba.njit(cache=True, nogil=True)
+def _distinct(values, n):
+    """How many distinct ``values`` in ``[0, n)`` there are."""
+    seen, count = np.zeros(n, np.bool_), 0
+    for value in values:
+        if not seen[value]:
+            seen[value], count = True, count + 1
+    return count
 
 
 @numba.njit(cache=True, nogil=True)

@@ -6,7 +6,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
-from cbm.estimate import WELSCH_EFFICIENT_SCALE, hypothesis_pairs, least_squares_fit, robust_fit, weighted_procrustes
+from cbm.estimate import (
+    WELSCH_EFFICIENT_SCALE,
+    by_centroid_distance,
+    hypothesis_pairs,
+    least_squares_fit,
+    robust_fit,
+    weighted_procrustes,
+)
+from cbm.interpreted import interpreted
 
 pytestmark = pytest.mark.filterwarnings("error")
 NU_FLOOR = 0.3
@@ -96,6 +104,24 @@ def test_input_order_does_not_change_the_fit():
     order = rng.permutation(25)
     np.testing.assert_allclose(robust_fit(src[order], dst[order], NU_FLOOR).transform,
                                robust_fit(src, dst, NU_FLOOR).transform, atol=1e-9)
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_the_least_median_order_is_numpys_lexsort_of_the_centroid_distances(seed):
+    """The order the least-median start reads the pairs in, as numpy built it (ties included: on a
+    grid, and with every ``dst`` point alike)."""
+    rng = np.random.default_rng(seed)
+    for k in [2, 3, 7, 8, 9, 60, 129, 400]:
+        for grid in (False, True):
+            src = rng.normal(0.0, 30.0, (k, 2)) + rng.normal(0.0, 1000.0, 2)
+            dst = rng.normal(0.0, 30.0, (k, 2))
+            if grid:
+                src, dst = np.round(src / 10.0), np.full((k, 2), 3.0)
+            expected = np.lexsort((np.linalg.norm(src - src.mean(axis=0), axis=1),
+                                   np.linalg.norm(dst - dst.mean(axis=0), axis=1)))
+            np.testing.assert_array_equal(by_centroid_distance(src, dst), expected)
+            with interpreted():
+                np.testing.assert_array_equal(by_centroid_distance(src, dst), expected)
 
 
 @pytest.mark.parametrize("sigma", [0.1, 0.6, 1.0])

@@ -103,6 +103,97 @@ def test_each_groups_block_holds_its_candidates_costs_between_its_boxes_in_order
     assert (size > 2).any()
 
 
+def kd_tree_pairs(ego, cav, gate, sigma):
+    """``gated_pairs`` as it was built on scipy's k-d tree, sorted by (ego, CAV) index."""
+    from scipy.spatial import cKDTree
+
+    found = cKDTree(ego[:, :2]).sparse_distance_matrix(cKDTree(cav[:, :2]), gate, output_type="ndarray")
+    i, j, d = found["i"].astype(np.intp), found["j"].astype(np.intp), found["v"]
+    mismatch = module.size_mismatch(ego[i], cav[j])
+    keep = mismatch <= module.SIZE_GATE
+    i, j, d, mismatch = i[keep], j[keep], d[keep], mismatch[keep]
+    cost = ((d / sigma) ** 2 + (module.axis_difference(ego[i, 6], cav[j, 6]) / module.HEADING_SIGMA) ** 2
+            + (mismatch / module.SIZE_SIGMA) ** 2)
+    order = np.lexsort((j, i))
+    return np.stack([i, j], axis=1)[order], cost[order]
+
+
+def random_scene(rng, n_ego, n_cav, on_grid):
+    """Boxes on a 1 m grid (many centres exactly at the gate) or scattered near each other, with
+    random headings and sizes from degenerate to twice a car's."""
+    ego, cav = np.zeros((n_ego, 7)), np.zeros((n_cav, 7))
+    if on_grid:
+        ego[:, :2], cav[:, :2] = rng.integers(-4, 5, (n_ego, 2)), rng.integers(-4, 5, (n_cav, 2))
+    else:
+        ego[:, :2] = rng.uniform(-15, 15, (n_ego, 2))
+        cav[:, :2] = rng.uniform(-15, 15, (n_cav, 2)) if n_ego == 0 else ego[rng.integers(0, n_ego, n_cav), :2]
+        cav[:, :2] += rng.normal(0, 1.0, (n_cav, 2))
+    ego[:, 3:6] = rng.choice([0.0, 1.9, 2.1, 4.5, 9.0], (n_ego, 3))
+    cav[:, 3:6] = rng.choice([0.0, 1.9, 4.5], (n_cav, 3))
+    ego[:, 6], cav[:, 6] = rng.uniform(-np.pi, np.pi, n_ego), rng.uniform(-np.pi, np.pi, n_cav)
+    return ego, cav
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_gated_pairs_are_the_k_d_trees_to_the_last_bit(seed):
+    rng = np.random.default_rng(seed)
+    for n_ego, n_cav in [(0, 0), (0, 5), (5, 0), (1, 1), (1, 30), (30, 1), (40, 40), (300, 250)]:
+        for on_grid, gate in [(True, 1.0), (True, 2.0), (True, np.sqrt(2.0)), (False, rng.uniform(0.5, 4.0))]:
+            ego, cav = random_scene(rng, n_ego, n_cav, on_grid)
+            expected = kd_tree_pairs(ego, cav, gate, gate / 3)
+            found = module.gated_pairs(ego, cav, gate, gate / 3)
+            np.testing.assert_array_equal(found[0].reshape(-1, 2), expected[0].reshape(-1, 2))
+            np.testing.assert_array_equal(found[1], expected[1])
+            with interpreted():
+                plain = module.gated_pairs(ego, cav, gate, gate / 3)
+            np.testing.assert_array_equal(plain[0], found[0])
+            np.testing.assert_array_equal(plain[1], found[1])
+
+
+@pytest.mark.parametrize("seed", range(4))
+def test_groups_whose_rows_take_their_own_least_cost_are_answered_as_the_solver_does(seed):
+    """``row_minima`` against ``linear_sum_assignment`` of each group's dense block, on groups wide
+    and tall, sparse and full, with costs drawn from few values (ties) or many: whenever it
+    answers a group, the solver agrees; the lone candidates are always answered."""
+    from scipy.optimize import linear_sum_assignment
+
+    rng = np.random.default_rng(seed)
+    answered = 0
+    for case in range(300):
+        n_ego, n_cav = rng.integers(1, 12, 2)
+        candidates = np.unique(np.stack([rng.integers(0, n_ego, 12), rng.integers(0, n_cav, 12)], axis=1), axis=0)
+        few = rng.random() < 0.3
+        cost = rng.choice([0.0, 1.0, 2.0, 3.5], len(candidates)) if few else rng.uniform(0.0, 30.0, len(candidates))
+        rows, cols = candidates[:, 0], candidates[:, 1]
+        group, size = module.connected_groups(rows, cols, n_ego, n_cav)
+        if rng.random() < 0.5:
+            group, size = np.zeros(len(rows), np.int64), np.array([len(rows)])
+        partner, solved = module.row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, 1e6)
+        for g in np.flatnonzero(solved):
+            mine = candidates[group == g]
+            ego_ids, r_of = np.unique(mine[:, 0], return_inverse=True)
+            cav_ids, c_of = np.unique(mine[:, 1], return_inverse=True)
+            block = np.full((len(ego_ids), len(cav_ids)), 1e6)
+            block[r_of, c_of] = cost[group == g]
+            r, c = linear_sum_assignment(block)
+            np.testing.assert_array_equal(partner[ego_ids], _partners(ego_ids, cav_ids[c], ego_ids[r]))
+            answered += size[g] > 1
+        assert solved[size == 1].all()
+        if case < 20:
+            with interpreted():
+                plain = module.row_minima(rows, cols, cost, group, len(size), n_ego, n_cav, 1e6)
+            np.testing.assert_array_equal(plain[0], partner)
+            np.testing.assert_array_equal(plain[1], solved)
+    assert answered > 50
+
+
+def _partners(ego_ids, cav_of, paired):
+    """Each of ``ego_ids``'s CAV partner (-1 if unpaired) given the ``paired`` ego ids' ``cav_of``."""
+    out = np.full(len(ego_ids), -1)
+    out[np.searchsorted(ego_ids, paired)] = cav_of
+    return out
+
+
 def test_refinement_adds_true_pairs_cbm_missed():
     own, refined, kept, right = [], [], 0, 0
     for seed in range(8):
