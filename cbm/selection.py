@@ -42,14 +42,15 @@ class Visit:
     members: np.ndarray
     common: tuple
 
-    def set_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
-        """(K, 2) pairs of one anchor's filtered set, sorted by ego index: the visit's when it
-        filtered the anchor (the same kernel, so the same members in the same order), else filtered now."""
+    def members_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
+        """Pair ids of one anchor's filtered set, increasing: the visit's when it filtered the anchor
+        (the same kernel, so the same members), else filtered now."""
         at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
-        if len(at) == 0:
-            return set_of(anchor, L, self.common)
-        pairs = _as_pairs(self.members[self.offsets[at[0]]:self.offsets[at[0] + 1]], self.common[N_CAV])
-        return pairs[np.argsort(pairs[:, 0], kind="stable")]
+        return self.members_at(int(at[0])) if len(at) else filtered_members(anchor, L, self.common)
+
+    def members_at(self, position: int) -> np.ndarray:
+        """Pair ids of the filtered set of the anchor at ``position`` of the visit, increasing."""
+        return np.sort(self.members[self.offsets[position]:self.offsets[position + 1]])
 
 
 @dataclass(frozen=True)
@@ -342,12 +343,12 @@ def _tie_broken(tied: np.ndarray, visited: np.ndarray, members: np.ndarray, offs
     return int(min(keys, key=keys.__getitem__))
 
 
-def set_of(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
-    """(K, 2) pairs of one anchor's filtered set L^(2) (eq. 12), sorted by ego index."""
+def filtered_members(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
+    """Pair ids of one anchor's filtered set L^(2) (eq. 12), increasing (a one-to-one set: in
+    increasing ego index too)."""
     with listing_held(L):
         _, _, _, members, _ = _largest_sets(np.array([anchor], np.int64), L.count, L.width, *common)
-    pairs = _as_pairs(members, common[N_CAV])
-    return pairs[np.argsort(pairs[:, 0], kind="stable")]
+    return np.sort(members)
 
 
 def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
@@ -364,30 +365,33 @@ def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: 
                       np.zeros(0, np.int64), kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit))
     order = visit.order[:pool]
     known = min(len(visit.sizes), len(order))
-    first = (winner, visit.set_of(winner, L))
-    found = _distinct_largest(order[:known], visit.sizes[:known], first, k, lambda anchor: visit.set_of(anchor, L))
+    first = (winner, visit.members_of(winner, L))
+    found = _distinct_largest(order[:known], visit.sizes[:known], first, k, visit.members_at)
     rest = order[known:]
     if len(found) == k:
         rest = rest[L.count[rest] > len(found[-1][1])]
-    if len(rest) == 0:
-        return found
-    nowhere = np.zeros(len(L.count), bool)
-    with listing_held(L):
-        sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
-    return _distinct_largest(np.concatenate([order[:known], rest]), sizes, first, k,
-                             lambda anchor: visit.set_of(anchor, L))
+    if len(rest) > 0:
+        nowhere = np.zeros(len(L.count), bool)
+        with listing_held(L):
+            sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
+        anchors = np.concatenate([order[:known], rest])
+        found = _distinct_largest(anchors, sizes, first, k, lambda index: visit.members_at(index) if index < known
+                                  else filtered_members(int(anchors[index]), L, visit.common))
+    n_cav = visit.common[N_CAV]
+    return [(anchor, _as_pairs(members, n_cav)) for anchor, members in found]
 
 
 def _distinct_largest(anchors: np.ndarray, sizes: np.ndarray, first: tuple[int, np.ndarray], k: int,
-                      set_of) -> list[tuple[int, np.ndarray]]:
-    """``first`` and the next anchors by decreasing filtered size ``sizes`` (ties in the order of
-    ``anchors``) whose sets differ from those taken, until ``k`` are taken or the sizes reach 0."""
+                      members_at) -> list[tuple[int, np.ndarray]]:
+    """``first`` (anchor, pair ids increasing) and the next anchors by decreasing filtered size
+    ``sizes`` (ties in the order of ``anchors``) whose sets differ from those taken, until ``k`` are
+    taken or the sizes reach 0; ``members_at(index)``: the pair ids of ``anchors[index]``'s set, increasing."""
     found, seen = [first], {first[1].tobytes()}
     for index in np.argsort(-sizes, kind="stable"):
         if len(found) == k or sizes[index] == 0:
             break
-        pairs = set_of(int(anchors[index]))
-        if pairs.tobytes() not in seen:
-            seen.add(pairs.tobytes())
-            found.append((int(anchors[index]), pairs))
+        members = members_at(int(index))
+        if members.tobytes() not in seen:
+            seen.add(members.tobytes())
+            found.append((int(anchors[index]), members))
     return found
