@@ -32,7 +32,7 @@ from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
-from .reassociate import connected_groups, gated_assignment
+from .reassociate import gated_assignment
 from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
@@ -108,8 +108,6 @@ def compile_selection() -> None:
     strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
     filtered_sizes(order[:2], *sets)
     robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
-    pairs = np.zeros((2, 2), np.intp)
-    connected_groups(pairs[:, 0], pairs[:, 1], 1, 1)
     gated_assignment(ego, cav, 3.0, 1.0)
 
 
