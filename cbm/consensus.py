@@ -38,41 +38,78 @@ class PairSets:
         return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int32))
 
 
-@numba.njit(cache=True, nogil=True)
-def _count_by_member(anchor, member, has_set, start):
-    """Adds the quadruples (anchor, member) to ``start[member + 1]`` and marks their anchors in ``has_set``."""
-    for row in range(len(anchor)):
-        has_set[anchor[row]] = True
-        start[member[row] + 1] += 1
+@numba.njit(cache=True, nogil=True, inline="always")
+def _rows_of(head, n_ego, n_cav):
+    """The first pair ids of a ``VoteRows`` head's ego anchor i and ego member i': ``i Nc``, ``i' Nc``."""
+    query = -head - 1
+    return (query // n_ego) * n_cav, (query % n_ego) * n_cav
 
 
 @numba.njit(cache=True, nogil=True)
-def _place_by_member(anchor, member, fill, values):
-    """Writes each quadruple's anchor at ``values[fill[member]]`` and moves that member's ``fill`` on."""
-    for row in range(len(anchor)):
-        values[fill[member[row]]] = anchor[row]
-        fill[member[row]] += 1
+def _count_by_member(rows, n_ego, n_cav, bits, has_set, start):
+    """Adds the quadruples of ``rows`` (``VoteRows``) to ``start[member + 1]`` and marks their
+    anchors in ``has_set``."""
+    low, anchor_row, member_row = (1 << bits) - 1, 0, 0
+    for r in range(len(rows)):
+        if rows[r] < 0:
+            anchor_row, member_row = _rows_of(rows[r], n_ego, n_cav)
+        else:
+            has_set[anchor_row + (rows[r] >> bits)] = True
+            start[member_row + (rows[r] & low) + 1] += 1
 
 
-def voted_by_member(votes: list[tuple[np.ndarray, np.ndarray]], n_pairs: int) -> PairSets:
+@numba.njit(cache=True, nogil=True)
+def _place_by_member(rows, n_ego, n_cav, bits, fill, values):
+    """Writes each quadruple's anchor of ``rows`` (``VoteRows``) at ``values[fill[member]]`` and moves
+    that member's ``fill`` on."""
+    low, anchor_row, member_row = (1 << bits) - 1, 0, 0
+    for r in range(len(rows)):
+        if rows[r] < 0:
+            anchor_row, member_row = _rows_of(rows[r], n_ego, n_cav)
+        else:
+            member = member_row + (rows[r] & low)
+            values[fill[member]] = anchor_row + (rows[r] >> bits)
+            fill[member] += 1
+
+
+def _place(part, fill: np.ndarray, values: np.ndarray) -> None:
+    """``_place_by_member`` of one ``VoteRows``."""
+    _place_by_member(part.rows, part.n_ego, part.n_cav, part.bits, fill, values)
+
+
+@numba.njit(cache=True, nogil=True)
+def _place_own(has_set, fill, values):
+    """Writes every anchor A with a quadruple last in its own group, (A, A) (each non-empty voting set
+    holds its own pair); ``fill`` then holds each group's end and becomes the groups' starts, moved
+    up by one."""
+    n_pairs = len(has_set)
+    for a in range(n_pairs):
+        if has_set[a]:
+            values[fill[a]] = a
+            fill[a] += 1
+    for a in range(n_pairs, 0, -1):
+        fill[a] = fill[a - 1]
+    fill[0] = 0
+
+
+def voted_by_member(votes: list, n_pairs: int) -> PairSets:
     """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m.
 
-    ``votes`` are the join's parts of (anchor, member) rows, in order; a counting sort groups them by
-    member (in row order), then adds (A, A) for every anchor A that has a quadruple (every non-empty
-    voting set holds its own pair). The list is emptied part by part as the parts are placed, so the
-    rows and their grouping (4 bytes a row) are never held twice."""
+    ``votes`` are the join's parts (``cbm.local_matching.join.VoteRows``), in order; a counting
+    sort groups their quadruples by member (in row order), then adds (A, A) for every anchor A that
+    has a quadruple (every non-empty voting set holds its own pair). The list is emptied part by
+    part as the parts are placed, so the rows and their grouping are never held twice; the
+    groups' starts are moved along as they fill (no copy of them)."""
     has_set = np.zeros(n_pairs, np.bool_)
     start = np.zeros(n_pairs + 1, np.int64)
-    for anchor, member in votes:
-        _count_by_member(anchor, member, has_set, start)
+    for part in votes:
+        _count_by_member(part.rows, part.n_ego, part.n_cav, part.bits, has_set, start)
     start[1:] += has_set
     np.cumsum(start, out=start)
     values = np.empty(start[n_pairs], np.int32)
-    fill = start[:-1].copy()
     while votes:
-        _place_by_member(*votes.pop(0), fill, values)
-    own = np.flatnonzero(has_set)
-    values[fill[own]] = own
+        _place(votes.pop(0), start, values)
+    _place_own(has_set, start, values)
     return PairSets(start=start, member=values)
 
 
