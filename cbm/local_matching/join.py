@@ -39,9 +39,10 @@ POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 @dataclass(frozen=True)
 class VoteRows:
     """The quadruples within sigma3 of one part of the join, in its order, 4 bytes a row where the
-    sizes allow (``packing``): per ego vector with votes, a head ``-(i Ne + i') - 1`` (its anchor
-    i and member i'), then one row ``b << bits | j'`` per quadruple (CAV anchor b, CAV member j'),
-    whose anchor pair is ``i Nc + b`` and member pair ``i' Nc + j'``."""
+    sizes allow (``packing``): per ego vector a head ``-(i Ne + i') - 1`` (its anchor i and
+    member i'; written before its window is scanned, kept even when it finds nothing: a branch per
+    query costs the join more than the 4 bytes), then one row ``b << bits | j'`` per quadruple (CAV
+    anchor b, CAV member j'), whose anchor pair is ``i Nc + b`` and member pair ``i' Nc + j'``."""
 
     rows: np.ndarray
     n_ego: int
@@ -114,17 +115,15 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
             u = order[q]
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
-            i, member, head = u // per_anchor, ego_member[u], n_votes
             if sigma3 >= 0.0:
                 most = n_votes + 1 + (k1 - k0 + 1) * widest
                 while most > len(rows):
                     rows = _grown(rows, n_votes)
-                rows[head] = -(i * n_ego + member) - 1
+                rows[n_votes] = -(u // per_anchor * n_ego + ego_member[u]) - 1
                 n_votes += 1
-            n_votes = _query(zx, zy, i, slot_row[i], signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member,
-                             g_check, g_slot, cos2_sigma1, sigma2, sigma3, slots, rows, bits, n_votes)
-            if n_votes == head + 1:
-                n_votes = head
+            n_votes = _query(zx, zy, u // per_anchor, slot_row[u // per_anchor], signs, k0, k1, c0, c1, ny, start,
+                             gx, gy, g_anchor, g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, slots, rows,
+                             bits, n_votes)
         if counting:
             _add_slots(ego_ids[chunk:last], signs, slots, count2)
     return rows[:n_votes].copy()
