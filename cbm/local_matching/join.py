@@ -244,20 +244,25 @@ def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context,
                 signs: np.ndarray, sigma1_rad: float, radius: float, sigma2: float, sigma3: float,
                 count2: np.ndarray, kept: dict | None, run) -> list[VoteRows]:
     """The votes of the heading groups ``batch`` (numbered from ``first``), their grids built (or
-    taken from ``kept``) here: without ``kept`` they are freed on return, before the next batch's."""
-    parallel = run is not _at_once
-    grids = _grids(batch, first, cav, signs, radius, run, kept)
+    taken from ``kept``) here: without ``kept`` each is held only by its group's jobs, so it is
+    freed as soon as they have run, while the batch's later groups are joined."""
+    grids = _grids(batch, first, cav, signs, radius, run, kept)[::-1]
     n_ego, n_cav = signs.shape
-    dtype, bits = packing(n_ego, n_cav)
     jobs = []
-    for group, grid in zip(batch, grids):
-        slot = _slots(grid.anchor, grid.check)
-        common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
-                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, slot, math.cos(sigma1_rad) ** 2,
-                  sigma2, sigma3, count2)
-        parts = np.array_split(group, THREADS) if parallel else [group]
-        jobs += [run(_join, part, *common, np.empty(1024, dtype), bits) for part in parts if len(part)]
-    return [VoteRows(job.result(), n_ego, n_cav, bits) for job in jobs]
+    for group in batch:
+        jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run)
+    return [VoteRows(job.result(), n_ego, n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
+
+
+def _submitted(group: np.ndarray, grid, ego: Context, per_anchor: int, signs: np.ndarray, sigma1_rad: float,
+               sigma2: float, sigma3: float, count2: np.ndarray, run) -> list:
+    """The jobs (``run``) joining the ego objects ``group`` against ``grid``: one per thread in parallel."""
+    dtype, bits = packing(*signs.shape)
+    common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
+              grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, _slots(grid.anchor, grid.check),
+              math.cos(sigma1_rad) ** 2, sigma2, sigma3, count2)
+    parts = [group] if run is _at_once else np.array_split(group, THREADS)
+    return [run(_join, part, *common, np.empty(1024, dtype), bits) for part in parts if len(part)]
 
 
 def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
