@@ -57,12 +57,18 @@ class Sampler(threading.Thread):
 
 
 def measure(checkout: Path, scene: str) -> dict:
-    """One match of ``scene``'s first trial by ``checkout``'s ``cbm``: resident MB before, sampled
-    peak during, ``ru_maxrss`` after, and the match's milliseconds."""
-    sys.path[:0] = [str(checkout), str(checkout / "tests"), str(ROOT / "bench")]
+    """One match of ``scene``'s first trial by ``checkout``'s ``cbm`` (imported before ``bench_match``,
+    which puts this checkout first on the path): resident MB before, sampled peak during,
+    ``ru_maxrss`` after, and the match's milliseconds."""
+    sys.path.insert(0, str(checkout))
+    import cbm
+    from cbm import match
+
+    sys.path.append(str(ROOT / "bench"))
     from bench_match import trials_for
 
-    from cbm import match
+    if Path(cbm.__file__).resolve().parents[1] != checkout.resolve():
+        raise SystemExit(f"bench_peak: imported {cbm.__file__}, not {checkout}'s cbm")
 
     layout, size = scene.split(":")
     trial = trials_for(int(size), 1, layout)[0]
