@@ -39,42 +39,47 @@ class PairSets:
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _rows_of(head, n_ego, n_cav):
-    """The first pair ids of a ``VoteRows`` head's ego anchor i and ego member i': ``i Nc``, ``i' Nc``."""
-    query = -head - 1
-    return (query // n_ego) * n_cav, (query % n_ego) * n_cav
+def _decoded(code, bits, n_cav, anchor_row, member_row):
+    """One value of ``VoteRows.rows`` after the rows of its ego vector's anchor i and member i'
+    start at ``anchor_row``, ``member_row`` (``i Nc``, ``i' Nc``): the rows then, and the value's
+    anchor and member pairs, (-1, -1) for a head. Without a branch: heads and quadruples alternate
+    unpredictably where votes are few."""
+    low, head = (1 << bits) - 1, code < 0
+    query = -code - 1
+    anchor_row = (query >> bits) * n_cav if head else anchor_row
+    member_row = (query & low) * n_cav if head else member_row
+    anchor = -1 if head else anchor_row + (code >> bits)
+    member = -1 if head else member_row + (code & low)
+    return anchor_row, member_row, anchor, member
 
 
 @numba.njit(cache=True, nogil=True)
-def _count_by_member(rows, n_ego, n_cav, bits, has_set, start):
+def _count_by_member(rows, bits, n_cav, has_set, start):
     """Adds the quadruples of ``rows`` (``VoteRows``) to ``start[member + 1]`` and marks their
-    anchors in ``has_set``."""
-    low, anchor_row, member_row = (1 << bits) - 1, 0, 0
+    anchors in ``has_set``; a head adds to ``start[0]`` and marks ``has_set[-1]``, the caller's
+    spare entries."""
+    anchor_row = member_row = 0
     for r in range(len(rows)):
-        if rows[r] < 0:
-            anchor_row, member_row = _rows_of(rows[r], n_ego, n_cav)
-        else:
-            has_set[anchor_row + (rows[r] >> bits)] = True
-            start[member_row + (rows[r] & low) + 1] += 1
+        anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
+        has_set[anchor] = True
+        start[member + 1] += 1
 
 
 @numba.njit(cache=True, nogil=True)
-def _place_by_member(rows, n_ego, n_cav, bits, fill, values):
+def _place_by_member(rows, bits, n_cav, fill, values):
     """Writes each quadruple's anchor of ``rows`` (``VoteRows``) at ``values[fill[member]]`` and moves
     that member's ``fill`` on."""
-    low, anchor_row, member_row = (1 << bits) - 1, 0, 0
+    anchor_row = member_row = 0
     for r in range(len(rows)):
-        if rows[r] < 0:
-            anchor_row, member_row = _rows_of(rows[r], n_ego, n_cav)
-        else:
-            member = member_row + (rows[r] & low)
-            values[fill[member]] = anchor_row + (rows[r] >> bits)
+        anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
+        if member >= 0:
+            values[fill[member]] = anchor
             fill[member] += 1
 
 
 def _place(part, fill: np.ndarray, values: np.ndarray) -> None:
     """``_place_by_member`` of one ``VoteRows``."""
-    _place_by_member(part.rows, part.n_ego, part.n_cav, part.bits, fill, values)
+    _place_by_member(part.rows, part.bits, part.n_cav, fill, values)
 
 
 @numba.njit(cache=True, nogil=True)
@@ -100,10 +105,11 @@ def voted_by_member(votes: list, n_pairs: int) -> PairSets:
     has a quadruple (every non-empty voting set holds its own pair). The list is emptied part by
     part as the parts are placed, so the rows and their grouping are never held twice; the
     groups' starts are moved along as they fill (no copy of them)."""
-    has_set = np.zeros(n_pairs, np.bool_)
-    start = np.zeros(n_pairs + 1, np.int64)
+    spare = np.zeros(n_pairs + 1, np.bool_)
+    has_set, start = spare[:-1], np.zeros(n_pairs + 1, np.int64)
     for part in votes:
-        _count_by_member(part.rows, part.n_ego, part.n_cav, part.bits, has_set, start)
+        _count_by_member(part.rows, part.bits, part.n_cav, spare, start)
+    start[0] = 0
     start[1:] += has_set
     np.cumsum(start, out=start)
     values = np.empty(start[n_pairs], np.int32)

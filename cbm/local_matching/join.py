@@ -39,7 +39,7 @@ POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 @dataclass(frozen=True)
 class VoteRows:
     """The quadruples within sigma3 of one part of the join, in its order, 4 bytes a row where the
-    sizes allow (``packing``): per ego vector a head ``-(i Ne + i') - 1`` (its anchor i and
+    sizes allow (``packing``): per ego vector a head ``-(i << bits | i') - 1`` (its anchor i and
     member i'; written before its window is scanned, kept even when it finds nothing: a branch per
     query costs the join more than the 4 bytes), then one row ``b << bits | j'`` per quadruple (CAV
     anchor b, CAV member j'), whose anchor pair is ``i Nc + b`` and member pair ``i' Nc + j'``."""
@@ -53,15 +53,15 @@ class VoteRows:
         """``part[0]``, ``part[1]``: the quadruples' anchor and member pair ids, unpacked."""
         head = self.rows < 0
         query = -self.rows[np.maximum.accumulate(np.where(head, np.arange(len(head)), 0))] - 1
-        ego = (query // self.n_ego, query % self.n_ego)[k][~head].astype(np.int64)
+        ego = (query >> self.bits, query & ((1 << self.bits) - 1))[k][~head].astype(np.int64)
         cav = (self.rows >> self.bits, self.rows & ((1 << self.bits) - 1))[k][~head]
         return (ego * self.n_cav + cav).astype(np.int32)
 
 
 def packing(n_ego: int, n_cav: int) -> tuple[type, int]:
-    """The dtype of ``VoteRows.rows`` and the shift of b: int32 and 16 while every head and row
-    fits, else int64 and 32."""
-    if n_cav < 2**15 and n_ego * n_ego < 2**31:
+    """The dtype of ``VoteRows.rows`` and the shift of i and b: int32 and 16 while every object
+    index fits in 15 bits, else int64 and 32."""
+    if max(n_ego, n_cav) < 2**15:
         return np.int32, 16
     return np.int64, 32
 
@@ -119,7 +119,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
                 most = n_votes + 1 + (k1 - k0 + 1) * widest
                 while most > len(rows):
                     rows = _grown(rows, n_votes)
-                rows[n_votes] = -(u // per_anchor * n_ego + ego_member[u]) - 1
+                rows[n_votes] = -((np.int64(u // per_anchor) << bits) | ego_member[u]) - 1
                 n_votes += 1
             n_votes = _query(zx, zy, u // per_anchor, slot_row[u // per_anchor], signs, k0, k1, c0, c1, ny, start,
                              gx, gy, g_anchor, g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, slots, rows,
