@@ -45,7 +45,6 @@ class VoteRows:
     anchor b, CAV member j'), whose anchor pair is ``i Nc + b`` and member pair ``i' Nc + j'``."""
 
     rows: np.ndarray
-    n_ego: int
     n_cav: int
     bits: int
 
@@ -93,7 +92,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
     within sigma3 packed as ``VoteRows.rows`` (``rows``: an empty array of their dtype; ``bits``:
-    the shift of a row's CAV anchor). One pass scans the cells of the wider threshold's window
+    the shift of i and b, ``packing``). One pass scans the cells of the wider threshold's window
     (``_query``); a negative threshold skips its test: a sigma2 edit counts again without listing
     the votes, a sigma3 edit lists them without counting. The ego vectors of ``ANCHORS_PER_CHUNK``
     objects at a time are visited column by column of the grid, so consecutive queries read the
@@ -251,7 +250,7 @@ def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context,
     jobs = []
     for group in batch:
         jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run)
-    return [VoteRows(job.result(), n_ego, n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
+    return [VoteRows(job.result(), n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
 
 
 def _submitted(group: np.ndarray, grid, ego: Context, per_anchor: int, signs: np.ndarray, sigma1_rad: float,
