@@ -221,10 +221,10 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
 
 
 def _find_trim():
-    """glibc's ``malloc_trim``, or None where the C library has none."""
+    """glibc's ``malloc_trim``, or None where the C library has none (or cannot be opened by name)."""
     try:
         return ctypes.CDLL(None).malloc_trim
-    except (AttributeError, OSError):
+    except (AttributeError, OSError, TypeError):
         return None
 
 
