@@ -38,41 +38,84 @@ class PairSets:
         return PairSets(start=np.zeros(n_pairs + 1, dtype=np.int64), member=np.zeros(0, dtype=np.int32))
 
 
-@numba.njit(cache=True, nogil=True)
-def _count_by_member(anchor, member, has_set, start):
-    """Adds the quadruples (anchor, member) to ``start[member + 1]`` and marks their anchors in ``has_set``."""
-    for row in range(len(anchor)):
-        has_set[anchor[row]] = True
-        start[member[row] + 1] += 1
+@numba.njit(cache=True, nogil=True, inline="always")
+def _decoded(code, bits, n_cav, anchor_row, member_row):
+    """One value of ``VoteRows.rows`` after the rows of its ego vector's anchor i and member i'
+    start at ``anchor_row``, ``member_row`` (``i Nc``, ``i' Nc``): the rows then, and the value's
+    anchor and member pairs, (-1, -1) for a head. Without a branch: heads and quadruples alternate
+    unpredictably where votes are few."""
+    low, head = (1 << bits) - 1, code < 0
+    query = -code - 1
+    anchor_row = (query >> bits) * n_cav if head else anchor_row
+    member_row = (query & low) * n_cav if head else member_row
+    anchor = -1 if head else anchor_row + (code >> bits)
+    member = -1 if head else member_row + (code & low)
+    return anchor_row, member_row, anchor, member
 
 
 @numba.njit(cache=True, nogil=True)
-def _place_by_member(anchor, member, fill, values):
-    """Writes each quadruple's anchor at ``values[fill[member]]`` and moves that member's ``fill`` on."""
-    for row in range(len(anchor)):
-        values[fill[member[row]]] = anchor[row]
-        fill[member[row]] += 1
+def _count_by_member(rows, bits, n_cav, has_set, start):
+    """Adds the quadruples of ``rows`` (``VoteRows``) to ``start[member + 1]`` and marks their
+    anchors in ``has_set``; a head adds to ``start[0]`` and marks ``has_set[-1]``, the caller's
+    spare entries."""
+    anchor_row = member_row = 0
+    for r in range(len(rows)):
+        anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
+        has_set[anchor] = True
+        start[member + 1] += 1
 
 
-def voted_by_member(votes: list[tuple[np.ndarray, np.ndarray]], n_pairs: int) -> PairSets:
+@numba.njit(cache=True, nogil=True)
+def _place_by_member(rows, bits, n_cav, fill, values):
+    """Writes each quadruple's anchor of ``rows`` (``VoteRows``) at ``values[fill[member]]`` and moves
+    that member's ``fill`` on."""
+    anchor_row = member_row = 0
+    for r in range(len(rows)):
+        anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
+        if member >= 0:
+            values[fill[member]] = anchor
+            fill[member] += 1
+
+
+def _place(part, fill: np.ndarray, values: np.ndarray) -> None:
+    """``_place_by_member`` of one ``VoteRows``."""
+    _place_by_member(part.rows, part.bits, part.n_cav, fill, values)
+
+
+@numba.njit(cache=True, nogil=True)
+def _place_own(has_set, fill, values):
+    """Writes every anchor A with a quadruple last in its own group, (A, A) (each non-empty voting set
+    holds its own pair); ``fill`` then holds each group's end and becomes the groups' starts, moved
+    up by one."""
+    n_pairs = len(has_set)
+    for a in range(n_pairs):
+        if has_set[a]:
+            values[fill[a]] = a
+            fill[a] += 1
+    for a in range(n_pairs, 0, -1):
+        fill[a] = fill[a - 1]
+    fill[0] = 0
+
+
+def voted_by_member(votes: list, n_pairs: int) -> PairSets:
     """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m.
 
-    ``votes`` are the join's parts of (anchor, member) rows, in order; a counting sort groups them by
-    member (in row order), then adds (A, A) for every anchor A that has a quadruple (every non-empty
-    voting set holds its own pair). The list is emptied part by part as the parts are placed, so the
-    rows and their grouping (4 bytes a row) are never held twice."""
-    has_set = np.zeros(n_pairs, np.bool_)
-    start = np.zeros(n_pairs + 1, np.int64)
-    for anchor, member in votes:
-        _count_by_member(anchor, member, has_set, start)
+    ``votes`` are the join's parts (``cbm.local_matching.join.VoteRows``), in order; a counting
+    sort groups their quadruples by member (in row order), then adds (A, A) for every anchor A that
+    has a quadruple (every non-empty voting set holds its own pair). The list is emptied part by
+    part as the parts are placed, so the rows and their grouping are never held twice; the
+    groups' starts are moved along as they fill (no copy of them)."""
+    spare = np.zeros(n_pairs + 1, np.bool_)
+    has_set, start = spare[:-1], np.zeros(n_pairs + 1, np.int64)
+    for part in votes:
+        _count_by_member(part.rows, part.bits, part.n_cav, spare, start)
+    start[0] = 0
     start[1:] += has_set
     np.cumsum(start, out=start)
     values = np.empty(start[n_pairs], np.int32)
-    fill = start[:-1].copy()
     while votes:
-        _place_by_member(*votes.pop(0), fill, values)
-    own = np.flatnonzero(has_set)
-    values[fill[own]] = own
+        _place(votes.pop(0), start, values)
+    _place_own(has_set, start, values)
     return PairSets(start=start, member=values)
 
 

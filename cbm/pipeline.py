@@ -14,7 +14,8 @@ from .context import Context
 from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
-from .local_matching import CandidateSets, count_candidates
+from .local_matching import CandidateSets
+from .local_matching.counting import candidate_sets, counts_and_votes
 from .params import CBMParams
 from .result import MatchResult
 from .reuse import Prepared, Reuse, prepare, recall, remember
@@ -83,7 +84,8 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     """Steps 1-4 and the candidate and voting sets, for checked inputs; with ``reuse``, what an
     earlier call on the same input built and no threshold changes is taken from it, and so are the
     counts of eq. 8 when sigma1 and sigma2 are unchanged and the voting sets of eq. 9 when sigma1 and
-    sigma3 are (``cbm.reuse.recall``)."""
+    sigma3 are (``cbm.reuse.recall``). The join's votes are grouped, and freed, before the sorted
+    blocks of the candidate sets are built, so the two are never held at once."""
     timings = {} if timings is None else timings
     started = time.perf_counter()
     ready = prepare(ego, cav, init, params.heading) if reuse is None else reuse.prepared(ego, cav, init, params.heading)
@@ -93,10 +95,9 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     kept, sigma3 = None if reuse is None else ready.kept, params.sigma3 if params.consensus else None
     voting_key = (params.sigma1_rad, sigma3)
     voted_by = None if sigma3 is None else recall(kept, "voted_by", voting_key)
-    candidates, votes = count_candidates(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
-                                         params.sigma1_rad, params.sigma2, sigma3, kept, list_votes=voted_by is None)
-    timings["local_matching"] = time.perf_counter() - t
-    t = time.perf_counter()
+    count2, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
+                                     params.sigma1_rad, params.sigma2, sigma3, kept, list_votes=voted_by is None)
+    joined = time.perf_counter()
 
     n_pairs = len(ego) * len(cav)
     if sigma3 is None:
@@ -104,7 +105,11 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     elif voted_by is None:
         voted_by = voted_by_member(votes, n_pairs)
         remember(kept, "voted_by", voting_key, voted_by)
-    timings["voting_sets"] = time.perf_counter() - t
+    grouped = time.perf_counter()
+    candidates = candidate_sets(ready.ego_context, ready.cav_context, ready.signs, params.sigma1_rad, params.sigma2,
+                                count2, kept)
+    timings["local_matching"] = joined - t + time.perf_counter() - grouped
+    timings["voting_sets"] = grouped - joined
     return Sets(params, ego, ready, candidates, voted_by)
 
 

@@ -13,7 +13,7 @@ import numpy as np
 from ..context import Context
 from ..reuse import ran, recall, remember
 from .candidates import CandidateSets, member_lookup
-from .join import run_join
+from .join import VoteRows, run_join
 from .listing import listing_for
 
 MOST_PAIRS = 2**31 - 1
@@ -24,12 +24,21 @@ NOTHING = np.zeros(0, np.int64)
 
 def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
                      sigma2: float, sigma3: float | None, kept: dict | None = None,
-                     list_votes: bool = True) -> tuple[CandidateSets, list[tuple[np.ndarray, np.ndarray]]]:
-    """card(L_ij) at sigma2 for every anchor, and (with ``sigma3`` and ``list_votes``) the (anchor,
-    member) rows of every quadruple within sigma3 (the voting sets of eq. 9 without their own pairs),
-    from one join, as the join's parts (``run_join``); ``sigma3`` None: the consensus is off.
+                     list_votes: bool = True) -> tuple[CandidateSets, list[VoteRows]]:
+    """card(L_ij) at sigma2 for every anchor, and (with ``sigma3`` and ``list_votes``) every
+    quadruple within sigma3 (the voting sets of eq. 9 without their own pairs), from one join, as
+    the join's parts (``VoteRows``, packed); ``sigma3`` None: the consensus is off.
     ``kept`` (``cbm.reuse.Prepared.kept``): the grids, sorted blocks and counts built earlier for the
     same contexts, read and filled; counts kept for this (sigma1, sigma2) are not counted again."""
+    count2, votes = counts_and_votes(ego, cav, ego_heading, signs, sigma1_rad, sigma2, sigma3, kept, list_votes)
+    return candidate_sets(ego, cav, signs, sigma1_rad, sigma2, count2, kept), votes
+
+
+def counts_and_votes(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
+                     sigma2: float, sigma3: float | None, kept: dict | None = None,
+                     list_votes: bool = True) -> tuple[np.ndarray, list[VoteRows]]:
+    """The join of ``count_candidates``: card(L_ij) + 1 of every anchor with a candidate (0 for the
+    others; eq. 8 with the anchor pair itself) and the votes, before any candidate set is listed."""
     n_ego, n_cav = signs.shape
     if n_ego * n_cav > MOST_PAIRS:
         raise ValueError(f"cbm.match: {n_ego} x {n_cav} boxes make more than {MOST_PAIRS} pairs (the voting "
@@ -50,6 +59,13 @@ def count_candidates(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
         count2 = counters
         count2 += count2 > 0
         remember(kept, "count", (sigma1_rad, sigma2), count2)
-    candidates = CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs,
-                               listing_for(kept, sigma1_rad, sigma2, count2))
-    return candidates, votes
+    return count2, votes
+
+
+def candidate_sets(ego: Context, cav: Context, signs: np.ndarray, sigma1_rad: float, sigma2: float,
+                   count2: np.ndarray, kept: dict | None = None) -> CandidateSets:
+    """L_ij of every anchor (eq. 8) from its counts ``count2``: the members listed on demand from
+    both agents' sorted blocks, built here unless ``kept`` holds them."""
+    n_ego, n_cav = signs.shape
+    return CandidateSets(count2, member_lookup(ego, cav, n_ego, n_cav, sigma1_rad, sigma2, kept), signs,
+                         listing_for(kept, sigma1_rad, sigma2, count2))

@@ -9,8 +9,10 @@ are joined in a fixed order, so nothing depends on the threads.
 """
 from __future__ import annotations
 
+import ctypes
 import math
 from concurrent.futures import ThreadPoolExecutor
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -28,8 +30,39 @@ counters, 64 rows of Nc, stay in a core's cache)."""
 REUSE_RADII = 2.0
 """A kept grid serves radii up to this factor from the one it was built for; beyond it, the cells
 would make a window scan many more vectors (or visit many more cells) than a new grid's."""
+TRIM_FROM = 32 * 2**20
+"""Bytes of votes from which a join hands its threads' freed memory back to the system (``_trim``)."""
 POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 """The threads the kernels (numba, without the interpreter lock) share."""
+
+
+@dataclass(frozen=True)
+class VoteRows:
+    """The quadruples within sigma3 of one part of the join, in its order, 4 bytes a row where the
+    sizes allow (``packing``): per ego vector a head ``-(i << bits | i') - 1`` (its anchor i and
+    member i'; written before its window is scanned, kept even when it finds nothing: a branch per
+    query costs the join more than the 4 bytes), then one row ``b << bits | j'`` per quadruple (CAV
+    anchor b, CAV member j'), whose anchor pair is ``i Nc + b`` and member pair ``i' Nc + j'``."""
+
+    rows: np.ndarray
+    n_cav: int
+    bits: int
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        """``part[0]``, ``part[1]``: the quadruples' anchor and member pair ids, unpacked."""
+        head = self.rows < 0
+        query = -self.rows[np.maximum.accumulate(np.where(head, np.arange(len(head)), 0))] - 1
+        ego = (query >> self.bits, query & ((1 << self.bits) - 1))[k][~head].astype(np.int64)
+        cav = (self.rows >> self.bits, self.rows & ((1 << self.bits) - 1))[k][~head]
+        return (ego * self.n_cav + cav).astype(np.int32)
+
+
+def packing(n_ego: int, n_cav: int) -> tuple[type, int]:
+    """The dtype of ``VoteRows.rows`` and the shift of i and b: int32 and 16 while every object
+    index fits in 15 bits, else int64 and 32."""
+    if max(n_ego, n_cav) < 2**15:
+        return np.int32, 16
+    return np.int64, 32
 
 
 @numba.njit(cache=True, nogil=True)
@@ -54,11 +87,12 @@ def _by_column(ego_ids, chunk, per_anchor, ego_vectors, u0, cell, nx, column_sta
 
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor,
-          g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, count2):
+          g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, count2, rows, bits):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within sigma2 to ``count2[a]``; returns those
-    within sigma3 as (anchor, member) rows. One pass scans the cells of the wider threshold's window
+    within sigma3 packed as ``VoteRows.rows`` (``rows``: an empty array of their dtype; ``bits``:
+    the shift of i and b, ``packing``). One pass scans the cells of the wider threshold's window
     (``_query``); a negative threshold skips its test: a sigma2 edit counts again without listing
     the votes, a sigma3 edit lists them without counting. The ego vectors of ``ANCHORS_PER_CHUNK``
     objects at a time are visited column by column of the grid, so consecutive queries read the
@@ -66,7 +100,7 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
     """
     n_ego, n_cav = signs.shape
     counting, radius = sigma2 >= 0.0, max(sigma2, sigma3)
-    vote_anchor, vote_member, n_votes = np.empty(1024, np.int32), np.empty(1024, np.int32), 0
+    n_votes = 0
     order = np.empty(ANCHORS_PER_CHUNK * per_anchor, np.int64)
     column_start = np.empty(nx + 1, np.int64)
     slots = np.zeros(ANCHORS_PER_CHUNK * 3 * n_cav, np.int32)
@@ -81,29 +115,31 @@ def _join(ego_ids, ego_vectors, ego_member, per_anchor, signs, u0, v0, cell, nx,
             zx, zy = ego_vectors[u, 0], ego_vectors[u, 1]
             k0, k1, c0, c1 = cells(zx + zy, zx - zy, radius, u0, v0, cell, nx, ny)
             if sigma3 >= 0.0:
-                most = n_votes + (k1 - k0 + 1) * widest
-                while most > len(vote_anchor):
-                    vote_anchor, vote_member = _grown(vote_anchor, n_votes), _grown(vote_member, n_votes)
-            n_votes = _query(zx, zy, u // per_anchor, ego_member[u], slot_row[u // per_anchor], signs, k0, k1, c0, c1,
-                             ny, start, gx, gy, g_anchor, g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3,
-                             slots, vote_anchor, vote_member, n_votes)
+                most = n_votes + 1 + (k1 - k0 + 1) * widest
+                while most > len(rows):
+                    rows = _grown(rows, n_votes)
+                rows[n_votes] = -((np.int64(u // per_anchor) << bits) | ego_member[u]) - 1
+                n_votes += 1
+            n_votes = _query(zx, zy, u // per_anchor, slot_row[u // per_anchor], signs, k0, k1, c0, c1, ny, start,
+                             gx, gy, g_anchor, g_member, g_check, g_slot, cos2_sigma1, sigma2, sigma3, slots, rows,
+                             bits, n_votes)
         if counting:
             _add_slots(ego_ids[chunk:last], signs, slots, count2)
-    return vote_anchor[:n_votes].copy(), vote_member[:n_votes].copy()
+    return rows[:n_votes].copy()
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check,
-           g_slot, cos2_sigma1, sigma2, sigma3, slots, vote_anchor, vote_member, n_votes):
-    """Eq. 7 for one ego vector z of anchor ``i`` (and ``member``) against the rows of the cells
-    c0..c1 of the columns k0..k1. Each row within sigma2 adds 1 to its slot (``slots``), the row's
-    anchor and sign (``_slots``) from ``slot_row`` on, without a branch: which slot counts is
-    settled per anchor pair afterwards (``_add_slots``). The few rows within sigma3 whose sign
-    holds against anchor ``i`` (``check`` 0 or ``signs[i, b]``) are appended as (anchor, member)
-    pair ids, in the order of the rows, to lists grown beforehand to hold as many rows as k1 - k0 + 1
-    columns can (``_widest_column``). Returns the lists' new length."""
-    n_cav = signs.shape[1]
-    sign_row, row, member_row = signs[i], i * n_cav, member * n_cav
+def _query(zx, zy, i, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anchor, g_member, g_check, g_slot,
+           cos2_sigma1, sigma2, sigma3, slots, rows, bits, n_votes):
+    """Eq. 7 for one ego vector z of anchor ``i`` against the rows of the cells c0..c1 of the
+    columns k0..k1. Each row within sigma2 adds 1 to its slot (``slots``), the row's anchor and
+    sign (``_slots``) from ``slot_row`` on, without a branch: which slot counts is settled per
+    anchor pair afterwards (``_add_slots``). The few rows within sigma3 whose sign holds against
+    anchor ``i`` (``check`` 0 or ``signs[i, b]``) are appended as (CAV anchor b, CAV member j')
+    packed in one value, ``b << bits | j'``, in the order of the rows, to ``rows``, grown
+    beforehand to hold as many rows as k1 - k0 + 1 columns can (``_widest_column``). Returns the
+    new length of ``rows``."""
+    sign_row = signs[i]
     z2 = zx * zx + zy * zy
     for k in range(k0, k1 + 1):
         for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
@@ -115,8 +151,7 @@ def _query(zx, zy, i, member, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy
             slots[slot_row + g_slot[v]] += (l1 <= sigma2) & angle
             if (l1 <= sigma3) & angle:
                 b = g_anchor[v]
-                vote_anchor[n_votes] = row + b
-                vote_member[n_votes] = member_row + g_member[v]
+                rows[n_votes] = (np.int64(b) << bits) | g_member[v]
                 n_votes += (g_check[v] == 0) | (sign_row[b] == g_check[v])
     return n_votes
 
@@ -164,10 +199,10 @@ def _grown(values, n):
 
 def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
              radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
-             kept: dict | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
+             kept: dict | None = None) -> list[VoteRows]:
     """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
     at a time, then their ego objects are joined in parts; the votes come back as the parts'
-    (anchor, member) rows, in a fixed order (not joined into one array: that would hold them twice).
+    ``VoteRows``, in a fixed order (not joined into one array: that would hold them twice).
     The grids are built for ``radius`` (at least both thresholds); a negative ``sigma2`` counts
     nothing (``count2`` is not read), a negative ``sigma3`` lists nothing. ``kept`` holds the grids
     between calls on the same contexts: a grid serves any radius (every vector of the cells a window
@@ -180,25 +215,53 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     for first in range(0, len(groups), THREADS if parallel else 1):
         votes += _join_batch(groups[first:first + (THREADS if parallel else 1)], first, ego, cav, per_anchor, signs,
                              sigma1_rad, radius, sigma2, sigma3, count2, kept, run)
+    if sum(part.rows.nbytes for part in votes) >= TRIM_FROM:
+        _trim()
     return votes
+
+
+def _find_trim():
+    """glibc's ``malloc_trim``, or None where the C library has none (or cannot be opened by name)."""
+    try:
+        return ctypes.CDLL(None).malloc_trim
+    except (AttributeError, OSError, TypeError):
+        return None
+
+
+_MALLOC_TRIM = _find_trim()
+
+
+def _trim() -> None:
+    """Hands the memory the join's threads freed (grids, grown vote lists) back to the system: glibc
+    keeps it resident in the threads' arenas, where the voting sets' grouping, which comes next,
+    never reuses it."""
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)
 
 
 def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context, per_anchor: int,
                 signs: np.ndarray, sigma1_rad: float, radius: float, sigma2: float, sigma3: float,
-                count2: np.ndarray, kept: dict | None, run) -> list[tuple[np.ndarray, np.ndarray]]:
+                count2: np.ndarray, kept: dict | None, run) -> list[VoteRows]:
     """The votes of the heading groups ``batch`` (numbered from ``first``), their grids built (or
-    taken from ``kept``) here: without ``kept`` they are freed on return, before the next batch's."""
-    parallel = run is not _at_once
-    grids = _grids(batch, first, cav, signs, radius, run, kept)
+    taken from ``kept``) here: without ``kept`` each is held only by its group's jobs, so it is
+    freed as soon as they have run, while the batch's later groups are joined."""
+    grids = _grids(batch, first, cav, signs, radius, run, kept)[::-1]
+    n_ego, n_cav = signs.shape
     jobs = []
-    for group, grid in zip(batch, grids):
-        slot = _slots(grid.anchor, grid.check)
-        common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
-                  grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, slot, math.cos(sigma1_rad) ** 2,
-                  sigma2, sigma3, count2)
-        parts = np.array_split(group, THREADS) if parallel else [group]
-        jobs += [run(_join, part, *common) for part in parts if len(part)]
-    return [job.result() for job in jobs]
+    for group in batch:
+        jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run)
+    return [VoteRows(job.result(), n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
+
+
+def _submitted(group: np.ndarray, grid, ego: Context, per_anchor: int, signs: np.ndarray, sigma1_rad: float,
+               sigma2: float, sigma3: float, count2: np.ndarray, run) -> list:
+    """The jobs (``run``) joining the ego objects ``group`` against ``grid``: one per thread in parallel."""
+    dtype, bits = packing(*signs.shape)
+    common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
+              grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, _slots(grid.anchor, grid.check),
+              math.cos(sigma1_rad) ** 2, sigma2, sigma3, count2)
+    parts = [group] if run is _at_once else np.array_split(group, THREADS)
+    return [run(_join, part, *common, np.empty(1024, dtype), bits) for part in parts if len(part)]
 
 
 def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
