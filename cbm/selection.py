@@ -265,7 +265,7 @@ def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego
     where the listing's arguments, the rule and Nc are). The kernels add the anchors they list to
     the listing: the caller holds its lock (``listing_held``)."""
     centres = (np.ascontiguousarray(ego_xy, dtype=float), np.ascontiguousarray(cav_xy, dtype=float))
-    listing = (NO_LISTING if L.listing is None else L.listing).arguments(L.lookup[-1])
+    listing = (NO_LISTING if L.listing is None else L.listing).arguments()
     return (L.signs, L.lookup, listing, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy),
             centres, float(distance_limit))
 
@@ -318,8 +318,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
         set_of_member = np.repeat(np.arange(len(sizes)), sizes)
         shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
         runner_up = strongest_rival(order, stop, L, int(sizes[~shares].max(initial=0)), in_winner, common)
-    pairs = _as_pairs(winner, n_cav)
-    return Selection(anchor=int(visited[k_win]), pairs=pairs[np.argsort(pairs[:, 0], kind="stable")],
+    return Selection(anchor=int(visited[k_win]), pairs=_as_pairs(np.sort(winner), n_cav),
                      candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
                      visit=Visit(order, sizes, offsets, members, common))
 

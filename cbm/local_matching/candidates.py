@@ -135,10 +135,10 @@ class Listing:
     fill: np.ndarray
     lock: threading.RLock = field(default_factory=threading.RLock, compare=False)
 
-    def arguments(self, sigma2: float, writable: bool = True) -> tuple:
-        """``listed_into``'s ``listing`` argument for a call at ``sigma2`` (at most ``self.sigma2``);
+    def arguments(self, writable: bool = True) -> tuple:
+        """``listed_into``'s ``listing`` argument (for calls at a sigma2 up to ``self.sigma2``);
         ``writable`` False: anchors not yet listed are listed but not kept (for threads running at once)."""
-        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.sigma2, sigma2, writable)
+        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.sigma2, writable)
 
 
 NO_LISTING = Listing(0.0, 1, np.zeros(0, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32),

@@ -72,26 +72,26 @@ def assert_same_listing(sets, arguments: tuple) -> None:
 def test_a_set_read_from_a_wider_listing_is_the_set_listed_anew(layout):
     kept = {}
     wide = candidate_sets(layout, 4.0, kept)
-    assert_same_listing(wide, wide.listing.arguments(4.0))
+    assert_same_listing(wide, wide.listing.arguments())
     narrow = candidate_sets(layout, 2.0, kept)
     assert narrow.listing is wide.listing and narrow.listing.sigma2 == 4.0
     assert np.count_nonzero(narrow.listing.at >= 0) > 0
-    assert_same_listing(narrow, narrow.listing.arguments(2.0))
+    assert_same_listing(narrow, narrow.listing.arguments())
 
 
 def test_a_full_listing_lists_again_what_it_has_no_room_for(monkeypatch):
     monkeypatch.setattr(listing, "CAPACITY", 200)
     kept = {}
     wide = candidate_sets("street", 4.0, kept)
-    assert_same_listing(wide, wide.listing.arguments(4.0))
+    assert_same_listing(wide, wide.listing.arguments())
     assert 0 < wide.listing.fill[0] <= 200
     narrow = candidate_sets("street", 2.5, kept)
-    assert_same_listing(narrow, narrow.listing.arguments(2.5))
+    assert_same_listing(narrow, narrow.listing.arguments())
 
 
 def test_read_only_arguments_list_without_keeping():
     sets = candidate_sets("street", 3.0, {})
-    arguments = (*sets.listing.arguments(3.0)[:-1], False)
+    arguments = (*sets.listing.arguments()[:-1], False)
     assert_same_listing(sets, arguments)
     assert sets.listing.fill[0] == 0 and not np.any(sets.listing.at >= 0)
 
@@ -99,4 +99,4 @@ def test_read_only_arguments_list_without_keeping():
 def test_without_kept_inputs_nothing_is_listed_to_keep():
     sets = candidate_sets("street", 3.0, None)
     assert sets.listing is None
-    assert_same_listing(sets, NO_LISTING.arguments(3.0))
+    assert_same_listing(sets, NO_LISTING.arguments())
