@@ -282,15 +282,13 @@ class ExplorePanel:
         z = layouts.fitting_height(self.shown.span, screen)
         position, look_at = layouts.slid_clear_of_panel((x - 0.15 * z, y, z), (x, y, 0.0), screen)
         client.flush()
-        with client.atomic():
-            client.camera.position, client.camera.look_at = position, look_at
+        layouts.move_camera(client, position, look_at)
         client.flush()
 
     def clear_inspector(self) -> None:
         """Hide the inspector's panels and put back the camera they moved."""
         if self.camera_before is not None:
-            camera = self.tab.client.camera
-            camera.position, camera.look_at = self.camera_before
+            layouts.move_camera(self.tab.client, *self.camera_before)
             self.camera_before = None
         self.inspected = self.shown = None
         self.inspector_view.show(inspector.empty())

@@ -4,7 +4,7 @@ where ``init`` puts them, or where the estimate does), where, and with which tit
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -23,6 +23,8 @@ PANEL_PX = 384 + 2 * 16
 and its margins."""
 SCREEN = (math.radians(50.0), 1280, 720)
 """(vertical field of view, width, height) assumed before the browser reports its camera."""
+ASIDE = (0.0, 0.0, 0.05)
+"""Metres a camera move first steps aside (``move_camera``)."""
 
 
 @dataclass(frozen=True)
@@ -78,6 +80,20 @@ def clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, f
     if centre_y:
         z = max(z, fitting_height(4.0 * abs(centre_y), screen))
     return slid_clear_of_panel((x, centre_y, z), (look_at[0], centre_y, 0.0), screen)
+
+
+def move_camera(client: Any, position: Sequence[float], look_at: Sequence[float]) -> None:
+    """Put the browser's camera of viser ``client`` at ``position``, looking at ``look_at``.
+
+    viser sends a move only where it differs from its copy of the camera, and that copy is what the
+    browser last reported, which may predate the previous move (its report still in flight): a
+    move back to where the camera was before would then be dropped. So the move first steps
+    ``ASIDE`` and back, the steps sent in one batch (the browser draws only the last)."""
+    camera = client.camera
+    with client.atomic():
+        camera.position = np.add(position, ASIDE)
+        camera.position = position
+        camera.look_at = look_at
 
 
 def screen_of(camera: Any) -> tuple[float, int, int]:

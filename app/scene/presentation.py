@@ -12,6 +12,7 @@ import viser
 
 from ..session.settings import ViewOptions
 from .captions import caption_html
+from .layouts import move_camera
 
 if TYPE_CHECKING:
     from ..session.explorer import Outcome
@@ -51,8 +52,7 @@ def aim(scene: SceneView, view: ViewOptions, drawing: Drawing | None, oblique: b
     if drawing is None:
         scene.reset_camera(oblique=oblique)
     elif view.presentation and drawing.agents and not oblique:
-        camera = scene.client.camera
-        camera.position, camera.look_at = camera_over(drawing.agents, camera.fov)
+        move_camera(scene.client, *camera_over(drawing.agents, scene.client.camera.fov))
     else:
         scene.reset_camera(drawing.centre_y, oblique)
 

@@ -99,8 +99,7 @@ class WalkthroughPanel:
             self.title.content, self.text.content = IDLE_TITLE, IDLE
             self._buttons()
             if self._camera is not None:
-                camera = self.tab.client.camera
-                camera.position, camera.look_at = self._camera
+                layouts.move_camera(self.tab.client, *self._camera)
                 self._camera = None
 
     def look_at_object(self) -> None:
@@ -108,8 +107,8 @@ class WalkthroughPanel:
         show what the step draws about it (``Step.span``; reset camera goes back)."""
         if self.step is None or self.step.focus is None:
             return
-        camera = self.tab.client.camera
-        camera.position, camera.look_at = camera_over(self.step.focus, self.step.span, layouts.screen_of(camera))
+        client = self.tab.client
+        layouts.move_camera(client, *camera_over(self.step.focus, self.step.span, layouts.screen_of(client.camera)))
 
     def animate(self) -> None:
         """Glide the CAV's boxes along the step's motion over the seconds the slider sets

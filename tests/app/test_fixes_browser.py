@@ -123,6 +123,27 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
     page.close()
 
 
+def test_reset_camera_moves_the_browser_even_when_the_servers_copy_of_the_camera_lags(
+        browser, server: ExplorerServer) -> None:
+    """The browser reports its camera a little after each move, so the server's copy can still say
+    the camera is where reset puts it while the browser shows the inspector's panels (a report sent
+    just before the look-at move arrived). Reset camera must move the browser all the same."""
+    page = open_small_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    ui.wait_until(lambda: purple_pixels(page) < 100, timeout=30)
+    camera = tab.client.camera
+    where_reset_puts_it = (camera.position.copy(), camera.look_at.copy())
+    page.get_by_role("tab", name="Explore").click()
+    page.get_by_role("button", name="inspect the winning anchor").click()
+    ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
+    camera._state.position, camera._state.look_at = where_reset_puts_it
+    page.get_by_role("tab", name="View").click()
+    page.get_by_role("button", name="reset camera").click()
+    ui.wait_until(lambda: purple_pixels(page) < 100, timeout=30)
+    page.close()
+
+
 def disabled(page, label: str) -> bool:
     return ui.slider(page, label).get_attribute("data-disabled") == "true" or \
         ui.slider(page, label).get_attribute("aria-disabled") == "true"
