@@ -29,7 +29,7 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 def open_small_page(browser, server: ExplorerServer):
     page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
-    page.goto(server.url)
+    page.goto(ui.address(server))
     page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
     return page
 
@@ -201,7 +201,7 @@ def pedestrians_only(folder) -> Explorer:
 def test_a_dataset_without_vehicles_says_what_is_missing(browser, tmp_path) -> None:
     with ui.scenario_server(pedestrians_only(tmp_path), tmp_path / "presets") as running:
         page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
-        page.goto(running.url)
+        page.goto(ui.address(running))
         page.get_by_text("CBM cannot run on this frame.").first.wait_for(timeout=60_000)
         text = page.get_by_text("What is missing").first.inner_text()
         assert "0 vehicle(s) among its 6 objects (pedestrian)" in text

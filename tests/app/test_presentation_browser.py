@@ -37,7 +37,7 @@ def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 def _page(browser, server: ExplorerServer):
     page = browser.new_page(viewport={"width": 1280, "height": 720})
-    page.goto(server.url)
+    page.goto(ui.address(server))
     page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
     return page
 

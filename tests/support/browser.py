@@ -24,6 +24,14 @@ FIRST_SCREEN = {"width": 1280, "height": 720}
 """A projector's or a laptop's window: what must show in it without scrolling."""
 
 
+def address(server) -> str:
+    """``server``'s address with the browser's drawing buffer held at the page's own pixels: viser's
+    client otherwise lowers its resolution to 0.875 or 0.75 of them when frames come slowly (a
+    loaded machine), and the camera the browser reports (``image_width``, ``image_height``) then
+    changes size between a move and the test's check of it."""
+    return f"{server.url}/?fixedDpr=1"
+
+
 def launch(sync_api) -> Iterator:
     """Yield a headless chromium (``sync_api``: ``playwright.sync_api``) and close it after."""
     with sync_api.sync_playwright() as playwright:
@@ -35,7 +43,7 @@ def launch(sync_api) -> Iterator:
 def open_page(browser, server):
     """A new tab on ``server``, once its first frame's metrics are shown."""
     page = browser.new_page(viewport={"width": 1400, "height": 900})
-    page.goto(server.url)
+    page.goto(address(server))
     page.get_by_text("precision / recall").first.wait_for(timeout=30_000)
     return page
 
@@ -43,7 +51,7 @@ def open_page(browser, server):
 def open_first_screen(browser, server):
     """A new 1280x720 tab on ``server``, once its first frame's metrics are shown."""
     page = browser.new_page(viewport=FIRST_SCREEN)
-    page.goto(server.url)
+    page.goto(address(server))
     page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
     return page
 
