@@ -71,6 +71,39 @@ def test_the_map_stays_put_and_its_pose_moves_it_into_the_ego_frame(explorer: Ex
     assert len(one.lines["map_lane_boundary_2"].segments) == 0, "one copy of the scene, one map"
 
 
+
+def test_a_redraw_sets_no_pose_or_label_again_and_ends_where_a_fresh_view_starts(
+        explorer: Explorer, viser_server: viser.ViserServer, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Poses and labels given again as they were are not set again; a new frame moves them, and
+    back on the first frame every node stands and every label reads as a fresh view's do."""
+    import app.scene.view as view_module
+
+    placed: list[str] = []
+    place = view_module._place
+    monkeypatch.setattr(view_module, "_place", lambda handle, pose: (placed.append(handle.name), place(handle, pose)))
+    first, other = (draw(explorer.compute(dataclasses.replace(Settings(), frame=k)), explorer.map_segments)
+                    for k in (0, 30))
+    view = SceneView(_Client(viser_server.scene, viser_server.atomic), root="/redrawn", labels_root="/redrawn_labels")
+    view.show(first)
+    written = dict(view.written)
+    placed.clear()
+    view.show(first)
+    assert placed == [] and view.written == written
+    view.show(other)
+    assert "/redrawn/map_lane_boundary" in placed and view.written != written
+    view.show(first)
+    fresh = SceneView(_Client(viser_server.scene, viser_server.atomic), root="/fresh", labels_root="/fresh_labels")
+    fresh.show(first)
+    for name, handle in fresh.lines.items():
+        np.testing.assert_array_equal(view.lines[name].position, handle.position)
+        np.testing.assert_array_equal(view.lines[name].wxyz, handle.wxyz)
+    for name, handle in fresh.labels.items():
+        mine = view.labels[name]
+        assert (mine.text, mine.visible, mine.font_screen_scale) == (handle.text, handle.visible,
+                                                                       handle.font_screen_scale)
+        np.testing.assert_array_equal(mine.position, handle.position)
+
+
 @pytest.fixture(scope="module")
 def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
     with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
