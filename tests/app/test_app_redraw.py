@@ -104,6 +104,37 @@ def test_a_redraw_sets_no_pose_or_label_again_and_ends_where_a_fresh_view_starts
         np.testing.assert_array_equal(mine.position, handle.position)
 
 
+
+def test_geometry_is_reused_by_content_and_a_drawing_is_what_a_fresh_one_is(explorer: Explorer) -> None:
+    """``ByContent`` hands out the earlier (read-only) result for arguments of equal content and a new
+    one for others; a drawing made after others equals one made with every cache empty."""
+    from app.scene import drawing as drawing_module
+    from app.scene.geometry import footprint_mesh
+    from app.scene.memo import ByContent
+
+    memo, boxes = ByContent(footprint_mesh, kept=2), np.random.default_rng(0).normal(size=(5, 7))
+    first = memo(boxes, 0.5)
+    assert memo(boxes.copy(), 0.5) is first and not first[0].flags.writeable
+    for args in ((boxes + 1, 0.5), (boxes, 0.25)):
+        other = memo(*args)
+        assert other is not first
+        np.testing.assert_array_equal(other[0], footprint_mesh(*args)[0])
+    settings = Settings()
+    outcomes = [explorer.compute(s) for s in (settings, dataclasses.replace(settings, frame=30),
+                                              settings.with_params("cbm", sigma2=2.5))]
+    for outcome in (*outcomes, outcomes[0]):
+        drawn = draw(outcome, explorer.map_segments)
+    for cache in vars(drawing_module).values():
+        if isinstance(cache, ByContent):
+            cache._results.clear()
+    fresh = draw(outcomes[0], explorer.map_segments)
+    for name, mesh in fresh.meshes.items():
+        np.testing.assert_array_equal(drawn.meshes[name].vertices, mesh.vertices)
+        np.testing.assert_array_equal(drawn.meshes[name].faces, mesh.faces)
+    for name, lines in fresh.lines.items():
+        np.testing.assert_array_equal(drawn.lines[name].segments, lines.segments)
+
+
 @pytest.fixture(scope="module")
 def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
     with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
