@@ -43,8 +43,8 @@ class AnchorDetail:
 
 
 def _occurs_once(values: np.ndarray) -> np.ndarray:
-    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
-    return counts[inverse] == 1
+    """Whether each of ``values`` (object indices, not negative) occurs once among them."""
+    return np.bincount(values)[values] == 1
 
 
 def _votes_from(voted_by: PairSets, members: np.ndarray, voters: np.ndarray, n_pairs: int) -> np.ndarray:
