@@ -229,10 +229,9 @@ class ClientSession:
             self.worker.submit(self._settings)
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
-        """Show a result: the scene's changed nodes and the panels, in one batch sent at once."""
+        """Show a result: the scene's changed nodes and the panels, in one batch sent at once; then
+        keep its row and record (the timeline, drawn later, and the recording read them)."""
         outcome, picture = computed
-        self.history.add(outcome)
-        self.recording.add(outcome)
         first = not self.view.meshes
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
         with self.client.atomic():
@@ -241,13 +240,15 @@ class ClientSession:
             if relaid or staged or first:
                 presentation.aim(self.view, outcome.settings.view, picture)
             self.controls.metrics.show(picture.metrics_markdown, self._note)
-            self._show_timeline_soon(outcome.frame_index)
             self.key_numbers.show(outcome)
             self.caption.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)
             self.walkthrough.refresh(outcome)
         self.client.flush()
+        self.history.add(outcome)
+        self.recording.add(outcome)
+        self._show_timeline_soon(outcome.frame_index)
         self._note = ""
         if first:
             for name in picking.NODES:

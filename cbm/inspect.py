@@ -12,7 +12,7 @@ import numpy as np
 
 from .consensus import PairSets
 from .params import CBMParams
-from .pipeline import Sets, build_sets, checked_inputs, match_sets
+from .pipeline import Sets, build_sets, checked_inputs, match_sets_visited
 from .result import MatchResult
 from .reuse import Reuse
 from .selection import filtered_sizes
@@ -43,8 +43,8 @@ class AnchorDetail:
 
 
 def _occurs_once(values: np.ndarray) -> np.ndarray:
-    _, inverse, counts = np.unique(values, return_inverse=True, return_counts=True)
-    return counts[inverse] == 1
+    """Whether each of ``values`` (object indices, not negative) occurs once among them."""
+    return np.bincount(values)[values] == 1
 
 
 def _votes_from(voted_by: PairSets, members: np.ndarray, voters: np.ndarray, n_pairs: int) -> np.ndarray:
@@ -78,10 +78,16 @@ class Inspection:
         self.init, self.n_cav, self._started = init, len(cav), started
         self._anchors: dict[tuple[int, int], AnchorDetail] = {}
         """Anchors explained so far: kept with this inspection and forgotten with it."""
+        self._visited: tuple[np.ndarray, np.ndarray] | None = None
+        """(anchors, filtered sizes) the selection's visit computed (``match``), None before."""
 
     def match(self) -> MatchResult:
-        """What ``cbm.match`` returns on the same input, from the sets already built."""
-        return match_sets(self.sets, self.init, dict(self._timings), self._started)
+        """What ``cbm.match`` returns on the same input, from the sets already built; the filtered
+        sizes its selection computed are kept for ``best_anchor_among``."""
+        result, visit = match_sets_visited(self.sets, self.init, dict(self._timings), self._started)
+        if visit is not None:
+            self._visited = visit.order[:len(visit.sizes)], visit.sizes
+        return result
 
     def _pairs(self, ids: np.ndarray) -> np.ndarray:
         return np.stack([ids // self.n_cav, ids % self.n_cav], axis=1).reshape(-1, 2)
@@ -126,7 +132,26 @@ class Inspection:
         pairs = np.asarray(pairs, dtype=np.int64).reshape(-1, 2)
         if len(pairs) == 0:
             return None
-        sets = self.sets
-        sizes = filtered_sizes(pairs[:, 0] * self.n_cav + pairs[:, 1], sets.candidates, sets.voted_by, sets.rule,
-                               sets.ego_xy, sets.cav_xy, sets.params.distance_limit)
+        sizes = self._sizes(pairs[:, 0] * self.n_cav + pairs[:, 1])
         return self.anchor(*pairs[int(np.argmax(sizes))])
+
+    def _sizes(self, anchors: np.ndarray) -> np.ndarray:
+        """The filtered sizes of ``anchors`` (``selection.filtered_sizes``) as far as their largest
+        and its first holder go: those the selection's visit computed (the same kernel on the same
+        sets: the same sizes) are taken from it, the others filtered now, except an anchor whose
+        card(L_ij) is below the largest size taken (filtering never grows a set: it cannot be the
+        largest), which gets -1."""
+        sets = self.sets
+        sizes = np.full(len(anchors), -1, np.int64)
+        if self._visited is not None:
+            visited, visited_sizes = self._visited
+            order = np.argsort(visited, kind="stable")
+            at = np.minimum(np.searchsorted(visited[order], anchors), max(len(visited) - 1, 0))
+            known = (visited[order][at] == anchors) if len(visited) else np.zeros(len(anchors), bool)
+            sizes[known] = visited_sizes[order[at[known]]]
+        else:
+            known = np.zeros(len(anchors), bool)
+        unknown = ~known & (sets.candidates.count[anchors] >= sizes.max(initial=0))
+        sizes[unknown] = filtered_sizes(anchors[unknown], sets.candidates, sets.voted_by, sets.rule, sets.ego_xy,
+                                        sets.cav_xy, sets.params.distance_limit)
+        return sizes

@@ -19,7 +19,7 @@ from .local_matching.counting import candidate_sets, counts_and_votes
 from .params import CBMParams
 from .result import MatchResult
 from .reuse import Prepared, Reuse, prepare, recall, remember
-from .selection import select
+from .selection import Visit, select
 
 
 @dataclass(frozen=True)
@@ -141,6 +141,13 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
                started: float | None = None) -> MatchResult:
     """Steps 5-7b on sets already built (``build_sets``): consensus, selection, pose estimate,
     guided re-association. ``timings`` and ``started`` carry the earlier stages' timings into the result."""
+    return match_sets_visited(sets, init, timings, started)[0]
+
+
+def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
+                       started: float | None = None) -> tuple[MatchResult, Visit | None]:
+    """``match_sets``, and what the selection's visit filtered (``selection.Visit``; None when every
+    set is empty): the filtered sizes it computed, for ``cbm.inspect`` to reuse."""
     started = time.perf_counter() if started is None else started
     timings = {} if timings is None else timings
     params, n_cav = sets.params, len(sets.cav_xy)
@@ -178,7 +185,7 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
         timings=timings,
         context_pairs=context_pairs,
         **verdict_fields(verdict, len(pairs), n_cav, init),
-    )
+    ), chosen.visit
 
 
 def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int, init: np.ndarray) -> dict[str, Any]:

@@ -107,14 +107,15 @@ def evaluate(result: Any, trial: Trial) -> TrialMetrics:
     """
     pairs = _as_pairs(result.pairs)
     estimated = bool(result.estimated)
+    n_correct, n_true = count_correct(pairs, trial.gt_pairs), len(_as_pairs(trial.gt_pairs))
     return TrialMetrics(
         n_ego=len(trial.ego_boxes),
         n_cav=len(trial.cav_boxes),
         n_true=len(trial.gt_pairs),
         n_matched=len(pairs),
-        n_correct=count_correct(pairs, trial.gt_pairs),
-        precision=precision(pairs, trial.gt_pairs),
-        recall=recall(pairs, trial.gt_pairs),
+        n_correct=n_correct,
+        precision=n_correct / len(pairs) if len(pairs) else math.nan,  # ``precision``, counted once
+        recall=n_correct / n_true if n_true else math.nan,  # ``recall``
         ad=average_distance(pairs, trial.ego_true_xy, trial.cav_true_xy),
         rre=rre(result.transform, trial.T_true) if estimated else math.nan,
         rte=rte(result.transform, trial.T_true) if estimated else math.nan,

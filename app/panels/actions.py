@@ -53,3 +53,12 @@ def on_user(handle: Any, react: Callable[[], None]) -> None:
     callbacks when the app itself assigns a value (with no client): those are ignored, so moving
     the controls to new settings never fires a second change."""
     handle.on_update(lambda event: react() if event.client is not None else None)
+
+
+def assign(handle: Any, **values: Any) -> None:
+    """Give ``handle`` each of ``values`` it does not hold already. viser sends nothing for a value
+    equal to the one held either, but only after casting it by its type hints: a tenth of a
+    millisecond each, and a tab's controls are re-shown on every edit."""
+    for name, value in values.items():
+        if getattr(handle, name) != value:
+            setattr(handle, name, value)

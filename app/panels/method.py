@@ -17,7 +17,7 @@ from cbm.methods import METHODS
 from ..scene.words import WORDS, label_of
 from ..session.offers import Offers
 from ..session.settings import Settings
-from .actions import TabActions, on_user
+from .actions import TabActions, assign, on_user
 
 SLIDERS = {
     # (parameter set, field): (min, max, step)
@@ -60,18 +60,17 @@ class MethodControls:
         self._offer(settings)
         chosen = METHODS[settings.method]
         for key, folder in self.folders.items():
-            folder.visible = key in (chosen.params_key, "cbm")
+            assign(folder, visible=key in (chosen.params_key, "cbm"))
         inactive: dict[str, dict[str, list[str]]] = {key: {} for key in self.folders}
         for (key, name), control in self.params.items():
             why = inactive_reason(settings, key, name)
-            control.disabled = why is not None
-            control.hint = self.hints[(key, name)] if why is None else f"Disabled: {why}. {self.hints[(key, name)]}"
+            assign(control, disabled=why is not None,
+                   hint=self.hints[(key, name)] if why is None else f"Disabled: {why}. {self.hints[(key, name)]}")
             if why is not None:
                 inactive[key].setdefault(why, []).append(control.label)
         for key, note in self.notes.items():
-            note.content = "  \n".join(f"*Disabled ({why}): {', '.join(names)}.*"
-                                       for why, names in inactive[key].items())
-            note.visible = bool(inactive[key])
+            assign(note, content="  \n".join(f"*Disabled ({why}): {', '.join(names)}.*"
+                                              for why, names in inactive[key].items()), visible=bool(inactive[key]))
 
     def _offer(self, settings: Settings) -> None:
         why = self.offers.pose_graph(settings.cavs)
@@ -79,8 +78,8 @@ class MethodControls:
         if tuple(self.method.options) != offered:
             self.method.options = offered
         graphs = [m.label for m in METHODS.values() if m.takes_peers]
-        self.unoffered.content = f"*Not offered: {', '.join(graphs)} ({why}).*" if why and graphs else ""
-        self.unoffered.visible = bool(why and graphs)
+        assign(self.unoffered, content=f"*Not offered: {', '.join(graphs)} ({why}).*" if why and graphs else "",
+               visible=bool(why and graphs))
 
 
 def inactive_reason(settings: Settings, key: str, name: str) -> str | None:

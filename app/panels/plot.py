@@ -140,9 +140,20 @@ def send(handle: viser.GuiUplotHandle, data: tuple[np.ndarray, ...],
     """Show ``data`` (NaN where there is none) in ``handle``, with nulls on the wire (see above);
     ``series`` changes the chart's series too, in the order that never leaves a series without data."""
     changed = series is not None and tuple(series) != tuple(handle.series)
+    arrays = tuple(np.asarray(a, dtype=float) for a in data)
+    if not changed and _same(arrays, handle._impl.props.data):
+        return
     if changed and len(series) < len(handle.series):
         handle.series = series
-    handle._impl.props.data = tuple(np.asarray(a, dtype=float) for a in data)
+    handle._impl.props.data = arrays
     handle._queue_update("data", tuple([None if math.isnan(v) else v for v in a.tolist()] for a in data))
     if changed and tuple(series) != tuple(handle.series):
         handle.series = series
+
+
+def _same(arrays: tuple[np.ndarray, ...], shown: tuple) -> bool:
+    """Whether ``arrays`` are what ``send`` last put in the chart (NaN where it shows a gap): nothing
+    to send. Never for a chart showing no value (its placeholder went out with NaN, not null)."""
+    shown = tuple(np.asarray(b, dtype=float) for b in shown)
+    return (len(arrays) == len(shown) and any(np.isfinite(b).any() for b in shown[1:])
+            and all(a.shape == b.shape and np.array_equal(a, b, equal_nan=True) for a, b in zip(arrays, shown)))

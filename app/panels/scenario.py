@@ -10,7 +10,7 @@ import viser
 from ..scene.words import SCENARIO_WORDS
 from ..session.offers import Offers
 from ..session.settings import Settings
-from .actions import TabActions, on_user
+from .actions import TabActions, assign, on_user
 
 SLIDERS = {
     # field: (label, min, max, step, hint)
@@ -57,15 +57,14 @@ class ScenarioControls:
         reasons: dict[str, list[str]] = {}
         for name, slider in self.sliders.items():
             why = unread_reason(settings, name)
-            slider.disabled = why is not None
-            slider.hint = SLIDERS[name][4] if why is None else f"Disabled: {why}. {SLIDERS[name][4]}"
+            assign(slider, disabled=why is not None,
+                   hint=SLIDERS[name][4] if why is None else f"Disabled: {why}. {SLIDERS[name][4]}")
             if why is not None:
                 reasons.setdefault(why, []).append(SLIDERS[name][0])
         lines = [f"*Disabled ({why}): {', '.join(names)}.*" for why, names in reasons.items()]
         if self.offers.reported_poses:
             lines.append(f"*Not offered: localization error `dataset` ({self.offers.reported_poses}).*")
-        self.note.content = "  \n".join(lines)
-        self.note.visible = bool(lines)
+        assign(self.note, content="  \n".join(lines), visible=bool(lines))
 
 
 def unread_reason(settings: Settings, name: str) -> str | None:

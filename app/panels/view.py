@@ -13,7 +13,7 @@ from ..scene.cavs import legend as cavs_legend
 from ..scene.colours import palette
 from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
-from .actions import TabActions, on_user
+from .actions import TabActions, assign, on_user
 
 TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused")
 """The view options a checkbox of the same name sets."""
@@ -49,12 +49,12 @@ class ViewControls:
         self.points_every.value = view.points_every
 
     def reflect(self, settings: Settings) -> None:
-        self.line_pairs.visible = METHODS[settings.method].explains
+        assign(self.line_pairs, visible=METHODS[settings.method].explains)
         why = self.offers.points
-        self.points.disabled = why is not None
-        self.points.hint = POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}"
-        self.points_every.disabled = not settings.view.points or why is not None
-        self.legend.content = palette(settings.view).legend + cavs_legend(settings.cavs)
+        assign(self.points, disabled=why is not None,
+               hint=POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}")
+        assign(self.points_every, disabled=not settings.view.points or why is not None)
+        assign(self.legend, content=palette(settings.view).legend + cavs_legend(settings.cavs))
 
 
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls:

@@ -18,11 +18,15 @@ from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS
 from . import captions, cavs, colours, geometry, pairs, planes
 from .layouts import LAYOUTS, TITLE_AT, Panel
+from .memo import ByContent
 from .points import PointCloud, clouds, problems_markdown
 from .text import metrics_markdown
 
 MOST_PANELS = 2
 """The most copies of the scene a layout draws (side by side): each copy has its own map nodes."""
+_footprint_mesh, _vehicle_mesh = ByContent(geometry.footprint_mesh), ByContent(geometry.vehicle_mesh)
+_outline_segments, _cross_segments = ByContent(geometry.outline_segments), ByContent(geometry.cross_segments)
+"""The geometry of boxes and vehicles, taken from an earlier drawing when they have not moved."""
 
 
 @dataclass(frozen=True)
@@ -168,15 +172,15 @@ def _objects(outcome: Outcome, parts: _Parts, ego: np.ndarray, copies: int) -> d
 def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[str, Mesh]:
     """Boxes as their footprints, flat in the plane of comparison (``planes``), each CAV's in its
     colour; vehicles as small bodies (empty nodes for the CAVs the outcome lacks: hidden)."""
-    meshes = {"ego_boxes": Mesh(*geometry.footprint_mesh(ego, planes.EGO), palette.ego_boxes),
-              "ego_vehicle": Mesh(*geometry.vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
-              "cav_vehicle_before": Mesh(*geometry.vehicle_mesh(parts.before_poses), palette.cav_vehicle,
+    meshes = {"ego_boxes": Mesh(*_footprint_mesh(ego, planes.EGO), palette.ego_boxes),
+              "ego_vehicle": Mesh(*_vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
+              "cav_vehicle_before": Mesh(*_vehicle_mesh(parts.before_poses), palette.cav_vehicle,
                                          opacity=0.3)}
     for rank in range(1, MAX_CAVS + 1):
         tiles = np.concatenate(parts.tiles[rank]) if parts.tiles[rank] else np.zeros((0, 7))
-        meshes[cavs.node("cav_boxes", rank)] = Mesh(*geometry.footprint_mesh(tiles, planes.cav(rank)),
+        meshes[cavs.node("cav_boxes", rank)] = Mesh(*_footprint_mesh(tiles, planes.cav(rank)),
                                                     cavs.box_colour(rank, palette))
-        meshes[cavs.node("cav_vehicle", rank)] = Mesh(*geometry.vehicle_mesh(parts.cav_poses[rank]),
+        meshes[cavs.node("cav_vehicle", rank)] = Mesh(*_vehicle_mesh(parts.cav_poses[rank]),
                                                       cavs.vehicle_colour(rank, palette))
     return meshes
 
@@ -228,11 +232,11 @@ def no_lines() -> np.ndarray:
 
 
 def _outlines(parts: list[np.ndarray], z: float) -> np.ndarray:
-    return geometry.outline_segments(np.concatenate(parts), z) if parts else no_lines()
+    return _outline_segments(np.concatenate(parts), z) if parts else no_lines()
 
 
 def _crosses(parts: list[np.ndarray]) -> np.ndarray:
-    return geometry.cross_segments(np.concatenate(parts), planes.OUTLINES) if parts else no_lines()
+    return _cross_segments(np.concatenate(parts), planes.OUTLINES) if parts else no_lines()
 
 
 def _joined(parts: list[np.ndarray]) -> np.ndarray:

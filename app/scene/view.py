@@ -59,6 +59,10 @@ class SceneView:
         self.clouds: dict[str, viser.PointCloudHandle] = {}
         self.shown: dict[str, Hashable] = {}
         """Fingerprint of what each node shows."""
+        self.placed: dict[str, bytes] = {}
+        """The SE(2) pose each placed node was last given (its bytes): the same pose is not set again."""
+        self.written: dict[str, tuple] = {}
+        """What each label was last given (text, position, scale): a visible one given the same is left alone."""
         self.updates: Counter[str] = Counter()
         """How often each node was created or changed (a redraw that leaves it alone does not count)."""
         self.label_px = LABEL_PX
@@ -111,7 +115,7 @@ class SceneView:
 
     def place(self, name: str, pose: np.ndarray) -> None:
         """Stand mesh ``name`` (when drawn) at the SE(2) ``pose``: one pose update."""
-        if name in self.meshes:
+        if name in self.meshes and self._moved(name, pose):
             _place(self.meshes[name], pose)
 
     @property
@@ -129,7 +133,7 @@ class SceneView:
         for name, line_set in lines.items():
             if self._changed(name, fingerprint((line_set.segments,), line_set.color, line_set.thickness)):
                 self._lines(name, line_set)
-            if line_set.pose is not None:
+            if line_set.pose is not None and self._moved(name, line_set.pose):
                 _place(self.lines[name], line_set.pose)
 
     def _show_labels(self, labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
@@ -146,7 +150,10 @@ class SceneView:
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name``, its text ``label_px`` high."""
         scale = self.label_px / VISER_LABEL_PX
-        handle = self.labels.get(name)
+        handle, written = self.labels.get(name), (text, position, scale)
+        if handle is not None and handle.visible and self.written.get(name) == written:
+            return
+        self.written[name] = written
         if handle is None:
             self.labels[name] = self.client.scene.add_label(f"{self.labels_root}/{name}", text, position=position,
                                                             font_screen_scale=scale)
@@ -156,6 +163,14 @@ class SceneView:
     def hide_label(self, name: str) -> None:
         if name in self.labels:
             self.labels[name].visible = False
+
+    def _moved(self, name: str, pose: np.ndarray) -> bool:
+        """Whether node ``name`` is to stand elsewhere than the pose it was last given; remembers it."""
+        placed = np.ascontiguousarray(pose, dtype=float).tobytes()
+        if self.placed.get(name) == placed:
+            return False
+        self.placed[name] = placed
+        return True
 
     def _changed(self, name: str, shown: Hashable) -> bool:
         """Whether node ``name`` is to show something else than it does; remembers it."""

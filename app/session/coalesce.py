@@ -8,6 +8,8 @@ and values superseded while one was computing are never computed at all.
 from __future__ import annotations
 
 import threading
+import time
+import traceback
 from collections.abc import Callable
 from typing import Generic, TypeVar
 
@@ -69,23 +71,43 @@ class Coalescer(Generic[T, R]):
 
 
 class Later:
-    """``call(action)`` runs ``action`` after ``delay`` seconds on a timer thread, unless a newer
-    ``call`` comes first: only the latest of a burst runs (``close`` drops a pending one)."""
+    """``call(action)`` runs ``action`` after ``delay`` seconds on the instance's thread, unless a
+    newer ``call`` comes first: only the latest of a burst runs (``close`` drops a pending one and
+    ends the thread; a later ``call`` starts it again). One thread waits for every call, rather than
+    a timer thread started per call (a thread's start on every result)."""
 
     def __init__(self, delay: float) -> None:
         self.delay = delay
-        self._lock = threading.Lock()
-        self._timer: threading.Timer | None = None
+        self._condition = threading.Condition()
+        self._action: Callable[[], None] | None = None
+        self._due = 0.0
+        self._thread: threading.Thread | None = None
 
     def call(self, action: Callable[[], None]) -> None:
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()
-            self._timer = threading.Timer(self.delay, action)
-            self._timer.daemon = True
-            self._timer.start()
+        with self._condition:
+            self._action, self._due = action, time.monotonic() + self.delay
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="later", daemon=True)
+                self._thread.start()
+            self._condition.notify()
 
     def close(self) -> None:
-        with self._lock:
-            if self._timer is not None:
-                self._timer.cancel()
+        with self._condition:
+            self._action, self._thread = None, None
+            self._condition.notify()
+
+    def _run(self) -> None:
+        me = threading.current_thread()
+        while True:
+            with self._condition:
+                if self._thread is not me:
+                    return
+                now = time.monotonic()
+                if self._action is None or self._due > now:
+                    self._condition.wait(None if self._action is None else self._due - now)
+                    continue
+                action, self._action = self._action, None
+            try:
+                action()
+            except Exception:  # a failed action is reported; the later ones still run
+                traceback.print_exc()

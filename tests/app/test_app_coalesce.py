@@ -6,7 +6,7 @@ from __future__ import annotations
 import threading
 import time
 
-from app.session.coalesce import Coalescer
+from app.session.coalesce import Coalescer, Later
 
 
 def _collecting(compute_seconds: float = 0.005):
@@ -71,3 +71,28 @@ def test_a_slow_computation_never_piles_up_work() -> None:
     assert worker.wait_idle(timeout=10)
     worker.close()
     assert computed[-1] == 99 and len(computed) <= 5
+
+
+def test_later_runs_only_the_latest_of_a_burst_survives_a_failure_and_close_drops_a_pending_call() -> None:
+    ran: list[int] = []
+    done = threading.Event()
+    later = Later(0.05)
+    for k in range(5):
+        later.call(lambda k=k: ran.append(k))
+    later.call(lambda: (ran.append(9), done.set()))
+    assert done.wait(10)
+    assert ran == [9]
+    failed = threading.Event()
+    later.call(lambda: (failed.set(), 1 / 0))
+    assert failed.wait(10)
+    done.clear()
+    later.call(lambda: done.set())
+    assert done.wait(10)
+    later.call(lambda: ran.append(10))
+    later.close()
+    time.sleep(0.15)
+    assert ran == [9]
+    done.clear()
+    later.call(lambda: done.set())
+    assert done.wait(10)
+    later.close()

@@ -85,6 +85,34 @@ def test_a_slow_block_is_announced_until_it_ends_and_a_quick_one_not_at_all() ->
     assert quick == []
 
 
+
+def test_blocks_announced_at_once_each_get_their_own_reports_and_a_failing_one_stops_alone() -> None:
+    """One thread makes every block's reports: two blocks at once both report (until each ends), and a
+    report that raises ends that block's reports only."""
+    first, second, broken = [], [], []
+    reported = threading.Event()
+
+    def failing(seconds: float) -> None:
+        broken.append(seconds)
+        raise RuntimeError("report failed")
+
+    def counted(seconds: float) -> None:
+        second.append(seconds)
+        if len(second) >= 3:
+            reported.set()
+
+    with announced(first.append, after=0.01, every=0.01), announced(failing, after=0.01, every=0.01):
+        with announced(counted, after=0.02, every=0.01):
+            assert reported.wait(10)
+        count = len(second)
+        while len(first) < 3:
+            time.sleep(0.01)
+    ended = len(first)
+    time.sleep(0.1)
+    assert len(second) == count and len(first) == ended and len(broken) == 1
+    assert first == sorted(first) and second == sorted(second)
+
+
 def _free_port() -> int:
     with socket.socket() as probe:
         probe.bind(("127.0.0.1", 0))

@@ -71,6 +71,70 @@ def test_the_map_stays_put_and_its_pose_moves_it_into_the_ego_frame(explorer: Ex
     assert len(one.lines["map_lane_boundary_2"].segments) == 0, "one copy of the scene, one map"
 
 
+
+def test_a_redraw_sets_no_pose_or_label_again_and_ends_where_a_fresh_view_starts(
+        explorer: Explorer, viser_server: viser.ViserServer, monkeypatch: pytest.MonkeyPatch) -> None:
+    """Poses and labels given again as they were are not set again; a new frame moves them, and
+    back on the first frame every node stands and every label reads as a fresh view's do."""
+    import app.scene.view as view_module
+
+    placed: list[str] = []
+    place = view_module._place
+    monkeypatch.setattr(view_module, "_place", lambda handle, pose: (placed.append(handle.name), place(handle, pose)))
+    first, other = (draw(explorer.compute(dataclasses.replace(Settings(), frame=k)), explorer.map_segments)
+                    for k in (0, 30))
+    view = SceneView(_Client(viser_server.scene, viser_server.atomic), root="/redrawn", labels_root="/redrawn_labels")
+    view.show(first)
+    written = dict(view.written)
+    placed.clear()
+    view.show(first)
+    assert placed == [] and view.written == written
+    view.show(other)
+    assert "/redrawn/map_lane_boundary" in placed and view.written != written
+    view.show(first)
+    fresh = SceneView(_Client(viser_server.scene, viser_server.atomic), root="/fresh", labels_root="/fresh_labels")
+    fresh.show(first)
+    for name, handle in fresh.lines.items():
+        np.testing.assert_array_equal(view.lines[name].position, handle.position)
+        np.testing.assert_array_equal(view.lines[name].wxyz, handle.wxyz)
+    for name, handle in fresh.labels.items():
+        mine = view.labels[name]
+        assert (mine.text, mine.visible, mine.font_screen_scale) == (handle.text, handle.visible,
+                                                                       handle.font_screen_scale)
+        np.testing.assert_array_equal(mine.position, handle.position)
+
+
+
+def test_geometry_is_reused_by_content_and_a_drawing_is_what_a_fresh_one_is(explorer: Explorer) -> None:
+    """``ByContent`` hands out the earlier (read-only) result for arguments of equal content and a new
+    one for others; a drawing made after others equals one made with every cache empty."""
+    from app.scene import drawing as drawing_module
+    from app.scene.geometry import footprint_mesh
+    from app.scene.memo import ByContent
+
+    memo, boxes = ByContent(footprint_mesh, kept=2), np.random.default_rng(0).normal(size=(5, 7))
+    first = memo(boxes, 0.5)
+    assert memo(boxes.copy(), 0.5) is first and not first[0].flags.writeable
+    for args in ((boxes + 1, 0.5), (boxes, 0.25)):
+        other = memo(*args)
+        assert other is not first
+        np.testing.assert_array_equal(other[0], footprint_mesh(*args)[0])
+    settings = Settings()
+    outcomes = [explorer.compute(s) for s in (settings, dataclasses.replace(settings, frame=30),
+                                              settings.with_params("cbm", sigma2=2.5))]
+    for outcome in (*outcomes, outcomes[0]):
+        drawn = draw(outcome, explorer.map_segments)
+    for cache in vars(drawing_module).values():
+        if isinstance(cache, ByContent):
+            cache._results.clear()
+    fresh = draw(outcomes[0], explorer.map_segments)
+    for name, mesh in fresh.meshes.items():
+        np.testing.assert_array_equal(drawn.meshes[name].vertices, mesh.vertices)
+        np.testing.assert_array_equal(drawn.meshes[name].faces, mesh.faces)
+    for name, lines in fresh.lines.items():
+        np.testing.assert_array_equal(drawn.lines[name].segments, lines.segments)
+
+
 @pytest.fixture(scope="module")
 def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
     with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:

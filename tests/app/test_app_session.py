@@ -171,3 +171,36 @@ def test_opv2v_protocol_falls_back_to_sensor_range_without_visibility(explorer: 
                                                                              localization="gaussian"))
     outcome = explorer.compute(settings)
     assert "sensor range" in outcome.cav_note and outcome.metrics.n_true > 0
+
+
+def test_controls_reshown_unchanged_are_not_assigned_again_and_a_change_still_shows() -> None:
+    """``reflect`` assigns only what differs from what a control holds (``panels.actions.assign``):
+    a sigma2 edit assigns nothing; a method without CBM's parameters disables them, as before."""
+    import viser
+
+    from app import panels
+    from app.panels.actions import assign
+    from app.session.offers import offers_of
+
+    class Held:
+        disabled, hint = False, "a"
+
+    held, written = Held(), []
+    Held.__setattr__ = lambda self, name, value: (written.append(name), object.__setattr__(self, name, value))
+    assign(held, disabled=False, hint="b")
+    assert written == ["hint"] and held.hint == "b"
+    sequence = loaders.open("synthetic:30")
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        controls = panels.build(server.gui, Settings(), len(sequence), {}, offers_of(sequence))
+        messages = []
+        queue = server._websock_server.queue_message
+        server._websock_server.queue_message = lambda message: (messages.append(message), queue(message))
+        controls.reflect(Settings().with_params("cbm", sigma2=2.5))
+        assert messages == []
+        controls.reflect(dataclasses.replace(Settings(), method="icp"))
+        assert messages
+        sigma2 = next(c for (key, name), c in controls.method.params.items() if (key, name) == ("cbm", "sigma2"))
+        assert sigma2.disabled and sigma2.hint.startswith("Disabled: ")
+    finally:
+        server.stop()

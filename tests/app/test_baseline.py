@@ -75,3 +75,26 @@ def test_a_pinned_baseline_keeps_its_rows_and_computes_each_frame_once(small_exp
     assert len(hidden.lines["pinned"].segments) == 0
     baseline.unpin()
     assert baseline.outcome(small_explorer, current) is None and not baseline.rows
+
+
+def test_a_timeline_sent_again_unchanged_is_not_resent() -> None:
+    """``send`` queues the chart's data only when it differs from what it last sent (NaN = NaN),
+    and never skips the first data after the placeholder."""
+    import viser
+
+    from app.panels.plot import add_timeline, send
+
+    server = viser.ViserServer(port=0, verbose=False)
+    try:
+        plot = add_timeline(server.gui)
+        sent: list[object] = []
+        queue = plot._queue_update
+        object.__setattr__(plot, "_queue_update", lambda name, value: (sent.append(value), queue(name, value)))
+        data = timeline_data({0: row(False), 3: row(True)}, {}, 3, 10)
+        send(plot, data)
+        send(plot, tuple(a.copy() for a in data))
+        assert len(sent) == 1
+        send(plot, timeline_data({0: row(False), 3: row(True)}, {}, 0, 10))
+        assert len(sent) == 2
+    finally:
+        server.stop()

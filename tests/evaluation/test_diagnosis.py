@@ -173,3 +173,32 @@ def test_best_anchor_among_the_true_pairs_equals_explaining_each_of_them(seed, r
     slowest = max(details, key=lambda d: d.size)
     assert inspection.best_anchor_among(trial.gt_pairs).anchor == slowest.anchor
     assert inspection.best_anchor_among(np.zeros((0, 2), int)) is None
+
+
+@pytest.mark.parametrize("rule", ["released", "paper"])
+@pytest.mark.parametrize("seed", [0, 1, 2, 3])
+@pytest.mark.parametrize("limit", [2.0, 6.0])
+def test_the_best_true_anchor_after_a_match_reuses_the_visit_and_stays_the_same(seed, rule, limit):
+    """After ``match`` the sizes come partly from the selection's visit: the anchor found is the one
+    an inspection that never matched finds, as are the diagnosis' findings."""
+    world = street_scene(60, np.random.default_rng(seed))
+    trial = trial_of(world, eta=0.5, sigma_p=0.6, sigma_theta=4.0, seed=seed)
+    params = CBMParams(consensus_rule=rule, distance_limit=limit)
+    matched, fresh = (Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params) for _ in range(2))
+    result = matched.match()
+    assert (matched._visited is not None) == (result.anchor is not None)
+    assert matched.best_anchor_among(trial.gt_pairs).anchor == fresh.best_anchor_among(trial.gt_pairs).anchor
+    assert diagnose(result, trial, matched) == diagnose(result, trial, fresh)
+    wrong = np.array([[i, (j + 1) % len(trial.cav_boxes)] for i, j in trial.gt_pairs])
+    assert matched.best_anchor_among(wrong).anchor == fresh.best_anchor_among(wrong).anchor
+
+
+def test_one_to_one_mask_keeps_the_pairs_whose_objects_occur_once():
+    from cbm.inspect import one_to_one_mask
+
+    rng = np.random.default_rng(0)
+    for size in (1, 2, 7, 40):
+        pairs = rng.integers(0, 12, size=(size, 2))
+        once = [np.sum(pairs[:, 0] == i) == 1 and np.sum(pairs[:, 1] == j) == 1 for i, j in pairs]
+        assert one_to_one_mask(pairs).tolist() == once
+    assert one_to_one_mask(np.zeros((0, 2), int)).tolist() == []

@@ -118,3 +118,18 @@ def test_aggregate_of_nothing_is_nan_not_zero():
     assert all(math.isnan(agg[k]) for k in ("precision", "recall", "ad", "rre_mean", "rte_median", "success_rate"))
     nothing_matched = aggregate([replace(_metrics(0, 0, 3, ad=math.nan), estimated=False)])
     assert math.isnan(nothing_matched["precision"]) and nothing_matched["recall"] == 0.0
+
+
+@pytest.mark.parametrize("chosen", [[], [0], [0, 1], [1, 2, 3]])
+def test_evaluate_counts_precision_and_recall_as_the_functions_do(chosen):
+    """``evaluate`` counts the correct pairs once for both ratios: the same numbers as ``precision``
+    and ``recall`` (NaN included), whatever the pairs."""
+    trial = _trial()
+    candidates = np.array([trial.gt_pairs[0], [trial.gt_pairs[0, 0], trial.gt_pairs[1, 1]], trial.gt_pairs[2],
+                           [trial.gt_pairs[1, 0], trial.gt_pairs[2, 1]]])
+    pairs = candidates[chosen].reshape(-1, 2)
+    for truth in (trial.gt_pairs, np.zeros((0, 2), int)):
+        result = SimpleNamespace(pairs=pairs, transform=trial.init, estimated=False)
+        m = evaluate(result, replace(trial, gt_pairs=truth))
+        expected = (precision(pairs, truth), recall(pairs, truth))
+        assert np.array_equal((m.precision, m.recall), expected, equal_nan=True)
