@@ -94,7 +94,7 @@ def test_evaluate_py_refuses_a_listener_that_is_not_ray_within_15_s(tmp_path) ->
     assert took < 25, f"{took:.1f} s (10 s of waiting for the reply, the rest Python's start on a busy machine)"
 
 
-def test_sigterm_while_waiting_for_the_listener_stops_within_2_s(tmp_path) -> None:
+def test_sigterm_while_waiting_for_the_listener_stops_without_waiting_for_it(tmp_path) -> None:
     with listener(None) as (address, accepted):
         process = subprocess.Popen([sys.executable, "evaluate.py", *QUICK, "--ray", address,
                                     "--out", str(tmp_path / "o")], cwd=REPO, stderr=subprocess.PIPE, text=True)
@@ -104,7 +104,7 @@ def test_sigterm_while_waiting_for_the_listener_stops_within_2_s(tmp_path) -> No
         stderr = process.communicate(timeout=60)[1]
         took = time.monotonic() - started
     assert process.returncode == 143 and stderr.strip() == "evaluate.py: stopped by SIGTERM; nothing written"
-    assert took < 2.0
+    assert took < 8.0, f"stopped after {took:.1f} s: it waited for the listener (about 11 s) before acting"
 
 
 def ray_processes(marker: str) -> list[int]:
