@@ -68,7 +68,7 @@ def test_an_unreachable_cluster_is_reported_without_hanging():
         check_reachable("127.0.0.1:1", timeout=3.0)
     with pytest.raises(ExecutorError, match="HOST:PORT"):
         check_reachable("nowhere")
-    assert time.perf_counter() - start < 5.0
+    assert time.perf_counter() - start < 30.0, "a check waited for the network instead of its timeout"
 
 
 @pytest.mark.parametrize("ray,message", [("127.0.0.1:1", "the Ray cluster is unreachable"),

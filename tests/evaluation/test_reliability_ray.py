@@ -138,7 +138,7 @@ def test_a_stop_signal_during_ray_local_start_up_leaves_no_process(signum: int) 
         took = time.monotonic() - started
         assert process.returncode == 128 + signum, stderr
         assert stderr.strip() == f"evaluate.py: stopped by {signal.Signals(signum).name}; nothing written"
-        assert took < 2.5
+        assert took < 10.0, f"stopped after {took:.1f} s: it waited for Ray's start-up to finish"
         wait_for(lambda: not ray_processes(temporary), 10, "Ray's processes to be gone")
     finally:
         shutil.rmtree(temporary, ignore_errors=True)

@@ -49,6 +49,6 @@ def test_the_watchdog_ends_a_process_whose_main_thread_does_not_stop(tmp_path) -
     started = time.monotonic()
     process.send_signal(signal.SIGTERM)
     stderr = process.communicate(timeout=60)[1]
-    assert time.monotonic() - started < 2.0
+    assert time.monotonic() - started < 30, "the watchdog did not end the stuck process"
     assert process.returncode == 143 and stderr.strip() == "stuck: stopped by SIGTERM"
     wait_for(lambda: not any(alive(child) for child in children), 10, "the child to be gone")
