@@ -142,16 +142,9 @@ class Inspection:
         card(L_ij) is below the largest size taken (filtering never grows a set: it cannot be the
         largest), which gets -1."""
         sets = self.sets
-        sizes = np.full(len(anchors), -1, np.int64)
-        if self._visited is not None:
-            visited, visited_sizes = self._visited
-            order = np.argsort(visited, kind="stable")
-            at = np.minimum(np.searchsorted(visited[order], anchors), max(len(visited) - 1, 0))
-            known = (visited[order][at] == anchors) if len(visited) else np.zeros(len(anchors), bool)
-            sizes[known] = visited_sizes[order[at[known]]]
-        else:
-            known = np.zeros(len(anchors), bool)
-        unknown = ~known & (sets.candidates.count[anchors] >= sizes.max(initial=0))
+        taken = {} if self._visited is None else dict(zip(*(values.tolist() for values in self._visited)))
+        sizes = np.array([taken.get(anchor, -1) for anchor in anchors.tolist()], np.int64)
+        unknown = (sizes < 0) & (sets.candidates.count[anchors] >= sizes.max(initial=0))
         sizes[unknown] = filtered_sizes(anchors[unknown], sets.candidates, sets.voted_by, sets.rule, sets.ego_xy,
                                         sets.cav_xy, sets.params.distance_limit)
         return sizes

@@ -30,16 +30,18 @@ def count_correct(pairs: np.ndarray, gt_pairs: np.ndarray) -> int:
     return int(np.isin(pairs[:, 0] * width + pairs[:, 1], gt_pairs[:, 0] * width + gt_pairs[:, 1]).sum())
 
 
+def _share(n_correct: int, total: int) -> float:
+    return n_correct / total if total else math.nan
+
+
 def precision(pairs: np.ndarray, gt_pairs: np.ndarray) -> float:
     """precision = |M_hat n M| / |M_hat| (paper sec. IV-A, V-B); NaN when nothing was matched."""
-    n_matched = len(_as_pairs(pairs))
-    return count_correct(pairs, gt_pairs) / n_matched if n_matched else math.nan
+    return _share(count_correct(pairs, gt_pairs), len(_as_pairs(pairs)))
 
 
 def recall(pairs: np.ndarray, gt_pairs: np.ndarray) -> float:
     """recall = |M_hat n M| / |M| (paper sec. V-B); NaN when there are no true pairs."""
-    n_true = len(_as_pairs(gt_pairs))
-    return count_correct(pairs, gt_pairs) / n_true if n_true else math.nan
+    return _share(count_correct(pairs, gt_pairs), len(_as_pairs(gt_pairs)))
 
 
 def average_distance(pairs: np.ndarray, ego_true_xy: np.ndarray, cav_true_xy: np.ndarray) -> float:
@@ -107,15 +109,15 @@ def evaluate(result: Any, trial: Trial) -> TrialMetrics:
     """
     pairs = _as_pairs(result.pairs)
     estimated = bool(result.estimated)
-    n_correct, n_true = count_correct(pairs, trial.gt_pairs), len(_as_pairs(trial.gt_pairs))
+    n_correct = count_correct(pairs, trial.gt_pairs)
     return TrialMetrics(
         n_ego=len(trial.ego_boxes),
         n_cav=len(trial.cav_boxes),
         n_true=len(trial.gt_pairs),
         n_matched=len(pairs),
         n_correct=n_correct,
-        precision=n_correct / len(pairs) if len(pairs) else math.nan,  # ``precision``, counted once
-        recall=n_correct / n_true if n_true else math.nan,  # ``recall``
+        precision=_share(n_correct, len(pairs)),
+        recall=_share(n_correct, len(_as_pairs(trial.gt_pairs))),
         ad=average_distance(pairs, trial.ego_true_xy, trial.cav_true_xy),
         rre=rre(result.transform, trial.T_true) if estimated else math.nan,
         rte=rte(result.transform, trial.T_true) if estimated else math.nan,

@@ -150,10 +150,9 @@ class SceneView:
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name``, its text ``label_px`` high."""
         scale = self.label_px / VISER_LABEL_PX
-        handle, written = self.labels.get(name), (text, position, scale)
-        if handle is not None and handle.visible and self.written.get(name) == written:
+        handle = self.labels.get(name)
+        if not _differs(self.written, name, (text, position, scale)) and handle is not None and handle.visible:
             return
-        self.written[name] = written
         if handle is None:
             self.labels[name] = self.client.scene.add_label(f"{self.labels_root}/{name}", text, position=position,
                                                             font_screen_scale=scale)
@@ -166,17 +165,12 @@ class SceneView:
 
     def _moved(self, name: str, pose: np.ndarray) -> bool:
         """Whether node ``name`` is to stand elsewhere than the pose it was last given; remembers it."""
-        placed = np.ascontiguousarray(pose, dtype=float).tobytes()
-        if self.placed.get(name) == placed:
-            return False
-        self.placed[name] = placed
-        return True
+        return _differs(self.placed, name, np.ascontiguousarray(pose, dtype=float).tobytes())
 
     def _changed(self, name: str, shown: Hashable) -> bool:
         """Whether node ``name`` is to show something else than it does; remembers it."""
-        if self.shown.get(name) == shown:
+        if not _differs(self.shown, name, shown):
             return False
-        self.shown[name] = shown
         self.updates[name] += 1
         return True
 
@@ -214,3 +208,11 @@ class SceneView:
                 visible=not empty)
             return
         handle.points, handle.colors, handle.visible, handle.thickness = points, colors, not empty, lines.thickness
+
+
+def _differs(given: dict, name: str, value: Hashable) -> bool:
+    """Whether ``value`` differs from what ``given`` holds for ``name``; ``given`` holds it after."""
+    if given.get(name) == value:
+        return False
+    given[name] = value
+    return True
