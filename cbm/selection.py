@@ -23,6 +23,8 @@ from .consensus import RULE_CODES, PairSets, final_set
 from .estimate import residuals, weighted_procrustes
 from .local_matching import NO_LISTING, POOL, THREADS, CandidateSets, listed_into
 
+PAPER = RULE_CODES["paper"]
+"""The rule code of eq. 10 as the paper states it, the one rule that may drop a lone pair."""
 RIVAL_CHUNK = 128
 """Anchors handed to the threads at a time in the runner-up search."""
 RIVAL_THREADS_FROM = 250_000
@@ -68,32 +70,42 @@ class Selection:
 
 
 @numba.njit(cache=True, nogil=True)
-def _one_to_one_bound(ego, cav, size, ego_count, cav_count):
-    """min(distinct ego objects, distinct CAV objects) among the pairs ``ego[:size]``, ``cav[:size]``:
-    the most pairs a one-to-one subset of them can hold. The count arrays must be zero and are left so."""
+def _rival_bound(member, ego, cav, size, excluded, lone_kept, ego_count, cav_count):
+    """The most pairs the filtered set of the listed pairs ``member[:size]`` (objects ``ego``,
+    ``cav``) can hold free of ``excluded`` pairs: min(distinct ego objects, distinct CAV objects),
+    since L^(2) is a one-to-one subset of L_ij (eq. 10-11 only remove members); and 0 when
+    ``lone_kept`` (the rules that keep a pair alone in its row and column of L_ij: off and released)
+    and such a lone pair is excluded, for L^(2) then holds it. The count arrays must be zero and are
+    left so."""
     distinct_ego, distinct_cav = 0, 0
     for row in range(size):
         distinct_ego += ego_count[ego[row]] == 0
         distinct_cav += cav_count[cav[row]] == 0
-        ego_count[ego[row]], cav_count[cav[row]] = 1, 1
+        ego_count[ego[row]] += 1
+        cav_count[cav[row]] += 1
+    holds_excluded = False
+    for row in range(size):
+        holds_excluded |= lone_kept and excluded[member[row]] and ego_count[ego[row]] == 1 and cav_count[cav[row]] == 1
     for row in range(size):
         ego_count[ego[row]], cav_count[cav[row]] = 0, 0
-    return min(distinct_ego, distinct_cav)
+    return 0 if holds_excluded else min(distinct_ego, distinct_cav)
 
 
 @numba.njit(cache=True, nogil=True)
-def _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres, limit, beyond,
-                   work):
-    """card(L^(2)) of one anchor, its members into ``work``'s ``out``; 0 when its pairs are farther
-    apart than the limit on average (their distances computed from the ``centres``, ego and CAV, as
-    needed), and 0 (unfiltered, ``out`` not filled) when it cannot exceed ``beyond`` (-1: always
-    filtered): L^(2) is a one-to-one subset of L_ij (eq. 10-11 only remove members), so
-    ``_one_to_one_bound`` bounds it. ``work`` comes from ``_work_arrays``."""
-    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of, distance = work
+def _listed(anchor, signs, lookup, listing, n_cav, work):
+    """The members of L_ij of ``anchor`` listed into ``work``'s candidates, their objects and
+    distances (``listed_into``); returns how many."""
+    candidates, ego_of, cav_of, distance = work[5], work[6], work[7], work[8]
     i, j = anchor // n_cav, anchor % n_cav
-    listed = listed_into(i, j, signs[i, j], lookup, listing, candidates, ego_of, cav_of, distance)
-    if beyond >= 0 and _one_to_one_bound(ego_of, cav_of, listed, ego_count, cav_count) <= beyond:
-        return 0
+    return listed_into(i, j, signs[i, j], lookup, listing, candidates, ego_of, cav_of, distance)
+
+
+@numba.njit(cache=True, nogil=True)
+def _final_size(listed, voted_start, voted_by, rule, centres, limit, work):
+    """card(L^(2)) of the ``listed`` members of L_ij in ``work`` (``_listed``), its members into
+    ``work``'s ``out``; 0 when its pairs are farther apart than the limit on average (their
+    distances computed from the ``centres``, ego and CAV). ``work`` comes from ``_work_arrays``."""
+    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of, distance = work
     size = final_set(candidates, ego_of, cav_of, listed, voted_start, voted_by, rule, scratch, ego_count, cav_count,
                      voter_here, out)
     ego_xy, cav_xy = centres
@@ -125,8 +137,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres,
-                              limit, -1, work)
+        size = _final_size(_listed(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
+                           centres, limit, work)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -143,7 +155,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
 
 @numba.njit(cache=True, nogil=True)
 def _work_arrays(width, n_ego, n_cav, n_pairs):
-    """The zeroed work arrays ``_filtered_size`` needs: scratch, counts, voter flags, out, candidates and
+    """The zeroed work arrays ``_listed`` and ``_final_size`` need: scratch, counts, voter flags, out, candidates and
     their ego and CAV objects and distances."""
     return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
             np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64),
@@ -154,9 +166,13 @@ def _work_arrays(width, n_ego, n_cav, n_pairs):
 def _rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
                      centres, limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
-    ``excluded`` pair or it cannot exceed ``beyond`` (``_filtered_size``)."""
-    size = _filtered_size(anchor, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres, limit,
-                          beyond, work)
+    ``excluded`` pair or it cannot exceed ``beyond`` (-1: always filtered; ``_rival_bound``: then it
+    is not filtered)."""
+    listed = _listed(anchor, signs, lookup, listing, n_cav, work)
+    if beyond >= 0 and _rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1],
+                                    work[2]) <= beyond:
+        return 0
+    size = _final_size(listed, voted_start, voted_by, rule, centres, limit, work)
     for k in range(size):
         if excluded[work[4][k]]:
             return 0
@@ -184,7 +200,8 @@ def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing
     the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
     so that anchor's size is at most its count, at most the largest; and every later anchor's count
     is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
-    the largest so far is not filtered (``_filtered_size``): it cannot raise the maximum either."""
+    the largest so far, or whose filtered set is sure to hold an excluded pair, is not filtered
+    (``_rival_bound``): it cannot raise the maximum either."""
     work = _work_arrays(width, n_ego, n_cav, len(excluded))
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:
@@ -210,7 +227,7 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         anchors = anchors[L.count[anchors] > runner_up]
         if len(anchors) == 0:
             break
-        if rule != RULE_CODES["paper"]:
+        if rule != PAPER:
             anchors = anchors[~in_winner[anchors]]
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
