@@ -71,12 +71,11 @@ class Selection:
 
 @numba.njit(cache=True, nogil=True)
 def _rival_bound(member, ego, cav, size, excluded, lone_kept, ego_count, cav_count):
-    """The most pairs the filtered set of the listed pairs ``member[:size]`` (objects ``ego``,
-    ``cav``) can hold free of ``excluded`` pairs: min(distinct ego objects, distinct CAV objects),
-    since L^(2) is a one-to-one subset of L_ij (eq. 10-11 only remove members); and 0 when
-    ``lone_kept`` (the rules that keep a pair alone in its row and column of L_ij: off and released)
-    and such a lone pair is excluded, for L^(2) then holds it. The count arrays must be zero and are
-    left so."""
+    """For the listed pairs ``member[:size]`` (objects ``ego``, ``cav``): min(distinct ego objects,
+    distinct CAV objects), the most pairs their filtered set can hold (L^(2) is a one-to-one subset
+    of L_ij: eq. 10-11 only remove members); and whether, by a rule that keeps a pair alone in its
+    row and column of L_ij (``lone_kept``: off and released), such a lone pair is ``excluded``, so
+    that L^(2) holds it. The count arrays must be zero and are left so."""
     distinct_ego, distinct_cav = 0, 0
     for row in range(size):
         distinct_ego += ego_count[ego[row]] == 0
@@ -88,7 +87,7 @@ def _rival_bound(member, ego, cav, size, excluded, lone_kept, ego_count, cav_cou
         holds_excluded |= lone_kept and excluded[member[row]] and ego_count[ego[row]] == 1 and cav_count[cav[row]] == 1
     for row in range(size):
         ego_count[ego[row]], cav_count[cav[row]] = 0, 0
-    return 0 if holds_excluded else min(distinct_ego, distinct_cav)
+    return min(distinct_ego, distinct_cav), holds_excluded
 
 
 @numba.njit(cache=True, nogil=True)
@@ -166,12 +165,19 @@ def _work_arrays(width, n_ego, n_cav, n_pairs):
 def _rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
                      centres, limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
-    ``excluded`` pair or it cannot exceed ``beyond`` (-1: always filtered; ``_rival_bound``: then it
-    is not filtered)."""
-    listed = _listed(anchor, signs, lookup, listing, n_cav, work)
-    if beyond >= 0 and _rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1],
-                                    work[2]) <= beyond:
+    ``excluded`` pair or it cannot exceed ``beyond`` (-1: always filtered; ``_rival_bound``, or the
+    bound the listing keeps from a larger or equal sigma2: then it is not filtered, nor listed)."""
+    bound, listed_sigma2, writable = listing[6], listing[7], listing[8]
+    if 0 <= beyond and len(bound) and 0 <= bound[anchor] <= beyond:
         return 0
+    listed = _listed(anchor, signs, lookup, listing, n_cav, work)
+    if beyond >= 0:
+        most, holds_excluded = _rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1],
+                                            work[2])
+        if writable and len(bound) and lookup[-1] == listed_sigma2:
+            bound[anchor] = most
+        if most <= beyond or holds_excluded:
+            return 0
     size = _final_size(listed, voted_start, voted_by, rule, centres, limit, work)
     for k in range(size):
         if excluded[work[4][k]]:
@@ -201,7 +207,7 @@ def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing
     so that anchor's size is at most its count, at most the largest; and every later anchor's count
     is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
     the largest so far, or whose filtered set is sure to hold an excluded pair, is not filtered
-    (``_rival_bound``): it cannot raise the maximum either."""
+    (``_rival_free_size``): it cannot raise the maximum either."""
     work = _work_arrays(width, n_ego, n_cav, len(excluded))
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:

@@ -133,16 +133,21 @@ class Listing:
     cav: np.ndarray
     distance: np.ndarray
     fill: np.ndarray
+    bound: np.ndarray
+    """Per anchor, min(distinct ego objects, distinct CAV objects) of L_ij at ``sigma2``, -1 where
+    not known yet: no one-to-one subset of L_ij at this or a smaller sigma2 holds more (the
+    runner-up search's bound, ``cbm.selection``)."""
     lock: threading.RLock = field(default_factory=threading.RLock, compare=False)
 
     def arguments(self, writable: bool = True) -> tuple:
         """``listed_into``'s ``listing`` argument (for calls at a sigma2 up to ``self.sigma2``);
         ``writable`` False: anchors not yet listed are listed but not kept (for threads running at once)."""
-        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.sigma2, writable)
+        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.bound, self.sigma2,
+                writable)
 
 
 NO_LISTING = Listing(0.0, 1, np.zeros(0, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32),
-                     np.zeros(0, np.int32), np.zeros(0), np.zeros(1, np.int64))
+                     np.zeros(0, np.int32), np.zeros(0), np.zeros(1, np.int64), np.zeros(0, np.int32))
 """The listing of a call that keeps nothing (no ``kept``): every anchor is listed at its own sigma2."""
 
 

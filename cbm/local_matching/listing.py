@@ -31,7 +31,7 @@ def listing_for(kept: dict | None, sigma1_rad: float, sigma2: float, count2: np.
         n_pairs = len(count2)
         found = Listing(sigma2, max(1, int(count2.max(initial=0))), np.full(n_pairs, -1, np.int64),
                         np.zeros(n_pairs, np.int32), np.empty(CAPACITY, np.int32), np.empty(CAPACITY, np.int32),
-                        np.empty(CAPACITY), np.zeros(1, np.int64))
+                        np.empty(CAPACITY), np.zeros(1, np.int64), np.full(n_pairs, -1, np.int32))
         remember(kept, "listing", (sigma1_rad,), found)
     return found
 
@@ -41,7 +41,7 @@ def listed_into(i, j, sign, lookup, listing, out, ego_of, cav_of, distance):
     """The members of L_ij at the sigma2 of ``lookup`` (``members_into``, same members in the same
     order), from ``listing`` (``Listing.arguments``) when the anchor is in it, else listed at the
     listing's sigma2 (kept in it while it has room and ``writable``) and filtered to the call's."""
-    at, length, kept_ego, kept_cav, kept_distance, fill, listed_sigma2, writable = listing
+    at, length, kept_ego, kept_cav, kept_distance, fill, _, listed_sigma2, writable = listing
     e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1, sigma2 = lookup
     a = i * n_cav + j
     if len(at) == 0:
