@@ -13,6 +13,7 @@ import numpy as np
 from ..context import Context
 from ..reuse import ran, recall, remember
 from .candidates import CandidateSets, member_lookup
+from .distances import HEADROOM, Distances, counted, distances_within
 from .join import VoteRows, run_join
 from .listing import listing_for
 
@@ -44,6 +45,8 @@ def counts_and_votes(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
         raise ValueError(f"cbm.match: {n_ego} x {n_cav} boxes make more than {MOST_PAIRS} pairs (the voting "
                          "sets keep pair ids in 32 bits)")
     count2 = recall(kept, "count", (sigma1_rad, sigma2))
+    if count2 is None:
+        count2 = scanned_count(ego, cav, ego_heading, signs, sigma1_rad, sigma2, kept)
     counting, listing = count2 is None, sigma3 is not None and list_votes
     votes = []
     if counting or listing:
@@ -60,6 +63,34 @@ def counts_and_votes(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
         count2 += count2 > 0
         remember(kept, "count", (sigma1_rad, sigma2), count2)
     return count2, votes
+
+
+def scanned_count(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
+                  sigma2: float, kept: dict | None) -> np.ndarray | None:
+    """card(L_ij) + 1 of every anchor with a candidate (``counts_and_votes``'s) counted from the
+    quadruples' distances kept for this sigma1 (``distances``), kept here at ``HEADROOM`` times
+    sigma2 when this is a sigma2 edit (the counts kept are for this sigma1 and another sigma2);
+    None when the join must count: a first count, a sigma1 edit, or too many quadruples."""
+    if kept is None:
+        return None
+    found = recall(kept, "distances", (sigma1_rad,))
+    if found is None or (found.anchor is not None and found.radius < sigma2):
+        earlier = kept.get("count")
+        if earlier is None or earlier[0][0] != sigma1_rad:
+            return None
+        radius = HEADROOM * sigma2
+        found = distances_within(ego, cav, ego_heading, signs, sigma1_rad, radius, kept)
+        if found is None:
+            found = Distances(radius, None, None)
+        remember(kept, "distances", (sigma1_rad,), found)
+        ran(kept, "distances")
+    if found.anchor is None:
+        return None
+    count2 = counted(found, sigma2, signs.size)
+    count2 += count2 > 0
+    ran(kept, "count")
+    remember(kept, "count", (sigma1_rad, sigma2), count2)
+    return count2
 
 
 def candidate_sets(ego: Context, cav: Context, signs: np.ndarray, sigma1_rad: float, sigma2: float,
