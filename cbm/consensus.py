@@ -123,40 +123,58 @@ RULE_CODES = {None: 0, "paper": 1, "released": 2}
 
 
 @numba.njit(cache=True, nogil=True)
-def _alone(ego, cav, size, kept, ego_count, cav_count, alone):
-    """alone[r] for rows 0..size-1 (pair of ego object ``ego[r]`` and CAV object ``cav[r]``): kept, and
-    its ego and CAV objects occur once among the kept rows."""
+def _voters(ego, cav, size, rule, ego_count, cav_count, voter):
+    """voter[r] for rows 0..size-1 (pair of ego object ``ego[r]`` and CAV object ``cav[r]``): every row
+    under the paper rule (eq. 9-10), else the rows whose objects occur once in the set (the released
+    rule's lone members). ``ego_count`` and ``cav_count`` must be zero and are left holding how often
+    each object occurs."""
     for row in range(size):
-        if kept[row]:
-            ego_count[ego[row]] += 1
-            cav_count[cav[row]] += 1
+        ego_count[ego[row]] += 1
+        cav_count[cav[row]] += 1
     for row in range(size):
-        alone[row] = kept[row] and ego_count[ego[row]] == 1 and cav_count[cav[row]] == 1
-    for row in range(size):
-        ego_count[ego[row]] = 0
-        cav_count[cav[row]] = 0
+        voter[row] = (rule == 1) | ((ego_count[ego[row]] == 1) & (cav_count[cav[row]] == 1))
 
 
 @numba.njit(cache=True, nogil=True)
-def _voted(member, size, is_voter, voted_start, voted_by, needed, voter_here, enough):
+def _scan(rows, n, member, voted_start, voted_by, needed, voter_here, enough):
+    """enough[r] for the ``n`` rows r of ``rows``: at least ``needed`` of the pairs whose voting set
+    holds the row's pair (``voted_by[voted_start[m]:voted_start[m + 1]]``) are marked in
+    ``voter_here``; each scan stops at the vote it needs. The next row's list is looked up before
+    this one is scanned, so its loads are under way when the scan's last branch is mispredicted."""
+    if n == 0 or len(voted_by) == 0:
+        return
+    last = len(voted_by) - 1
+    m = member[rows[0]]
+    begin, end = voted_start[m], voted_start[m + 1]
+    first = voted_by[min(begin, last)]
+    for q in range(n):
+        m = member[rows[min(q + 1, n - 1)]]
+        next_begin, next_end = voted_start[m], voted_start[m + 1]
+        next_first = voted_by[min(next_begin, last)]
+        count = 0
+        if end > begin:
+            count = np.int64(voter_here[first])
+            k = begin + 1
+            while count < needed and k < end:
+                count += voter_here[voted_by[k]]
+                k += 1
+        enough[rows[q]] = count >= needed
+        begin, end, first = next_begin, next_end, next_first
+
+
+@numba.njit(cache=True, nogil=True)
+def _voted(member, size, is_voter, voted_start, voted_by, needed, voter_here, enough, rows):
     """enough[r] for rows 0..size-1: at least ``needed`` voters of the set hold the row's pair in their
-    voting set. ``voted_by[voted_start[m]:voted_start[m + 1]]`` are the pairs whose voting set holds
-    pair m; the scan stops at the vote it needs. With ``needed`` 1 (the released rule) a voter's own
-    row is taken as enough unscanned: that rule keeps the voters whatever their votes."""
+    voting set (``_scan``). With ``needed`` 1 (the released rule) a voter's own row is taken as
+    enough unscanned: that rule keeps the voters whatever their votes. ``rows`` is work room for
+    ``size`` row numbers; ``voter_here`` must be False and is left so."""
+    n = 0
     for row in range(size):
         voter_here[member[row]] = is_voter[row]
-    for row in range(size):
-        count = 0
-        enough[row] = needed == 1 and is_voter[row]
-        m = member[row]
-        if enough[row]:
-            continue
-        for k in range(voted_start[m], voted_start[m + 1]):
-            if voter_here[voted_by[k]]:
-                count += 1
-                if count >= needed:
-                    enough[row] = True
-                    break
+        enough[row] = (needed == 1) & is_voter[row]
+        rows[n] = row
+        n += not enough[row]
+    _scan(rows, n, member, voted_start, voted_by, needed, voter_here, enough)
     for row in range(size):
         voter_here[member[row]] = False
 
@@ -166,27 +184,25 @@ def final_set(member, ego, cav, size, voted_start, voted_by, rule, scratch, ego_
     """L^(2) of the candidate set ``member[:size]`` (pair ids; ``ego`` and ``cav`` their objects):
     the rows it keeps, in order, into ``out``; returns how many.
 
-    Consensus (eq. 9-10) by ``rule`` (0 off, 1 paper, 2 released), then the one-to-one rule (eq. 11).
-    ``scratch`` is a (3, max set size) bool work array; the count arrays and ``voter_here`` must be
-    zero/False and are left so.
-    """
-    everyone, lone, kept = scratch[0], scratch[1], scratch[2]
-    for row in range(size):
-        everyone[row] = True
-    if rule == 1:
-        _voted(member, size, everyone, voted_start, voted_by, 2, voter_here, kept)
-    elif rule == 2:
-        _alone(ego, cav, size, everyone, ego_count, cav_count, lone)
-        _voted(member, size, lone, voted_start, voted_by, 1, voter_here, kept)
-        for row in range(size):
-            kept[row] = kept[row] or lone[row]
+    Consensus (eq. 9-10) by ``rule`` (0 off, 1 paper, 2 released), then the one-to-one rule (eq. 11):
+    the kept rows whose objects occur once among the kept rows, counted by taking the rows not kept
+    off the set's counts. ``scratch`` is a (2, max set size) bool work array; the count arrays and
+    ``voter_here`` must be zero/False and are left so. Branches the data decide are left out where
+    the passes allow (sums and ``&`` of booleans instead)."""
+    voter, kept = scratch[0], scratch[1]
+    _voters(ego, cav, size, rule, ego_count, cav_count, voter)
+    if rule == 0:
+        kept[:size] = True
     else:
+        _voted(member, size, voter, voted_start, voted_by, 2 if rule == 1 else 1, voter_here, kept, out)
         for row in range(size):
-            kept[row] = True
-    _alone(ego, cav, size, kept, ego_count, cav_count, lone)
+            ego_count[ego[row]] -= 1 - kept[row]
+            cav_count[cav[row]] -= 1 - kept[row]
     kept_size = 0
     for row in range(size):
-        if lone[row]:
-            out[kept_size] = row
-            kept_size += 1
+        out[kept_size] = row
+        kept_size += kept[row] & (ego_count[ego[row]] == 1) & (cav_count[cav[row]] == 1)
+    for row in range(size):
+        ego_count[ego[row]] = 0
+        cav_count[cav[row]] = 0
     return kept_size

@@ -156,7 +156,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
 def _work_arrays(width, n_ego, n_cav, n_pairs):
     """The zeroed work arrays ``_listed`` and ``_final_size`` need: scratch, counts, voter flags, out, candidates and
     their ego and CAV objects and distances."""
-    return (np.zeros((3, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
+    return (np.zeros((2, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
             np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64),
             np.empty(width + 1, np.int64), np.empty(width + 1, np.int64), np.empty(width + 1))
 
