@@ -12,19 +12,29 @@ least-squares rigid fit of the set, then the set's centroids (see ``tie_break_ke
 """
 from __future__ import annotations
 
-import contextlib
-import math
 from dataclasses import dataclass
 
 import numba
 import numpy as np
 
-from .consensus import RULE_CODES, PairSets, final_set
+from .consensus import PairSets
 from .estimate import residuals, weighted_procrustes
-from .local_matching import NO_LISTING, POOL, THREADS, CandidateSets, listed_into
+from .filtered import (
+    LISTING,
+    N_CAV,
+    PAPER,
+    RULE,
+    filtered_sizes_of,
+    final_size,
+    kernel_arguments,
+    list_set,
+    listing_held,
+    read_only,
+    rival_free_size,
+    work_arrays,
+)
+from .local_matching import POOL, THREADS, CandidateSets
 
-PAPER = RULE_CODES["paper"]
-"""The rule code of eq. 10 as the paper states it, the one rule that may drop a lone pair."""
 RIVAL_CHUNK = 128
 """Anchors handed to the threads at a time in the runner-up search."""
 RIVAL_THREADS_FROM = 250_000
@@ -69,54 +79,6 @@ class Selection:
     """The visit's filtered sets (None when every set is empty)."""
 
 
-@numba.njit(cache=True, nogil=True)
-def _rival_bound(member, ego, cav, size, excluded, lone_kept, ego_count, cav_count):
-    """For the listed pairs ``member[:size]`` (objects ``ego``, ``cav``): min(distinct ego objects,
-    distinct CAV objects), the most pairs their filtered set can hold (L^(2) is a one-to-one subset
-    of L_ij: eq. 10-11 only remove members); and whether, by a rule that keeps a pair alone in its
-    row and column of L_ij (``lone_kept``: off and released), such a lone pair is ``excluded``, so
-    that L^(2) holds it. The count arrays must be zero and are left so."""
-    distinct_ego, distinct_cav = 0, 0
-    for row in range(size):
-        distinct_ego += ego_count[ego[row]] == 0
-        distinct_cav += cav_count[cav[row]] == 0
-        ego_count[ego[row]] += 1
-        cav_count[cav[row]] += 1
-    holds_excluded = False
-    for row in range(size):
-        holds_excluded |= lone_kept and excluded[member[row]] and ego_count[ego[row]] == 1 and cav_count[cav[row]] == 1
-    for row in range(size):
-        ego_count[ego[row]], cav_count[cav[row]] = 0, 0
-    return min(distinct_ego, distinct_cav), holds_excluded
-
-
-@numba.njit(cache=True, nogil=True)
-def _listed(anchor, signs, lookup, listing, n_cav, work):
-    """The members of L_ij of ``anchor`` listed into ``work``'s candidates, their objects and
-    distances (``listed_into``); returns how many."""
-    candidates, ego_of, cav_of, distance = work[5], work[6], work[7], work[8]
-    i, j = anchor // n_cav, anchor % n_cav
-    return listed_into(i, j, signs[i, j], lookup, listing, candidates, ego_of, cav_of, distance)
-
-
-@numba.njit(cache=True, nogil=True)
-def _final_size(listed, voted_start, voted_by, rule, centres, limit, work):
-    """card(L^(2)) of the ``listed`` members of L_ij in ``work`` (``_listed``), its members into
-    ``work``'s ``out``; 0 when its pairs are farther apart than the limit on average (their
-    distances computed from the ``centres``, ego and CAV). ``work`` comes from ``_work_arrays``."""
-    scratch, ego_count, cav_count, voter_here, out, candidates, ego_of, cav_of, distance = work
-    size = final_set(candidates, ego_of, cav_of, listed, voted_start, voted_by, rule, scratch, ego_count, cav_count,
-                     voter_here, out)
-    ego_xy, cav_xy = centres
-    total = 0.0
-    for k in range(size):
-        row = out[k]
-        dx, dy = ego_xy[ego_of[row], 0] - cav_xy[cav_of[row], 0], ego_xy[ego_of[row], 1] - cav_xy[cav_of[row], 1]
-        total += math.sqrt(dx * dx + dy * dy)
-        out[k] = candidates[row]
-    return size if size == 0 or total / size <= limit else 0
-
-
 @numba.njit(cache=True)
 def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
                   centres, limit):
@@ -125,7 +87,7 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
     Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
     position in ``order`` where the visit stopped. ``width`` is the largest card(L_ij).
     """
-    work = _work_arrays(width, n_ego, n_cav, len(candidate_count))
+    work = work_arrays(width, n_ego, n_cav, len(candidate_count))
     out = work[4]
     visited = np.empty(len(order), np.int64)
     sizes = np.empty(len(order), np.int64)
@@ -136,8 +98,8 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
         anchor = order[n]
         if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
             break
-        size = _final_size(_listed(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
-                           centres, limit, work)
+        size = final_size(list_set(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
+                          centres, limit, work)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             for k in range(offsets[n]):
@@ -153,67 +115,21 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
 
 
 @numba.njit(cache=True, nogil=True)
-def _work_arrays(width, n_ego, n_cav, n_pairs):
-    """The zeroed work arrays ``_listed`` and ``_final_size`` need: scratch, counts, voter flags, out, candidates and
-    their ego and CAV objects and distances."""
-    return (np.zeros((2, width), np.bool_), np.zeros(n_ego, np.int64), np.zeros(n_cav, np.int64),
-            np.zeros(n_pairs, np.bool_), np.empty(width, np.int64), np.empty(width + 1, np.int64),
-            np.empty(width + 1, np.int64), np.empty(width + 1, np.int64), np.empty(width + 1))
-
-
-@numba.njit(cache=True, nogil=True)
-def _rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
-                     centres, limit, work):
-    """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
-    ``excluded`` pair or it cannot exceed ``beyond`` (-1: always filtered; ``_rival_bound``, or the
-    bound the listing keeps from a larger or equal sigma2: then it is not filtered, nor listed)."""
-    bound, listed_sigma2, writable = listing[6], listing[7], listing[8]
-    if 0 <= beyond and len(bound) and 0 <= bound[anchor] <= beyond:
-        return 0
-    listed = _listed(anchor, signs, lookup, listing, n_cav, work)
-    if beyond >= 0:
-        most, holds_excluded = _rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1],
-                                            work[2])
-        if writable and len(bound) and lookup[-1] == listed_sigma2:
-            bound[anchor] = most
-        if most <= beyond or holds_excluded:
-            return 0
-    size = _final_size(listed, voted_start, voted_by, rule, centres, limit, work)
-    for k in range(size):
-        if excluded[work[4][k]]:
-            return 0
-    return size
-
-
-@numba.njit(cache=True, nogil=True)
-def _filtered_sizes(anchors, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
-                    centres, limit):
-    """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
-    an ``excluded`` pair."""
-    work = _work_arrays(width, n_ego, n_cav, len(excluded))
-    sizes = np.zeros(len(anchors), np.int64)
-    for n in range(len(anchors)):
-        sizes[n] = _rival_free_size(anchors[n], -1, excluded, signs, lookup, listing, voted_start, voted_by, rule,
-                                    n_ego, n_cav, centres, limit, work)
-    return sizes
-
-
-@numba.njit(cache=True, nogil=True)
 def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego,
                    n_cav, centres, limit):
-    """The largest of ``best`` and the sizes ``_filtered_sizes`` gives ``anchors`` (by decreasing
+    """The largest of ``best`` and the sizes ``filtered_sizes_of`` gives ``anchors`` (by decreasing
     card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
     the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
     so that anchor's size is at most its count, at most the largest; and every later anchor's count
     is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
     the largest so far, or whose filtered set is sure to hold an excluded pair, is not filtered
-    (``_rival_free_size``): it cannot raise the maximum either."""
-    work = _work_arrays(width, n_ego, n_cav, len(excluded))
+    (``rival_free_size``): it cannot raise the maximum either."""
+    work = work_arrays(width, n_ego, n_cav, len(excluded))
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:
             break
-        best = max(best, _rival_free_size(anchors[n], best, excluded, signs, lookup, listing, voted_start, voted_by,
-                                          rule, n_ego, n_cav, centres, limit, work))
+        best = max(best, rival_free_size(anchors[n], best, excluded, signs, lookup, listing, voted_start, voted_by,
+                                         rule, n_ego, n_cav, centres, limit, work))
     return best
 
 
@@ -238,7 +154,7 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
             continue
-        reading = (*common[:LISTING], _read_only(common[LISTING]), *common[LISTING + 1:])
+        reading = (*common[:LISTING], read_only(common[LISTING]), *common[LISTING + 1:])
         jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *reading)
                 for part in np.array_split(anchors, THREADS) if len(part)]
         runner_up = max(int(job.result()) for job in jobs)
@@ -282,31 +198,6 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
     return np.stack([members // n_cav, members % n_cav], axis=1)
 
 
-def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray,
-                     cav_xy: np.ndarray, distance_limit: float) -> tuple:
-    """The arguments the visiting kernels share, after their own (``LISTING``, ``RULE``, ``N_CAV``:
-    where the listing's arguments, the rule and Nc are). The kernels add the anchors they list to
-    the listing: the caller holds its lock (``listing_held``)."""
-    centres = (np.ascontiguousarray(ego_xy, dtype=float), np.ascontiguousarray(cav_xy, dtype=float))
-    listing = (NO_LISTING if L.listing is None else L.listing).arguments()
-    return (L.signs, L.lookup, listing, voted_by.start, voted_by.member, RULE_CODES[rule], len(ego_xy), len(cav_xy),
-            centres, float(distance_limit))
-
-
-LISTING, RULE, N_CAV = 2, 5, 7
-
-
-def _read_only(listing: tuple) -> tuple:
-    """``Listing.arguments`` that list the anchors not in the listing without adding them (for
-    kernels running on two threads at once)."""
-    return (*listing[:-1], False)
-
-
-def listing_held(L: CandidateSets):
-    """The lock of ``L``'s listing, held while kernels list into it (a no-op without one)."""
-    return contextlib.nullcontext() if L.listing is None else L.listing.lock
-
-
 def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, rule: str | None,
                    ego_xy: np.ndarray, cav_xy: np.ndarray, distance_limit: float) -> np.ndarray:
     """card(L^(2)) of each of ``anchors`` (eq. 12), 0 where the distance limit rejects it."""
@@ -315,8 +206,8 @@ def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, ru
         return np.zeros(0, np.int64)
     nowhere = np.zeros(len(L.count), bool)
     with listing_held(L):
-        return _filtered_sizes(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
-                                                                            distance_limit))
+        return filtered_sizes_of(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
+                                                                              distance_limit))
 
 
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
@@ -395,7 +286,7 @@ def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: 
     if len(rest) > 0:
         nowhere = np.zeros(len(L.count), bool)
         with listing_held(L):
-            sizes = np.concatenate([visit.sizes[:known], _filtered_sizes(rest, L.width, nowhere, *visit.common)])
+            sizes = np.concatenate([visit.sizes[:known], filtered_sizes_of(rest, L.width, nowhere, *visit.common)])
         anchors = np.concatenate([order[:known], rest])
         found = _distinct_largest(anchors, sizes, first, k, lambda index: visit.members_at(index) if index < known
                                   else filtered_members(int(anchors[index]), L, visit.common))
