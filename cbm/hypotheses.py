@@ -34,7 +34,7 @@ import numpy as np
 from . import se2
 from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
-from .reassociate import MAX_ROUNDS, axis_difference, gated_assignment, reassociate
+from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
 from .selection import Visit, anchor_sets
 
 HYPOTHESES = 6
@@ -150,10 +150,24 @@ def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float
     """Each pair's log-likelihood ratio, one object seen twice against a coincidence: its centres'
     (``pair_log_ratio``) plus its heading axes' (``heading_log_ratio``, the heading noise read from
     the ``reference`` pairs). ``moved``: the CAV boxes under the pose."""
-    d = np.linalg.norm(moved[pairs[:, 1], :2] - ego[pairs[:, 0], :2], axis=1)
-    heading = heading_sigma(axis_difference(moved[reference[:, 1], 6], ego[reference[:, 0], 6]))
-    return pair_log_ratio(d, sigma, density) + heading_log_ratio(
-        axis_difference(moved[pairs[:, 1], 6], ego[pairs[:, 0], 6]), heading)
+    ego = np.ascontiguousarray(ego)
+    d, turn = _gaps(ego, moved, pairs)
+    heading = heading_sigma(_gaps(ego, moved, reference)[1])
+    return pair_log_ratio(d, sigma, density) + heading_log_ratio(turn, heading)
+
+
+@numba.njit(cache=True, nogil=True)
+def _gaps(ego, moved, pairs):
+    """Each pair's centre distance and the angle between its heading axes (``axis_difference``),
+    each as numpy computes it elementwise."""
+    d, turn = np.empty(len(pairs)), np.empty(len(pairs))
+    for k in range(len(pairs)):
+        e, c = pairs[k, 0], pairs[k, 1]
+        dx, dy = moved[c, 0] - ego[e, 0], moved[c, 1] - ego[e, 1]
+        d[k] = math.sqrt(dx * dx + dy * dy)
+        angle = abs((moved[c, 6] - ego[e, 6] + math.pi) % (2.0 * math.pi) - math.pi)
+        turn[k] = min(angle, math.pi - angle)
+    return d, turn
 
 
 def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
