@@ -177,7 +177,7 @@ def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
     metres, degrees, scale = _gap(a, b)
     if min(abs(metres - SAME_POSE_M), abs(degrees - SAME_POSE_DEG)) <= ROUNDING * scale:
         return _small(se2.inverse(a) @ b)
-    return metres < SAME_POSE_M and degrees < SAME_POSE_DEG
+    return bool(metres < SAME_POSE_M and degrees < SAME_POSE_DEG)
 
 
 def near_any(a: np.ndarray, poses: list[np.ndarray]) -> bool:
