@@ -37,6 +37,9 @@ READMIT_ALPHA = 1e-3
 """A pair left out comes back unless a true pair would lie as far out with at most this probability."""
 READMIT_CAP = 10.0
 """A pair more than this many sigma off stays out, however few the inliers that read sigma."""
+ROUNDING = 1e-10
+"""Residuals within this many times the largest coordinate of the inlier gate are gated as numpy
+computes them (``_gated_inliers``): the two differ by less than 1e-13 times it."""
 REWEIGHT_STEPS = 20
 REWEIGHT_TOL = 1e-6
 """Most reweighting steps at the final scale, and the step (largest change of an entry of the
@@ -265,17 +268,6 @@ def _select(values, h):
     return values[h]
 
 
-def least_median_fit(src: np.ndarray, dst: np.ndarray) -> tuple[np.ndarray, float]:
-    """Least median of squares (Rousseeuw, JASA 1984) over rigid fits through two pairs
-    (``hypothesis_pairs``): the fit whose ``h``-th smallest residual, ``h = floor(K/2) + 1``, is
-    smallest, and that residual. It stands while fewer than half of the pairs are wrong. The pairs
-    are put in order of their distances from the centroids first (``by_centroid_distance``), so the
-    answer depends neither on the input order nor on where either frame lies."""
-    a, b = hypothesis_pairs(len(src))
-    c, s, tx, ty, median = _ordered_least_median(src, dst, a, b)
-    return np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]]), math.sqrt(median)
-
-
 @numba.njit(cache=True, nogil=True)
 def _ordered_least_median(src, dst, a, b):
     """``_least_median`` of the pairs in ``by_centroid_distance`` order, at index ``K // 2`` counted from 0."""
@@ -308,11 +300,46 @@ def _centroid_distances(points):
     return out
 
 
-def least_median_sigma(median: float, k: int) -> float:
+@numba.njit(cache=True, nogil=True)
+def least_median_sigma(median, k):
     """Rousseeuw and Leroy's (1987) scale of a least-median fit of ``k`` pairs, for 2-D residuals:
     the Rayleigh median ``median / sqrt(2 ln 2)`` times their small-sample factor ``1 + 5 / (n - p)``
     (``n = 2k`` coordinates, ``p = 3`` parameters), which undoes the fit's choice of the smallest median."""
     return median / RAYLEIGH_MEDIAN * (1.0 + 5.0 / max(2 * k - 3, 1))
+
+
+@numba.njit(cache=True, nogil=True)
+def _gated_inliers(src, dst, a, b, floor):
+    """Step 1 of ``robust_fit``: (inliers, T, limit, sure) of the least median of squares (Rousseeuw,
+    JASA 1984) over the two-pair fits ``a, b`` (``hypothesis_pairs``) of the pairs in
+    ``by_centroid_distance`` order, so that the answer depends neither on the input order nor on
+    where either frame lies: the fit ``T`` whose ``h``-th smallest residual, ``h = floor(K/2) + 1``,
+    is smallest (it stands while fewer than half of the pairs are wrong), and the pairs within
+    ``limit`` = ``INLIER_GATE`` sigma_0 (``least_median_sigma``) of it. Every pair is an inlier
+    below ``MIN_TO_REJECT`` pairs. ``sure`` is False when a residual lies within rounding
+    (``ROUNDING`` times the largest coordinate) of ``limit``: numpy's ``residuals``, which the gate
+    reads, round the products otherwise (BLAS), so the caller then gates those."""
+    n = len(src)
+    if n < MIN_TO_REJECT:
+        return np.ones(n, np.bool_), np.eye(3), np.inf, True
+    c, s, tx, ty, median = _ordered_least_median(src, dst, a, b)
+    T = np.array([[c, -s, tx], [s, c, ty], [0.0, 0.0, 1.0]])
+    limit = INLIER_GATE * max(least_median_sigma(math.sqrt(median), n), floor)
+    r = np.empty(n)
+    _residuals_into(T, src, dst, r)
+    margin = ROUNDING * max(np.abs(src).max(), np.abs(dst).max(), abs(tx), abs(ty))
+    return r <= limit, T, limit, not (np.abs(r - limit) <= margin).any()
+
+
+@numba.njit(cache=True, nogil=True)
+def _welsch_fit(src, dst, inlier, bounds, floor):
+    """Steps 2-3 of ``robust_fit`` from its ``inlier`` pairs (every pair when fewer than two are):
+    (T, weights, sigma) of ``_inlier_fit`` followed by ``_reweighted`` at nu = c sigma."""
+    if np.count_nonzero(inlier) < 2:
+        inlier = np.ones(len(inlier), np.bool_)
+    T, sigma = _inlier_fit(src, dst, inlier, bounds, floor)
+    T, weights = _reweighted(src, dst, T, WELSCH_EFFICIENT_SCALE * sigma, REWEIGHT_STEPS, REWEIGHT_TOL)
+    return T, weights, sigma
 
 
 @functools.lru_cache(maxsize=256)
@@ -330,8 +357,8 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     """Robust SE(2) fit of eq. 14 with Welsch weights and a scale that follows the data (>= 2 pairs).
 
     1. Single out wrong pairs where fewer than half of them can pull (from ``MIN_TO_REJECT``
-       pairs on): the least-median fit (``least_median_fit``) and its scale sigma_0
-       (``least_median_sigma``); pairs within ``INLIER_GATE`` sigma_0 of it are the inliers.
+       pairs on): the least-median fit and its scale sigma_0 (``_gated_inliers``,
+       ``least_median_sigma``); pairs within ``INLIER_GATE`` sigma_0 of it are the inliers.
     2. Read the noise from the inliers: their least-squares fit and its residual std-dev sigma
        (``inlier_sigma``, never below ``nu_floor / c``) -- Rousseeuw and Leroy's reweighted least
        squares (1987, ch. 5); a pair left out comes back when it lies within ``readmit_bounds``
@@ -347,13 +374,8 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
     """
     src, dst = np.ascontiguousarray(src, dtype=float), np.ascontiguousarray(dst, dtype=float)
     floor = nu_floor / WELSCH_EFFICIENT_SCALE
-    inlier = np.ones(len(src), dtype=bool)
-    if len(src) >= MIN_TO_REJECT:
-        T, median = least_median_fit(src, dst)
-        inlier = residuals(T, src, dst) <= INLIER_GATE * max(least_median_sigma(median, len(src)), floor)
-        if np.count_nonzero(inlier) < 2:
-            inlier[:] = True
-    T, sigma = _inlier_fit(src, dst, inlier, readmit_bounds(len(src)), floor)
-    nu = WELSCH_EFFICIENT_SCALE * sigma
-    T, weights = _reweighted(src, dst, T, nu, REWEIGHT_STEPS, REWEIGHT_TOL)
-    return Fit(T, weights, nu, sigma)
+    inlier, T, limit, sure = _gated_inliers(src, dst, *hypothesis_pairs(len(src)), floor)
+    if not sure:
+        inlier = residuals(T, src, dst) <= limit
+    T, weights, sigma = _welsch_fit(src, dst, inlier, readmit_bounds(len(src)), floor)
+    return Fit(T, weights, WELSCH_EFFICIENT_SCALE * sigma, sigma)

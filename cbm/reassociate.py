@@ -186,11 +186,31 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
         candidates, cost, len(ego), len(cav), DENSE_BLOCK, _UNPAIRED)
     for g in range(left):
         block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
-        r, c = linear_sum_assignment(block)
-        inside = block[r, c] < _UNPAIRED
-        partner[row_ids[row_at[g] + r[inside]]] = col_ids[col_at[g] + c[inside]]
-    rows = np.flatnonzero(partner >= 0)
-    return np.stack([rows, partner[rows]], axis=1)
+        _assign(partner, block, *linear_sum_assignment(block), row_ids[row_at[g]:], col_ids[col_at[g]:], _UNPAIRED)
+    return _paired(partner)
+
+
+@numba.njit(cache=True, nogil=True)
+def _assign(partner, block, r, c, row_ids, col_ids, unpaired):
+    """The solver's answer ``r, c`` for one dense ``block`` into ``partner``: ego box ``row_ids[r]``
+    pairs with CAV box ``col_ids[c]`` where the block's cost there is inside the gate (below ``unpaired``)."""
+    for k in range(len(r)):
+        if block[r[k], c[k]] < unpaired:
+            partner[row_ids[r[k]]] = col_ids[c[k]]
+
+
+@numba.njit(cache=True, nogil=True)
+def _paired(partner):
+    """(K, 2) pairs (ego index, CAV ``partner``) of the ego boxes with a partner (not -1), by ego index."""
+    n = 0
+    for e in range(len(partner)):
+        n += partner[e] >= 0
+    pairs, n = np.empty((n, 2), np.intp), 0
+    for e in range(len(partner)):
+        if partner[e] >= 0:
+            pairs[n, 0], pairs[n, 1] = e, partner[e]
+            n += 1
+    return pairs
 
 
 @numba.njit(cache=True, nogil=True)

@@ -28,6 +28,7 @@ from . import se2
 from .consensus import PairSets
 from .context import build_context, fold_heading, pair_signs
 from .estimate import robust_fit
+from .hypotheses import evidence, same_pose
 from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
 from .params import CBMParams
@@ -103,8 +104,9 @@ def compile_matching() -> None:
 
 def compile_selection() -> None:
     """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up on one thread and on
-    two, the robust fit, the grouping of a large assignment) with a first call on candidate sets whose sizes are
-    upper bounds, without running the join that counts them."""
+    two, the robust fit, the grouping of a large assignment, the evidence, the comparison of poses)
+    with a first call on candidate sets whose sizes are upper bounds, without running the join that
+    counts them."""
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
     cav = se2.apply_boxes(init, cav)
     ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav[:, 6])
@@ -120,7 +122,9 @@ def compile_selection() -> None:
     strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
     filtered_sizes(order[:2], *sets)
     robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
-    gated_assignment(ego, cav, 3.0, 1.0)
+    found = gated_assignment(ego, cav, 3.0, 1.0)
+    evidence(ego, cav, found, 1.0, 1.0, found)
+    same_pose(init, init)
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}

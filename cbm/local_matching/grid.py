@@ -210,16 +210,29 @@ def column(zu, u0, cell, nx):
 
 def heading_groups(ego_heading: np.ndarray, signs: np.ndarray) -> list[np.ndarray]:
     """Ego objects in ``HEADING_GROUPS`` groups of neighbouring headings (one group when no sign
-    is -1): within a group most CAV objects have one sign against every member."""
+    is -1): within a group most CAV objects have one sign against every member. The groups are
+    ``np.array_split``'s of the objects in heading order: the first ``n % HEADING_GROUPS`` one larger."""
     if not np.any(signs < 0):
         return [np.arange(len(ego_heading))] if len(ego_heading) else []
     order = np.argsort(ego_heading, kind="stable")
-    return [group for group in np.array_split(order, HEADING_GROUPS) if len(group)]
+    each, extra = divmod(len(order), HEADING_GROUPS)
+    ends = [k * each + min(k, extra) for k in range(HEADING_GROUPS + 1)]
+    return [order[a:b] for a, b in zip(ends, ends[1:]) if b > a]
 
 
 def group_signs(signs: np.ndarray, group: np.ndarray) -> np.ndarray:
     """(Nc,) the sign of each CAV object against every ego object of ``group``, 0 where it varies."""
-    rows = signs[group]
-    low, high = rows.min(axis=0), rows.max(axis=0)
-    return np.where(low == high, low, 0.0)
+    return _group_signs(np.ascontiguousarray(signs), group)
 
+
+@numba.njit(cache=True, nogil=True)
+def _group_signs(signs, group):
+    """``group_signs`` of the (Ne, Nc) ``signs`` and the rows ``group`` (at least one), row by row."""
+    low, high = signs[group[0]].copy(), signs[group[0]].copy()
+    for i in group[1:]:
+        for j in range(signs.shape[1]):
+            low[j], high[j] = min(low[j], signs[i, j]), max(high[j], signs[i, j])
+    for j in range(len(low)):
+        if low[j] != high[j]:
+            low[j] = 0.0
+    return low
