@@ -4,6 +4,7 @@ where ``init`` puts them, or where the estimate does), where, and with which tit
 from __future__ import annotations
 
 import math
+import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -25,6 +26,9 @@ SCREEN = (math.radians(50.0), 1280, 720)
 """(vertical field of view, width, height) assumed before the browser reports its camera."""
 ASIDE = (0.0, 0.0, 0.05)
 """Metres a camera move first steps aside (``move_camera``)."""
+MOVING = threading.Lock()
+"""Held while a camera move sets its steps: two moves at once (a button's and another callback's,
+each on a thread of its own) never interleave into a pose neither asked for."""
 
 
 @dataclass(frozen=True)
@@ -88,9 +92,10 @@ def move_camera(client: Any, position: Sequence[float], look_at: Sequence[float]
     viser sends a move only where it differs from its copy of the camera, and that copy is what the
     browser last reported, which may predate the previous move (its report still in flight): a
     move back to where the camera was before would then be dropped. So the move first steps
-    ``ASIDE`` and back, the steps sent in one batch (the browser draws only the last)."""
+    ``ASIDE`` and back, the steps sent in one batch (the browser draws only the last), one move at
+    a time (``MOVING``)."""
     camera = client.camera
-    with client.atomic():
+    with MOVING, client.atomic():
         camera.position = np.add(position, ASIDE)
         camera.position = position
         camera.look_at = look_at

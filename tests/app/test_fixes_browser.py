@@ -104,6 +104,7 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
     page.get_by_role("button", name="inspect the winning anchor").click()
     ui.wait_until(lambda: tab.explore.shown is not None)
     shown = tab.explore.shown
+    ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
     ui.wait_until(lambda: abs(tab.client.camera.look_at[1] - shown.centre[1]) < shown.span, timeout=30)
     scene_left = max(float(boxes[:, 1].max()) for boxes, _ in tab.last_drawing.objects.values() if len(boxes))
     assert shown.centre[1] > scene_left, "the panels are drawn left of the scene, away from the control panel"
