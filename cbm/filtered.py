@@ -83,19 +83,17 @@ def work_arrays(width, n_ego, n_cav, n_pairs):
 def rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
                     centres, limit, work):
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
-    ``excluded`` pair or it cannot exceed ``beyond`` (-1: always filtered; ``rival_bound``, or the
-    bound the listing keeps from a larger or equal sigma2: then it is not filtered, nor listed)."""
+    ``excluded`` pair or it cannot exceed ``beyond`` (``rival_bound``, or the bound the listing keeps
+    from a larger or equal sigma2: then it is not filtered, nor listed)."""
     bound, listed_sigma2, writable = listing[6], listing[7], listing[8]
-    if 0 <= beyond and len(bound) and 0 <= bound[anchor] <= beyond:
+    if len(bound) and 0 <= bound[anchor] <= beyond:
         return 0
     listed = list_set(anchor, signs, lookup, listing, n_cav, work)
-    if beyond >= 0:
-        most, holds_excluded = rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1],
-                                           work[2])
-        if writable and len(bound) and lookup[-1] == listed_sigma2:
-            bound[anchor] = most
-        if most <= beyond or holds_excluded:
-            return 0
+    most, holds_excluded = rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1], work[2])
+    if writable and len(bound) and lookup[-1] == listed_sigma2:
+        bound[anchor] = most
+    if most <= beyond or holds_excluded:
+        return 0
     size = final_size(listed, voted_start, voted_by, rule, centres, limit, work)
     for k in range(size):
         if excluded[work[4][k]]:
@@ -104,15 +102,14 @@ def rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_star
 
 
 @numba.njit(cache=True, nogil=True)
-def filtered_sizes_of(anchors, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
-                      centres, limit):
-    """card(L^(2)) of each anchor, 0 where the distance limit rejects it or its filtered set holds
-    an ``excluded`` pair."""
-    work = work_arrays(width, n_ego, n_cav, len(excluded))
+def filtered_sizes_of(anchors, width, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav, centres,
+                      limit):
+    """card(L^(2)) of each anchor, 0 where the distance limit rejects it."""
+    work = work_arrays(width, n_ego, n_cav, n_ego * n_cav)
     sizes = np.zeros(len(anchors), np.int64)
     for n in range(len(anchors)):
-        sizes[n] = rival_free_size(anchors[n], -1, excluded, signs, lookup, listing, voted_start, voted_by, rule,
-                                   n_ego, n_cav, centres, limit, work)
+        sizes[n] = final_size(list_set(anchors[n], signs, lookup, listing, n_cav, work), voted_start, voted_by,
+                              rule, centres, limit, work)
     return sizes
 
 

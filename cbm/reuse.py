@@ -57,6 +57,12 @@ def recall(kept: dict | None, name: str, key: tuple):
     return found[1] if found is not None and found[0] == key else None
 
 
+def kept_key(kept: dict | None, name: str) -> tuple | None:
+    """The key ``remember`` last kept ``name`` for, or None."""
+    found = None if kept is None else kept.get(name)
+    return None if found is None else found[0]
+
+
 def remember(kept: dict | None, name: str, key: tuple, value) -> None:
     """Keep ``value`` as ``name`` for ``key``, replacing the one kept before."""
     if kept is not None:

@@ -117,13 +117,14 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
 @numba.njit(cache=True, nogil=True)
 def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego,
                    n_cav, centres, limit):
-    """The largest of ``best`` and the sizes ``filtered_sizes_of`` gives ``anchors`` (by decreasing
-    card(L_ij) ``count``), visiting them in order and stopping at the first whose count is at most
-    the largest so far. Same answer as the maximum over every anchor: filtering never grows a set,
-    so that anchor's size is at most its count, at most the largest; and every later anchor's count
-    is no larger than this one's. An anchor whose members cannot form a one-to-one set larger than
-    the largest so far, or whose filtered set is sure to hold an excluded pair, is not filtered
-    (``rival_free_size``): it cannot raise the maximum either."""
+    """The largest of ``best`` and the filtered sizes of ``anchors`` (by decreasing card(L_ij)
+    ``count``) whose sets hold no ``excluded`` pair (``rival_free_size``), visiting them in order
+    and stopping at the first whose count is at most the largest so far. Same answer as the
+    maximum over every anchor: filtering never grows a set, so that anchor's size is at most its
+    count, at most the largest; and every later anchor's count is no larger than this one's. An
+    anchor whose members cannot form a one-to-one set larger than the largest so far, or whose
+    filtered set is sure to hold an excluded pair, is not filtered (``rival_free_size``): it cannot
+    raise the maximum either."""
     work = work_arrays(width, n_ego, n_cav, len(excluded))
     for n in range(len(anchors)):
         if count[anchors[n]] <= best:
@@ -204,10 +205,9 @@ def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, ru
     anchors = np.asarray(anchors, dtype=np.int64)
     if len(anchors) == 0:
         return np.zeros(0, np.int64)
-    nowhere = np.zeros(len(L.count), bool)
     with listing_held(L):
-        return filtered_sizes_of(anchors, L.width, nowhere, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
-                                                                              distance_limit))
+        return filtered_sizes_of(anchors, L.width, *kernel_arguments(L, voted_by, rule, ego_xy, cav_xy,
+                                                                     distance_limit))
 
 
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
@@ -284,9 +284,8 @@ def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: 
     if len(found) == k:
         rest = rest[L.count[rest] > len(found[-1][1])]
     if len(rest) > 0:
-        nowhere = np.zeros(len(L.count), bool)
         with listing_held(L):
-            sizes = np.concatenate([visit.sizes[:known], filtered_sizes_of(rest, L.width, nowhere, *visit.common)])
+            sizes = np.concatenate([visit.sizes[:known], filtered_sizes_of(rest, L.width, *visit.common)])
         anchors = np.concatenate([order[:known], rest])
         found = _distinct_largest(anchors, sizes, first, k, lambda index: visit.members_at(index) if index < known
                                   else filtered_members(int(anchors[index]), L, visit.common))

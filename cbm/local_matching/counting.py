@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..context import Context
-from ..reuse import ran, recall, remember
+from ..reuse import kept_key, ran, recall, remember
 from .candidates import CandidateSets, member_lookup
 from .distances import HEADROOM, Distances, counted, distances_within
 from .join import VoteRows, run_join
@@ -75,8 +75,8 @@ def scanned_count(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np
         return None
     found = recall(kept, "distances", (sigma1_rad,))
     if found is None or (found.anchor is not None and found.radius < sigma2):
-        earlier = kept.get("count")
-        if earlier is None or earlier[0][0] != sigma1_rad:
+        earlier = kept_key(kept, "count")
+        if earlier is None or earlier[0] != sigma1_rad:
             return None
         radius = HEADROOM * sigma2
         found = distances_within(ego, cav, ego_heading, signs, sigma1_rad, radius, kept)

@@ -16,7 +16,7 @@ import numba
 import numpy as np
 
 from ..context import Context
-from .grid import cells, heading_groups
+from .grid import cells, heading_groups, l1_and_angle
 from .join import ANCHORS_PER_CHUNK, POOL, THREADS, _at_once, _by_column, _grids, _grown, _widest_column
 
 HEADROOM = 1.5
@@ -90,11 +90,8 @@ def _accepted(ego_ids, ego_vectors, per_anchor, signs, u0, v0, cell, nx, ny, sta
             sign_row, z2 = signs[i], zx * zx + zy * zy
             for k in range(k0, k1 + 1):
                 for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-                    wx, wy, b, check = gx[v], gy[v], g_anchor[v], g_check[v]
-                    dot = zx * wx + zy * wy
-                    squared_norms = z2 * (wx * wx + wy * wy)
-                    l1 = abs(zx - wx) + abs(zy - wy)
-                    angle = (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms)
+                    b, check = g_anchor[v], g_check[v]
+                    l1, angle = l1_and_angle(zx, zy, z2, gx[v], gy[v], cos2_sigma1)
                     anchor[n], distance[n] = i * n_cav + b, l1
                     n += (l1 <= radius) & angle & ((check == 0) | ((check > 0) == (sign_row[b] > 0)))
     return anchor[:n].copy(), distance[:n].copy(), True

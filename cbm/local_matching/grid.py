@@ -187,6 +187,15 @@ def accepts(zx, zy, wx, wy, cos2_sigma1, radius):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
+def l1_and_angle(zx, zy, z2, wx, wy, cos2_sigma1):
+    """Eq. 7 for z and w without a branch: their L1 distance, and whether the angle test accepts
+    them (as in ``accepts``; ``z2`` is |z|^2)."""
+    dot = zx * wx + zy * wy
+    squared_norms = z2 * (wx * wx + wy * wy)
+    return abs(zx - wx) + abs(zy - wy), (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms)
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
 def cells(zu, zv, radius, u0, v0, cell, nx, ny):
     """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
     the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y. No column

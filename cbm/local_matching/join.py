@@ -18,7 +18,7 @@ import numba
 import numpy as np
 
 from ..context import Context
-from .grid import build_grid, cells, column, group_signs, heading_groups
+from .grid import build_grid, cells, column, group_signs, heading_groups, l1_and_angle
 
 PARALLEL_FROM = 20_000
 """Context vectors per agent from which the joins are split over threads."""
@@ -143,11 +143,7 @@ def _query(zx, zy, i, slot_row, signs, k0, k1, c0, c1, ny, start, gx, gy, g_anch
     z2 = zx * zx + zy * zy
     for k in range(k0, k1 + 1):
         for v in range(start[k * ny + c0], start[k * ny + c1 + 1]):
-            wx, wy = gx[v], gy[v]
-            dot = zx * wx + zy * wy
-            squared_norms = z2 * (wx * wx + wy * wy)
-            l1 = abs(zx - wx) + abs(zy - wy)
-            angle = (squared_norms > 0.0) & (dot * dot >= cos2_sigma1 * squared_norms)
+            l1, angle = l1_and_angle(zx, zy, z2, gx[v], gy[v], cos2_sigma1)
             slots[slot_row + g_slot[v]] += (l1 <= sigma2) & angle
             if (l1 <= sigma3) & angle:
                 b = g_anchor[v]
