@@ -85,12 +85,12 @@ def rival_free_size(anchor, beyond, excluded, signs, lookup, listing, voted_star
     """card(L^(2)) of one anchor, 0 where the distance limit rejects it, its set holds an
     ``excluded`` pair or it cannot exceed ``beyond`` (``rival_bound``, or the bound the listing keeps
     from a larger or equal sigma2: then it is not filtered, nor listed)."""
-    bound, listed_sigma2, writable = listing[6], listing[7], listing[8]
+    bound, listed_sigma2 = listing[6], listing[7]
     if len(bound) and 0 <= bound[anchor] <= beyond:
         return 0
     listed = list_set(anchor, signs, lookup, listing, n_cav, work)
     most, holds_excluded = rival_bound(work[5], work[6], work[7], listed, excluded, rule != PAPER, work[1], work[2])
-    if writable and len(bound) and lookup[-1] == listed_sigma2:
+    if len(bound) and lookup[-1] == listed_sigma2:
         bound[anchor] = most
     if most <= beyond or holds_excluded:
         return 0

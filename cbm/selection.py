@@ -35,9 +35,12 @@ from .filtered import (
 )
 from .local_matching import POOL, THREADS, CandidateSets
 
-RIVAL_CHUNK = 128
+RIVAL_FIRST = 64
+"""Anchors the runner-up search visits on the calling thread before it hands any to the threads:
+most searches end within them."""
+RIVAL_CHUNK = 512
 """Anchors handed to the threads at a time in the runner-up search."""
-RIVAL_THREADS_FROM = 250_000
+RIVAL_THREADS_FROM = 10_000
 """Candidate pairs (the chunk's card(L_ij) summed) from which a chunk's halves run on two threads;
 below, handing them over costs more than it saves, and the calling thread runs the chunk."""
 
@@ -115,22 +118,27 @@ def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_s
 
 
 @numba.njit(cache=True, nogil=True)
-def _largest_rival(anchors, count, best, width, excluded, signs, lookup, listing, voted_start, voted_by, rule, n_ego,
-                   n_cav, centres, limit):
-    """The largest of ``best`` and the filtered sizes of ``anchors`` (by decreasing card(L_ij)
-    ``count``) whose sets hold no ``excluded`` pair (``rival_free_size``), visiting them in order
-    and stopping at the first whose count is at most the largest so far. Same answer as the
-    maximum over every anchor: filtering never grows a set, so that anchor's size is at most its
-    count, at most the largest; and every later anchor's count is no larger than this one's. An
-    anchor whose members cannot form a one-to-one set larger than the largest so far, or whose
-    filtered set is sure to hold an excluded pair, is not filtered (``rival_free_size``): it cannot
-    raise the maximum either."""
+def _largest_rival(anchors, part, parts, count, best, shared, width, excluded, signs, lookup, listing, voted_start,
+                   voted_by, rule, n_ego, n_cav, centres, limit):
+    """The largest of ``best`` and the filtered sizes of ``anchors[part::parts]`` (by decreasing
+    card(L_ij) ``count``) whose sets hold no ``excluded`` pair (``rival_free_size``), visiting them in
+    order and stopping at the first whose count is at most the largest so far. ``shared[0]`` is the
+    largest size the other parts have found: read before each anchor, raised when this part finds a
+    larger one. Same answer as the maximum over every anchor: every value read there is a size some
+    anchor reaches, an anchor whose count is at most it cannot raise the maximum (filtering never
+    grows a set), and every later anchor's count is no larger. An anchor whose members cannot form a
+    one-to-one set larger than the largest so far, or whose filtered set is sure to hold an excluded
+    pair, is not filtered (``rival_free_size``): it cannot raise the maximum either."""
     work = work_arrays(width, n_ego, n_cav, len(excluded))
-    for n in range(len(anchors)):
+    for n in range(part, len(anchors), parts):
+        best = max(best, shared[0])
         if count[anchors[n]] <= best:
             break
-        best = max(best, rival_free_size(anchors[n], best, excluded, signs, lookup, listing, voted_start, voted_by,
-                                         rule, n_ego, n_cav, centres, limit, work))
+        size = rival_free_size(anchors[n], best, excluded, signs, lookup, listing, voted_start, voted_by, rule,
+                               n_ego, n_cav, centres, limit, work)
+        if size > best:
+            best = size
+            shared[0] = max(shared[0], size)
     return best
 
 
@@ -141,24 +149,28 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
 
     Without the paper's rule an anchor pair is alone in its row and column of its own set, so it
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
-    The anchors go in chunks whose halves run on two threads (a small chunk runs on the calling
-    thread); each run stops at the first anchor whose card(L_ij) cannot beat the largest size it has
-    seen (``_largest_rival``), so the largest of the halves' answers is the chunk's."""
+    The anchors go in chunks (the first ``RIVAL_FIRST`` anchors, then ``RIVAL_CHUNK`` at a time),
+    each visited by ``_largest_rival`` on the calling thread or, from ``RIVAL_THREADS_FROM``
+    candidate pairs, in two interleaved parts at once (the second on ``POOL``) that share the largest
+    size found; the listing then keeps no new anchor (only one thread may add to it)."""
     rule = common[RULE]
-    for chunk in range(first, len(order), RIVAL_CHUNK):
-        anchors = order[chunk:chunk + RIVAL_CHUNK]
+    ends = range(first + RIVAL_FIRST, len(order) + RIVAL_CHUNK, RIVAL_CHUNK)
+    for chunk, end in zip([first, *ends], ends):
+        anchors = order[chunk:end]
         anchors = anchors[L.count[anchors] > runner_up]
         if len(anchors) == 0:
             break
         if rule != PAPER:
             anchors = anchors[~in_winner[anchors]]
+        shared = np.array([runner_up], np.int64)
         if int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
-            runner_up = int(_largest_rival(anchors, L.count, runner_up, L.width, in_winner, *common))
+            runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
         reading = (*common[:LISTING], read_only(common[LISTING]), *common[LISTING + 1:])
-        jobs = [POOL.submit(_largest_rival, part, L.count, runner_up, L.width, in_winner, *reading)
-                for part in np.array_split(anchors, THREADS) if len(part)]
-        runner_up = max(int(job.result()) for job in jobs)
+        jobs = [POOL.submit(_largest_rival, anchors, part, THREADS, L.count, runner_up, shared, L.width, in_winner,
+                            *reading) for part in range(1, THREADS)]
+        mine = int(_largest_rival(anchors, 0, THREADS, L.count, runner_up, shared, L.width, in_winner, *reading))
+        runner_up = max([mine] + [int(job.result()) for job in jobs])
     return runner_up
 
 
