@@ -17,7 +17,7 @@ import numpy as np
 
 from ..context import Context
 from .grid import cells, heading_groups, l1_and_angle
-from .join import ANCHORS_PER_CHUNK, POOL, THREADS, _at_once, _by_column, _grids, _grown, _widest_column
+from .join import ANCHORS_PER_CHUNK, POOL, THREADS, _at_once, _by_column, _fresh_grids, _grids, _grown, _widest_column
 
 HEADROOM = 1.5
 """The radius kept, as a factor of the sigma2 that asked for it: room for the next edits upward."""
@@ -49,6 +49,7 @@ def distances_within(ego: Context, cav: Context, ego_heading: np.ndarray, signs:
     groups = heading_groups(ego_heading, signs)
     parallel = len(ego.vectors) >= PARALLEL_FROM
     run = POOL.submit if parallel else _at_once
+    _fresh_grids(kept, radius)
     grids = _grids(groups, 0, cav, signs, radius, run, kept)
     cos2_sigma1 = math.cos(sigma1_rad) ** 2
     jobs = [run(_accepted, part, ego.vectors, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,

@@ -4,13 +4,14 @@ Testing all (Ne Nc)^2 quadruples is what makes the released code dense. Here the
 output-sensitive and never holds the accepted quadruples of eq. 8: each ego context vector visits
 only the cells of the grid (``grid.VectorGrid``) its L1 square covers, and counts card(L_ij) for
 every anchor; it lists only the quadruples within sigma3, the voting sets of the consensus. It runs
-in parallel over parts of each heading group, each part owning its anchors' counters, and its lists
-are joined in a fixed order, so nothing depends on the threads.
+in parallel over the heading groups (or the parts of a single group), each owning its anchors'
+counters, and its lists are joined in a fixed order, so nothing depends on the threads.
 """
 from __future__ import annotations
 
 import ctypes
 import math
+import threading
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -21,7 +22,12 @@ from ..context import Context
 from .grid import build_grid, cells, column, group_signs, heading_groups, l1_and_angle
 
 PARALLEL_FROM = 20_000
-"""Context vectors per agent from which the joins are split over threads."""
+"""Context vectors per agent from which the join of a single heading group is split over threads."""
+GROUPS_APART_FROM = 5_000
+"""Context vectors per agent from which the heading groups are shared out between the threads, each
+group whole (its grid and its join): one hand-over and one wait in all. Splitting every group
+over the threads instead waits for the slower half of each group and of each pair of grids: 0.8x
+to 0.95x the time of local matching from 100 to 1000 objects per agent (``bench_steps.py``)."""
 THREADS = 2
 """Threads of ``POOL``: the cores of the machine the targets are set on."""
 ANCHORS_PER_CHUNK = 64
@@ -196,24 +202,54 @@ def _grown(values, n):
 def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndarray, sigma1_rad: float,
              radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
              kept: dict | None = None) -> list[VoteRows]:
-    """``_join`` group by group of ego headings. In parallel, ``THREADS`` groups' grids are built
-    at a time, then their ego objects are joined in parts; the votes come back as the parts'
-    ``VoteRows``, in a fixed order (not joined into one array: that would hold them twice).
-    The grids are built for ``radius`` (at least both thresholds); a negative ``sigma2`` counts
-    nothing (``count2`` is not read), a negative ``sigma3`` lists nothing. ``kept`` holds the grids
-    between calls on the same contexts: a grid serves any radius (every vector of the cells a window
-    covers is tested exactly), kept while its cells suit the radius."""
+    """``_join`` group by group of ego headings, each group's grid built and then joined. From
+    ``GROUPS_APART_FROM`` context vectors the groups are shared out between the threads
+    (``_groups_apart``); a single group is joined in parts on the threads from ``PARALLEL_FROM``.
+    The votes come back as the parts' ``VoteRows``, in a fixed order (not joined into one array:
+    that would hold them twice). The grids are built for ``radius`` (at least both thresholds); a
+    negative ``sigma2`` counts nothing (``count2`` is not read), a negative ``sigma3`` lists nothing.
+    ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
+    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
-    parallel = len(ego.vectors) >= PARALLEL_FROM
-    run = POOL.submit if parallel else _at_once
-    votes = []
-    for first in range(0, len(groups), THREADS if parallel else 1):
-        votes += _join_batch(groups[first:first + (THREADS if parallel else 1)], first, ego, cav, per_anchor, signs,
-                             sigma1_rad, radius, sigma2, sigma3, count2, kept, run)
+    _fresh_grids(kept, radius)
+    arguments = (ego, cav, per_anchor, signs, sigma1_rad, radius, sigma2, sigma3, count2, kept)
+    if len(groups) > 1 and len(ego.vectors) >= GROUPS_APART_FROM:
+        votes = _groups_apart(groups, arguments)
+    elif len(ego.vectors) >= PARALLEL_FROM:
+        votes = _join_batch(groups, 0, *arguments, POOL.submit)
+    else:
+        votes = [rows for part in _groups_joined(groups, range(len(groups)), arguments).values() for rows in part]
     if sum(part.rows.nbytes for part in votes) >= TRIM_FROM:
         _trim()
     return votes
+
+
+def _groups_joined(groups: list[np.ndarray], indices, arguments: tuple) -> dict[int, list[VoteRows]]:
+    """The votes of each heading group ``groups[k]``, k taken in turn from ``indices``: its grid
+    built (or taken from ``kept``) and joined on the calling thread."""
+    return {k: _join_batch([groups[k]], k, *arguments, _at_once) for k in indices}
+
+
+def _groups_apart(groups: list[np.ndarray], arguments: tuple) -> list[VoteRows]:
+    """The votes of every heading group, in the groups' order, the groups shared out whole between
+    the calling thread and one of ``POOL``'s: each takes the next group not yet taken when it is
+    done with one. The groups own disjoint ego objects, so their counters never meet."""
+    indices = iter(range(len(groups)))
+    taking = threading.Lock()
+
+    def taken():
+        while True:
+            with taking:
+                k = next(indices, None)
+            if k is None:
+                return
+            yield k
+
+    theirs = POOL.submit(_groups_joined, groups, taken(), arguments)
+    joined = _groups_joined(groups, taken(), arguments)
+    joined.update(theirs.result())
+    return [rows for k in range(len(groups)) for rows in joined[k]]
 
 
 def _find_trim():
@@ -260,13 +296,17 @@ def _submitted(group: np.ndarray, grid, ego: Context, per_anchor: int, signs: np
     return [run(_join, part, *common, np.empty(1024, dtype), bits) for part in parts if len(part)]
 
 
-def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
-           kept: dict | None) -> list:
-    """The grids of the heading groups ``batch`` (numbered from ``first``): those in ``kept`` when
-    they were built for a radius within ``REUSE_RADII`` of this one, the others built by ``run`` (and
-    put there)."""
+def _fresh_grids(kept: dict | None, radius: float) -> None:
+    """Empties ``kept``'s grids unless they were built for a radius within ``REUSE_RADII`` of this
+    one (before any thread reads them)."""
     if kept is not None and not radius / REUSE_RADII <= kept.get("grid_radius", -1.0) <= radius * REUSE_RADII:
         kept["grid_radius"], kept["grids"] = radius, {}
+
+
+def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray, radius: float, run,
+           kept: dict | None) -> list:
+    """The grids of the heading groups ``batch`` (numbered from ``first``): those in ``kept`` (left
+    there by ``_fresh_grids`` for this radius), the others built by ``run`` (and put there)."""
     known = {} if kept is None else kept["grids"]
     jobs = {first + k: run(build_grid, cav, group_signs(signs, g), radius)
             for k, g in enumerate(batch) if first + k not in known}

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 
 from cbm import CBMParams, se2
 from cbm.context import build_context, fold_heading, pair_signs
-from cbm.local_matching import count_candidates
+from cbm.local_matching import count_candidates, join
 from cbm.selection import by_count_descending
 from support.scenes import street_scene
 
@@ -28,9 +28,16 @@ def direct_sets(ego_context, cav_context, signs, n_ego, n_cav, sigma1, sigma2):
     return sets
 
 
+THREADING = {"one thread": (2**62, 2**62), "groups apart": (0, 2**62), "parts of a group": (2**62, 0)}
+"""The join's paths: (``GROUPS_APART_FROM``, ``PARALLEL_FROM``) that make this small scene take them."""
+
+
+@pytest.mark.parametrize("threading", list(THREADING))
 @pytest.mark.parametrize("heading", ["align", "fold"])
 @pytest.mark.parametrize("seed", [0, 1, 2])
-def test_counts_and_members_equal_the_direct_enumeration(seed, heading):
+def test_counts_and_members_equal_the_direct_enumeration(seed, heading, threading, monkeypatch):
+    monkeypatch.setattr(join, "GROUPS_APART_FROM", THREADING[threading][0])
+    monkeypatch.setattr(join, "PARALLEL_FROM", THREADING[threading][1])
     rng = np.random.default_rng(seed)
     world = street_scene(24, rng, extent=40.0)
     ego = world[rng.permutation(24)[:18]]
