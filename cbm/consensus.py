@@ -22,6 +22,11 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from .local_matching import POOL
+
+VOTES_APART_FROM = 200_000
+"""Vote rows from which ``voted_by_member`` counts and places them in two halves at once."""
+
 
 @dataclass(frozen=True)
 class PairSets:
@@ -77,11 +82,6 @@ def _place_by_member(rows, bits, n_cav, fill, values):
             fill[member] += 1
 
 
-def _place(part, fill: np.ndarray, values: np.ndarray) -> None:
-    """``_place_by_member`` of one ``VoteRows``."""
-    _place_by_member(part.rows, part.bits, part.n_cav, fill, values)
-
-
 @numba.njit(cache=True, nogil=True)
 def _place_own(has_set, fill, values):
     """Writes every anchor A with a quadruple last in its own group, (A, A) (each non-empty voting set
@@ -104,19 +104,69 @@ def voted_by_member(votes: list, n_pairs: int) -> PairSets:
     sort groups their quadruples by member (in row order), then adds (A, A) for every anchor A that
     has a quadruple (every non-empty voting set holds its own pair). The list is emptied part by
     part as the parts are placed, so the rows and their grouping are never held twice; the
-    groups' starts are moved along as they fill (no copy of them)."""
+    groups' starts are moved along as they fill (no copy of them). From ``VOTES_APART_FROM`` rows
+    the parts are counted and placed in two halves at once (``_grouped_apart``)."""
+    if len(votes) > 1 and sum(len(part.rows) for part in votes) >= VOTES_APART_FROM:
+        return _grouped_apart(votes, n_pairs)
     spare = np.zeros(n_pairs + 1, np.bool_)
     has_set, start = spare[:-1], np.zeros(n_pairs + 1, np.int64)
-    for part in votes:
-        _count_by_member(part.rows, part.bits, part.n_cav, spare, start)
+    _counted(votes, spare, start)
     start[0] = 0
     start[1:] += has_set
     np.cumsum(start, out=start)
     values = np.empty(start[n_pairs], np.int32)
-    while votes:
-        _place(votes.pop(0), start, values)
+    _placed(votes, start, values)
     _place_own(has_set, start, values)
     return PairSets(start=start, member=values)
+
+
+def _grouped_apart(votes: list, n_pairs: int) -> PairSets:
+    """``voted_by_member`` with the parts in two halves of about as many rows, each counted and then
+    placed on a thread of its own (the second on ``POOL``): the first half's quadruples of a member
+    go first in its group, the second's right after them, so the groups are the same as one pass's."""
+    halves = _halves(votes)
+    votes.clear()
+    counts = [(np.zeros(n_pairs + 1, np.bool_), np.zeros(n_pairs + 1, np.int64)) for _ in halves]
+    _both(_counted, *((half, *count) for half, count in zip(halves, counts)))
+    (spare, first), (other, start) = counts
+    has_set = spare[:-1] | other[:-1]
+    start[0] = 0
+    start[1:] += first[1:] + has_set
+    np.cumsum(start, out=start)
+    values = np.empty(start[n_pairs], np.int32)
+    fill = start.copy()
+    start[:-1] += first[1:]
+    del first
+    _both(_placed, (halves[0], fill, values), (halves[1], start, values))
+    _place_own(has_set, start, values)
+    return PairSets(start=start, member=values)
+
+
+def _halves(votes: list) -> tuple[list, list]:
+    """The parts in order, cut into two lists where the rows before the cut first reach half of them."""
+    ends = np.cumsum([len(part.rows) for part in votes])
+    cut = min(max(int(np.searchsorted(ends, ends[-1] / 2)) + 1, 1), len(votes) - 1)
+    return votes[:cut], votes[cut:]
+
+
+def _both(function, mine: tuple, theirs: tuple) -> None:
+    """``function(*mine)`` on the calling thread while ``function(*theirs)`` runs on ``POOL``."""
+    job = POOL.submit(function, *theirs)
+    function(*mine)
+    job.result()
+
+
+def _counted(parts: list, spare: np.ndarray, start: np.ndarray) -> None:
+    """``_count_by_member`` of every part."""
+    for part in parts:
+        _count_by_member(part.rows, part.bits, part.n_cav, spare, start)
+
+
+def _placed(parts: list, fill: np.ndarray, values: np.ndarray) -> None:
+    """``_place_by_member`` of every part, in order, each part dropped from ``parts`` once placed."""
+    while parts:
+        part = parts.pop(0)
+        _place_by_member(part.rows, part.bits, part.n_cav, fill, values)
 
 
 RULE_CODES = {None: 0, "paper": 1, "released": 2}

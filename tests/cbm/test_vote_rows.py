@@ -2,6 +2,7 @@
 import numpy as np
 
 from cbm import CBMParams
+from cbm import consensus
 from cbm.consensus import voted_by_member
 from cbm.local_matching import join
 from cbm.local_matching.counting import counts_and_votes
@@ -30,3 +31,18 @@ def test_the_wide_packing_gives_the_same_voting_sets(monkeypatch):
 def test_the_narrow_packing_holds_objects_up_to_15_bits():
     assert join.packing(2**15 - 1, 2**15 - 1) == (np.int32, 16)
     assert join.packing(2**15, 3) == (np.int64, 32)
+
+
+
+def test_the_voting_sets_grouped_in_two_halves_at_once_are_the_same_as_in_one_pass(monkeypatch):
+    ego, cav, init = scene(60)
+    params = CBMParams(sigma3=2.0)
+    monkeypatch.setattr(consensus, "VOTES_APART_FROM", 2**62)
+    one_pass = voting_sets(ego, cav, init, params)
+    cut, halves = consensus._halves, []
+    monkeypatch.setattr(consensus, "VOTES_APART_FROM", 0)
+    monkeypatch.setattr(consensus, "_halves", lambda votes: halves.append(len(votes)) or cut(votes))
+    apart = voting_sets(ego, cav, init, params)
+    assert halves[0] > 2 and one_pass.member.size > len(ego)
+    np.testing.assert_array_equal(apart.start, one_pass.start)
+    np.testing.assert_array_equal(apart.member, one_pass.member)
