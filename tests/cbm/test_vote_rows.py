@@ -1,8 +1,7 @@
-"""The join's packed votes (``VoteRows``) give the same voting sets in either packing."""
+"""The join's packed votes (``VoteRows``) give the same voting sets in either packing, and grouped in one pass or in two halves at once."""
 import numpy as np
 
-from cbm import CBMParams
-from cbm import consensus
+from cbm import CBMParams, consensus
 from cbm.consensus import voted_by_member
 from cbm.local_matching import join
 from cbm.local_matching.counting import counts_and_votes
