@@ -1,4 +1,5 @@
-"""The join's packed votes (``VoteRows``) give the same voting sets in either packing, and grouped in one pass or in two halves at once."""
+"""The join's packed votes (``VoteRows``) give the same voting sets in either packing, and grouped
+in one pass or in two halves at once."""
 import numpy as np
 
 from cbm import CBMParams, consensus
