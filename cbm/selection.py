@@ -12,6 +12,7 @@ least-squares rigid fit of the set, then the set's centroids (see ``tie_break_ke
 """
 from __future__ import annotations
 
+from concurrent.futures import Future
 from dataclasses import dataclass
 
 import numba
@@ -40,6 +41,11 @@ RIVAL_FIRST = 64
 most searches end within them."""
 RIVAL_CHUNK = 512
 """Anchors handed to the threads at a time in the runner-up search."""
+RIVAL_APART = (5_000, 40_000)
+"""Ego x CAV pairs from and below which, without a listing, ``select`` starts the runner-up search
+on ``POOL`` (on that one thread) and returns: the caller verifies the winner meanwhile. Below, the
+hand-over costs more than it saves (and the warm-up's small scene never waits for ``POOL`` while it
+compiles); from the upper end the search is better split over both threads."""
 RIVAL_THREADS_FROM = 10_000
 """Candidate pairs (the chunk's card(L_ij) summed) from which a chunk's halves run on two threads;
 below, handing them over costs more than it saves, and the calling thread runs the chunk."""
@@ -76,10 +82,25 @@ class Selection:
     """(K, 2) (ego index, CAV index) of the winning set, sorted by ego index."""
     candidate_count: int
     """card(L_ij) of the winning anchor before filtering (eq. 8)."""
-    runner_up_count: int
-    """Largest set among anchors that share no pair with the winner."""
+    rival: Future | Found
+    """The runner-up search (``strongest_rival``): found, or running on ``POOL`` (``RIVAL_APART``)."""
     visit: Visit | None = None
     """The visit's filtered sets (None when every set is empty)."""
+
+    @property
+    def runner_up_count(self) -> int:
+        """Largest set among anchors that share no pair with the winner (waits for the search)."""
+        return self.rival.result()
+
+
+@dataclass(frozen=True)
+class Found:
+    """A runner-up search's answer, read like that of a search still running (``Future.result``)."""
+
+    count: int
+
+    def result(self) -> int:
+        return self.count
 
 
 @numba.njit(cache=True)
@@ -143,7 +164,7 @@ def _largest_rival(anchors, part, parts, count, best, shared, width, excluded, s
 
 
 def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: int, in_winner: np.ndarray,
-                    common: tuple) -> int:
+                    common: tuple, threads: bool = True) -> int:
     """Largest filtered set sharing no pair with the winner, among anchors from ``order[first]`` on
     whose candidate set could beat ``runner_up``.
 
@@ -151,8 +172,8 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
     The anchors go in chunks (the first ``RIVAL_FIRST`` anchors, then ``RIVAL_CHUNK`` at a time),
     each visited by ``_largest_rival`` on the calling thread or, from ``RIVAL_THREADS_FROM``
-    candidate pairs and without a listing to keep them in, in two interleaved parts at once (the
-    second on ``POOL``) that share the largest size found. With a listing (the app's edits) the
+    candidate pairs, with ``threads`` and without a listing to keep them in, in two interleaved
+    parts at once (the second on ``POOL``) that share the largest size found. With a listing (the app's edits) the
     calling thread visits them, adding each anchor it lists to the listing, which later edits read
     (only one thread may add to it): listed on two threads and not kept, a sigma2 edit on
     ``synthetic:300``'s frame took 1.2x as long."""
@@ -166,7 +187,7 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if rule != PAPER:
             anchors = anchors[~in_winner[anchors]]
         shared = np.array([runner_up], np.int64)
-        if L.listing is not None or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
+        if not threads or L.listing is not None or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
         reading = (*common[:LISTING], read_only(common[LISTING]), *common[LISTING + 1:])
@@ -229,7 +250,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
            distance_limit: float) -> Selection:
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
     n_ego, n_cav = len(ego_xy), len(cav_xy)
-    empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, runner_up_count=0)
+    empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, rival=Found(0))
     candidate_count = L.count
     if n_ego * n_cav == 0 or not candidate_count.any():
         return empty
@@ -246,9 +267,13 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
         in_winner[winner] = True
         set_of_member = np.repeat(np.arange(len(sizes)), sizes)
         shares = np.bincount(set_of_member, weights=in_winner[members], minlength=len(sizes)) > 0
-        runner_up = strongest_rival(order, stop, L, int(sizes[~shares].max(initial=0)), in_winner, common)
+        search = (order, stop, L, int(sizes[~shares].max(initial=0)), in_winner, common)
+        if L.listing is None and RIVAL_APART[0] <= n_ego * n_cav < RIVAL_APART[1]:
+            rival = POOL.submit(strongest_rival, *search, threads=False)
+        else:
+            rival = Found(strongest_rival(*search))
     return Selection(anchor=int(visited[k_win]), pairs=_as_pairs(np.sort(winner), n_cav),
-                     candidate_count=int(candidate_count[visited[k_win]]), runner_up_count=runner_up,
+                     candidate_count=int(candidate_count[visited[k_win]]), rival=rival,
                      visit=Visit(order, sizes, offsets, members, common))
 
 
