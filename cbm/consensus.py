@@ -123,23 +123,32 @@ def voted_by_member(votes: list, n_pairs: int) -> PairSets:
 def _grouped_apart(votes: list, n_pairs: int) -> PairSets:
     """``voted_by_member`` with the parts in two halves of about as many rows, each counted and then
     placed on a thread of its own (the second on ``POOL``): the first half's quadruples of a member
-    go first in its group, the second's right after them, so the groups are the same as one pass's."""
+    go first in its group, the second's right after them, so the groups are the same as one pass's.
+    The first half's counts become where the second half's quadruples go (``_after_first``): one
+    array more than one pass holds (8 MB at 1000 objects per agent)."""
     halves = _halves(votes)
     votes.clear()
     counts = [(np.zeros(n_pairs + 1, np.bool_), np.zeros(n_pairs + 1, np.int64)) for _ in halves]
     _both(_counted, *((half, *count) for half, count in zip(halves, counts)))
-    (spare, first), (other, start) = counts
+    (spare, behind), (other, start) = counts
     has_set = spare[:-1] | other[:-1]
     start[0] = 0
-    start[1:] += first[1:] + has_set
+    start[1:] += behind[1:] + has_set
     np.cumsum(start, out=start)
     values = np.empty(start[n_pairs], np.int32)
-    fill = start.copy()
-    start[:-1] += first[1:]
-    del first
-    _both(_placed, (halves[0], fill, values), (halves[1], start, values))
-    _place_own(has_set, start, values)
-    return PairSets(start=start, member=values)
+    _after_first(start, behind)
+    _both(_placed, (halves[0], start, values), (halves[1], behind, values))
+    _place_own(has_set, behind, values)
+    return PairSets(start=behind, member=values)
+
+
+@numba.njit(cache=True, nogil=True)
+def _after_first(start, counts):
+    """``counts[m + 1]`` (the first half's quadruples of member m) turned in place into where the
+    second half's go in the groups that begin at ``start``: ``start[m] + counts[m + 1]``."""
+    for m in range(len(start) - 1):
+        counts[m] = start[m] + counts[m + 1]
+    counts[-1] = start[-1]
 
 
 def _halves(votes: list) -> tuple[list, list]:

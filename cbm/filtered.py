@@ -115,8 +115,8 @@ def filtered_sizes_of(anchors, width, signs, lookup, listing, voted_start, voted
 
 def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray,
                      cav_xy: np.ndarray, distance_limit: float) -> tuple:
-    """The arguments the visiting kernels share, after their own (``LISTING``, ``RULE``, ``N_CAV``:
-    where the listing's arguments, the rule and Nc are). The kernels add the anchors they list to
+    """The arguments the visiting kernels share, after their own (``RULE``, ``N_CAV``: where the rule
+    and Nc are). The kernels add the anchors they list to
     the listing: the caller holds its lock (``listing_held``)."""
     centres = (np.ascontiguousarray(ego_xy, dtype=float), np.ascontiguousarray(cav_xy, dtype=float))
     listing = (NO_LISTING if L.listing is None else L.listing).arguments()
@@ -124,13 +124,7 @@ def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego
             centres, float(distance_limit))
 
 
-LISTING, RULE, N_CAV = 2, 5, 7
-
-
-def read_only(listing: tuple) -> tuple:
-    """``Listing.arguments`` that list the anchors not in the listing without adding them (for
-    kernels running on two threads at once)."""
-    return (*listing[:-1], False)
+RULE, N_CAV = 5, 7
 
 
 def listing_held(L: CandidateSets):

@@ -21,7 +21,6 @@ import numpy as np
 from .consensus import PairSets
 from .estimate import residuals, weighted_procrustes
 from .filtered import (
-    LISTING,
     N_CAV,
     PAPER,
     RULE,
@@ -30,7 +29,6 @@ from .filtered import (
     kernel_arguments,
     list_set,
     listing_held,
-    read_only,
     rival_free_size,
     work_arrays,
 )
@@ -190,10 +188,9 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if not threads or L.listing is not None or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
-        reading = (*common[:LISTING], read_only(common[LISTING]), *common[LISTING + 1:])
         jobs = [POOL.submit(_largest_rival, anchors, part, THREADS, L.count, runner_up, shared, L.width, in_winner,
-                            *reading) for part in range(1, THREADS)]
-        mine = int(_largest_rival(anchors, 0, THREADS, L.count, runner_up, shared, L.width, in_winner, *reading))
+                            *common) for part in range(1, THREADS)]
+        mine = int(_largest_rival(anchors, 0, THREADS, L.count, runner_up, shared, L.width, in_winner, *common))
         runner_up = max([mine] + [int(job.result()) for job in jobs])
     return runner_up
 

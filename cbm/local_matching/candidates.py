@@ -139,11 +139,10 @@ class Listing:
     runner-up search's bound, ``cbm.selection``)."""
     lock: threading.RLock = field(default_factory=threading.RLock, compare=False)
 
-    def arguments(self, writable: bool = True) -> tuple:
-        """``listed_into``'s ``listing`` argument (for calls at a sigma2 up to ``self.sigma2``);
-        ``writable`` False: anchors not yet listed are listed but not kept (for threads running at once)."""
-        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.bound, self.sigma2,
-                writable)
+    def arguments(self) -> tuple:
+        """``listed_into``'s ``listing`` argument (for calls at a sigma2 up to ``self.sigma2``): only
+        one thread at a time may list into it (``lock``)."""
+        return (self.at, self.length, self.ego, self.cav, self.distance, self.fill, self.bound, self.sigma2)
 
 
 NO_LISTING = Listing(0.0, 1, np.zeros(0, np.int64), np.zeros(0, np.int32), np.zeros(0, np.int32),

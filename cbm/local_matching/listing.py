@@ -40,8 +40,8 @@ def listing_for(kept: dict | None, sigma1_rad: float, sigma2: float, count2: np.
 def listed_into(i, j, sign, lookup, listing, out, ego_of, cav_of, distance):
     """The members of L_ij at the sigma2 of ``lookup`` (``members_into``, same members in the same
     order), from ``listing`` (``Listing.arguments``) when the anchor is in it, else listed at the
-    listing's sigma2 (kept in it while it has room and ``writable``) and filtered to the call's."""
-    at, length, kept_ego, kept_cav, kept_distance, fill, _, listed_sigma2, writable = listing
+    listing's sigma2 (kept in it while it has room) and filtered to the call's."""
+    at, length, kept_ego, kept_cav, kept_distance, fill, _, listed_sigma2 = listing
     e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav, cos2_sigma1, sigma2 = lookup
     a = i * n_cav + j
     if len(at) == 0:
@@ -50,7 +50,7 @@ def listed_into(i, j, sign, lookup, listing, out, ego_of, cav_of, distance):
         size = members_into(i, j, sign, e_key, ex, ey, e_member, per_ego, c_key, cx, cy, c_member, per_cav, n_cav,
                             cos2_sigma1, listed_sigma2, out, ego_of, cav_of, distance)
         kept = max(size - 1, 0)
-        if writable and fill[0] + kept <= len(kept_ego):
+        if fill[0] + kept <= len(kept_ego):
             at[a], length[a] = fill[0], kept
             for k in range(kept):
                 kept_ego[fill[0] + k], kept_cav[fill[0] + k] = ego_of[k], cav_of[k]

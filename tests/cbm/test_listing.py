@@ -89,13 +89,6 @@ def test_a_full_listing_lists_again_what_it_has_no_room_for(monkeypatch):
     assert_same_listing(narrow, narrow.listing.arguments())
 
 
-def test_read_only_arguments_list_without_keeping():
-    sets = candidate_sets("street", 3.0, {})
-    arguments = (*sets.listing.arguments()[:-1], False)
-    assert_same_listing(sets, arguments)
-    assert sets.listing.fill[0] == 0 and not np.any(sets.listing.at >= 0)
-
-
 def test_without_kept_inputs_nothing_is_listed_to_keep():
     sets = candidate_sets("street", 3.0, None)
     assert sets.listing is None
