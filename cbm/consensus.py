@@ -97,16 +97,19 @@ def _place_own(has_set, fill, values):
     fill[0] = 0
 
 
-def voted_by_member(votes: list, n_pairs: int) -> PairSets:
+def voted_by_member(votes: list, n_pairs: int, halves: bool | None = None) -> PairSets:
     """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m.
 
     ``votes`` are the join's parts (``cbm.local_matching.join.VoteRows``), in order; a counting
     sort groups their quadruples by member (in row order), then adds (A, A) for every anchor A that
     has a quadruple (every non-empty voting set holds its own pair). The list is emptied part by
     part as the parts are placed, so the rows and their grouping are never held twice; the
-    groups' starts are moved along as they fill (no copy of them). From ``VOTES_APART_FROM`` rows
-    the parts are counted and placed in two halves at once (``_grouped_apart``)."""
-    if len(votes) > 1 and sum(len(part.rows) for part in votes) >= VOTES_APART_FROM:
+    groups' starts are moved along as they fill (no copy of them). With ``halves`` (by default from
+    ``VOTES_APART_FROM`` rows) the parts are counted and placed in two halves at once
+    (``_grouped_apart``)."""
+    if halves is None:
+        halves = sum(len(part.rows) for part in votes) >= VOTES_APART_FROM
+    if halves and len(votes) > 1:
         return _grouped_apart(votes, n_pairs)
     spare = np.zeros(n_pairs + 1, np.bool_)
     has_set, start = spare[:-1], np.zeros(n_pairs + 1, np.int64)

@@ -25,16 +25,17 @@ from pathlib import Path
 import numpy as np
 
 from . import se2
-from .consensus import PairSets
+from .consensus import PairSets, voted_by_member
 from .context import build_context, fold_heading, pair_signs
 from .estimate import robust_fit
 from .hypotheses import evidence, same_pose
 from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
+from .local_matching.counting import counts_and_votes
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
 from .reassociate import gated_assignment
-from .reuse import Reuse
+from .reuse import Reuse, prepare
 from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
@@ -97,9 +98,14 @@ def sigma2_edit() -> None:
 
 
 def compile_matching() -> None:
-    """Compile steps 1-4 and the voting sets (context, the join, the grouping, the counts of a
-    sigma2 edit) with first calls."""
+    """Compile steps 1-4 and the voting sets (context, the join, the grouping in one pass and in
+    two halves, the counts of a sigma2 edit) with first calls."""
     sigma2_edit()
+    ego, cav, init, params = checked_inputs(*scene(), CBMParams())
+    ready = prepare(ego, cav, init, params.heading)
+    _, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
+                                params.sigma1_rad, params.sigma2, params.sigma3)
+    voted_by_member(votes, ready.signs.size, halves=True)
 
 
 def compile_selection() -> None:

@@ -2,7 +2,7 @@
 in one pass or in two halves at once."""
 import numpy as np
 
-from cbm import CBMParams, consensus
+from cbm import CBMParams
 from cbm.consensus import voted_by_member
 from cbm.local_matching import join
 from cbm.local_matching.counting import counts_and_votes
@@ -34,15 +34,18 @@ def test_the_narrow_packing_holds_objects_up_to_15_bits():
 
 
 
+
 def test_the_voting_sets_grouped_in_two_halves_at_once_are_the_same_as_in_one_pass(monkeypatch):
     ego, cav, init = scene(60)
     params = CBMParams(sigma3=2.0)
-    monkeypatch.setattr(consensus, "VOTES_APART_FROM", 2**62)
-    one_pass = voting_sets(ego, cav, init, params)
-    cut, halves = consensus._halves, []
-    monkeypatch.setattr(consensus, "VOTES_APART_FROM", 0)
-    monkeypatch.setattr(consensus, "_halves", lambda votes: halves.append(len(votes)) or cut(votes))
-    apart = voting_sets(ego, cav, init, params)
-    assert halves[0] > 2 and one_pass.member.size > len(ego)
-    np.testing.assert_array_equal(apart.start, one_pass.start)
-    np.testing.assert_array_equal(apart.member, one_pass.member)
+    ready = prepare(ego, cav, init, params.heading)
+    grouped = {}
+    for halves in (False, True):
+        _, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
+                                    params.sigma1_rad, params.sigma2, params.sigma3)
+        assert len(votes) > 2
+        grouped[halves] = voted_by_member(votes, ready.signs.size, halves=halves)
+        assert votes == []
+    assert grouped[False].member.size > len(ego)
+    np.testing.assert_array_equal(grouped[True].start, grouped[False].start)
+    np.testing.assert_array_equal(grouped[True].member, grouped[False].member)
