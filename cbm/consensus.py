@@ -23,6 +23,7 @@ import numba
 import numpy as np
 
 from .local_matching import POOL
+from .local_matching.join import TRIM_FROM, trim_freed
 
 VOTES_APART_FROM = 200_000
 """Vote rows from which ``voted_by_member`` counts and places them in two halves at once."""
@@ -106,11 +107,23 @@ def voted_by_member(votes: list, n_pairs: int, halves: bool | None = None) -> Pa
     part as the parts are placed, so the rows and their grouping are never held twice; the
     groups' starts are moved along as they fill (no copy of them). With ``halves`` (by default from
     ``VOTES_APART_FROM`` rows) the parts are counted and placed in two halves at once
-    (``_grouped_apart``)."""
+    (``_grouped_apart``). Large votes' memory, freed, goes back to the system (``trim_freed``)."""
+    nbytes = sum(part.rows.nbytes for part in votes)
+    grouped = _grouped_apart(votes, n_pairs) if _in_halves(votes, halves) else _grouped(votes, n_pairs)
+    if nbytes >= TRIM_FROM:
+        trim_freed()
+    return grouped
+
+
+def _in_halves(votes: list, halves: bool | None) -> bool:
+    """Whether ``voted_by_member`` groups the votes in two halves at once."""
     if halves is None:
         halves = sum(len(part.rows) for part in votes) >= VOTES_APART_FROM
-    if halves and len(votes) > 1:
-        return _grouped_apart(votes, n_pairs)
+    return halves and len(votes) > 1
+
+
+def _grouped(votes: list, n_pairs: int) -> PairSets:
+    """``voted_by_member`` in one pass."""
     spare = np.zeros(n_pairs + 1, np.bool_)
     has_set, start = spare[:-1], np.zeros(n_pairs + 1, np.int64)
     _counted(votes, spare, start)

@@ -37,7 +37,8 @@ REUSE_RADII = 2.0
 """A kept grid serves radii up to this factor from the one it was built for; beyond it, the cells
 would make a window scan many more vectors (or visit many more cells) than a new grid's."""
 TRIM_FROM = 32 * 2**20
-"""Bytes of votes from which a join hands its threads' freed memory back to the system (``_trim``)."""
+"""Bytes of votes from which a join, and their grouping, hand the memory freed back to the system
+(``trim_freed``)."""
 POOL = ThreadPoolExecutor(max_workers=THREADS, thread_name_prefix="cbm")
 """The threads the kernels (numba, without the interpreter lock) share."""
 
@@ -209,29 +210,34 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     that would hold them twice). The grids are built for ``radius`` (at least both thresholds); a
     negative ``sigma2`` counts nothing (``count2`` is not read), a negative ``sigma3`` lists nothing.
     ``kept`` holds the grids between calls on the same contexts: a grid serves any radius (every
-    vector of the cells a window covers is tested exactly), kept while its cells suit the radius."""
+    vector of the cells a window covers is tested exactly), kept while its cells suit the radius.
+    From ``PARALLEL_FROM`` each group is joined in ``THREADS`` parts, even by one thread: a part's
+    vote list, grown and then copied to fit, is then half a group's (whole groups on both threads
+    held 63 MB more at once at 1000 objects per agent, dense)."""
     per_anchor = max(len(ego_heading) - 1, 0)
     groups = heading_groups(ego_heading, signs)
     _fresh_grids(kept, radius)
     arguments = (ego, cav, per_anchor, signs, sigma1_rad, radius, sigma2, sigma3, count2, kept)
+    parts = THREADS if len(ego.vectors) >= PARALLEL_FROM else 1
     if len(groups) > 1 and len(ego.vectors) >= GROUPS_APART_FROM:
-        votes = _groups_apart(groups, arguments)
+        votes = _groups_apart(groups, arguments, parts)
     elif len(ego.vectors) >= PARALLEL_FROM:
-        votes = _join_batch(groups, 0, *arguments, POOL.submit)
+        votes = _join_batch(groups, 0, *arguments, POOL.submit, parts)
     else:
-        votes = [rows for part in _groups_joined(groups, range(len(groups)), arguments).values() for rows in part]
+        votes = [rows for part in _groups_joined(groups, range(len(groups)), arguments, 1).values() for rows in part]
     if sum(part.rows.nbytes for part in votes) >= TRIM_FROM:
-        _trim()
+        trim_freed()
     return votes
 
 
-def _groups_joined(groups: list[np.ndarray], indices, arguments: tuple) -> dict[int, list[VoteRows]]:
+def _groups_joined(groups: list[np.ndarray], indices, arguments: tuple, parts: int) -> dict[int, list[VoteRows]]:
     """The votes of each heading group ``groups[k]``, k taken in turn from ``indices``: its grid
-    built (or taken from ``kept``) and joined on the calling thread."""
-    return {k: _join_batch([groups[k]], k, *arguments, _at_once) for k in indices}
+    built (or taken from ``kept``) and joined on the calling thread, in ``parts`` parts of its ego
+    objects one after another."""
+    return {k: _join_batch([groups[k]], k, *arguments, _at_once, parts) for k in indices}
 
 
-def _groups_apart(groups: list[np.ndarray], arguments: tuple) -> list[VoteRows]:
+def _groups_apart(groups: list[np.ndarray], arguments: tuple, parts: int) -> list[VoteRows]:
     """The votes of every heading group, in the groups' order, the groups shared out whole between
     the calling thread and one of ``POOL``'s: each takes the next group not yet taken when it is
     done with one. The groups own disjoint ego objects, so their counters never meet."""
@@ -246,8 +252,8 @@ def _groups_apart(groups: list[np.ndarray], arguments: tuple) -> list[VoteRows]:
                 return
             yield k
 
-    theirs = POOL.submit(_groups_joined, groups, taken(), arguments)
-    joined = _groups_joined(groups, taken(), arguments)
+    theirs = POOL.submit(_groups_joined, groups, taken(), arguments, parts)
+    joined = _groups_joined(groups, taken(), arguments, parts)
     joined.update(theirs.result())
     return [rows for k in range(len(groups)) for rows in joined[k]]
 
@@ -263,37 +269,39 @@ def _find_trim():
 _MALLOC_TRIM = _find_trim()
 
 
-def _trim() -> None:
-    """Hands the memory the join's threads freed (grids, grown vote lists) back to the system: glibc
-    keeps it resident in the threads' arenas, where the voting sets' grouping, which comes next,
-    never reuses it."""
+def trim_freed() -> None:
+    """Hands the memory the threads freed (the join's grids and grown vote lists; the votes once
+    grouped) back to the system: glibc keeps it resident in the threads' arenas, where what comes
+    next never reuses it."""
     if _MALLOC_TRIM is not None:
         _MALLOC_TRIM(0)
 
 
 def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context, per_anchor: int,
                 signs: np.ndarray, sigma1_rad: float, radius: float, sigma2: float, sigma3: float,
-                count2: np.ndarray, kept: dict | None, run) -> list[VoteRows]:
-    """The votes of the heading groups ``batch`` (numbered from ``first``), their grids built (or
-    taken from ``kept``) here: without ``kept`` each is held only by its group's jobs, so it is
-    freed as soon as they have run, while the batch's later groups are joined."""
+                count2: np.ndarray, kept: dict | None, run, parts: int) -> list[VoteRows]:
+    """The votes of the heading groups ``batch`` (numbered from ``first``), each joined in ``parts``
+    parts of its ego objects, their grids built (or taken from ``kept``) here: without ``kept`` each
+    is held only by its group's jobs, so it is freed as soon as they have run, while the batch's
+    later groups are joined."""
     grids = _grids(batch, first, cav, signs, radius, run, kept)[::-1]
     n_ego, n_cav = signs.shape
     jobs = []
     for group in batch:
-        jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run)
+        jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run,
+                           parts)
     return [VoteRows(job.result(), n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
 
 
 def _submitted(group: np.ndarray, grid, ego: Context, per_anchor: int, signs: np.ndarray, sigma1_rad: float,
-               sigma2: float, sigma3: float, count2: np.ndarray, run) -> list:
-    """The jobs (``run``) joining the ego objects ``group`` against ``grid``: one per thread in parallel."""
+               sigma2: float, sigma3: float, count2: np.ndarray, run, parts: int) -> list:
+    """The jobs (``run``) joining the ego objects ``group`` against ``grid``, in ``parts`` parts."""
     dtype, bits = packing(*signs.shape)
     common = (ego.vectors, ego.member, per_anchor, signs, grid.u0, grid.v0, grid.cell, grid.nx, grid.ny,
               grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check, _slots(grid.anchor, grid.check),
               math.cos(sigma1_rad) ** 2, sigma2, sigma3, count2)
-    parts = [group] if run is _at_once else np.array_split(group, THREADS)
-    return [run(_join, part, *common, np.empty(1024, dtype), bits) for part in parts if len(part)]
+    return [run(_join, part, *common, np.empty(1024, dtype), bits)
+            for part in np.array_split(group, parts) if len(part)]
 
 
 def _fresh_grids(kept: dict | None, radius: float) -> None:
