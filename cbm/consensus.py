@@ -22,8 +22,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .local_matching import POOL
-from .local_matching.join import TRIM_FROM, trim_freed
+from .local_matching import POOL, TRIM_FROM, trim_freed
 
 VOTES_APART_FROM = 200_000
 """Vote rows from which ``voted_by_member`` counts and places them in two halves at once."""

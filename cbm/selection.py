@@ -170,10 +170,10 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
     The anchors go in chunks (the first ``RIVAL_FIRST`` anchors, then ``RIVAL_CHUNK`` at a time),
     each visited by ``_largest_rival`` on the calling thread or, from ``RIVAL_THREADS_FROM``
-    candidate pairs, with ``threads`` and without a listing to keep them in, in two interleaved
-    parts at once (the second on ``POOL``) that share the largest size found. With a listing (the app's edits) the
-    calling thread visits them, adding each anchor it lists to the listing, which later edits read
-    (only one thread may add to it): listed on two threads and not kept, a sigma2 edit on
+    candidate pairs, with ``threads`` and without a listing, in two interleaved parts at once (the
+    second on ``POOL``) that share the largest size found. With a listing (the app's edits) the
+    calling thread visits them all, adding each anchor it lists to the listing, which later edits
+    read (only one thread may add to it): listed on two threads and not kept, a sigma2 edit on
     ``synthetic:300``'s frame took 1.2x as long."""
     rule = common[RULE]
     ends = range(first + RIVAL_FIRST, len(order) + RIVAL_CHUNK, RIVAL_CHUNK)
