@@ -32,7 +32,7 @@ from .filtered import (
     rival_free_size,
     work_arrays,
 )
-from .local_matching import POOL, THREADS, CandidateSets
+from .local_matching import POOL, THREADS, CandidateSets, Done
 
 RIVAL_FIRST = 64
 """Anchors the runner-up search visits on the calling thread before it hands any to the threads:
@@ -80,7 +80,7 @@ class Selection:
     """(K, 2) (ego index, CAV index) of the winning set, sorted by ego index."""
     candidate_count: int
     """card(L_ij) of the winning anchor before filtering (eq. 8)."""
-    rival: Future | Found
+    rival: Future | Done
     """The runner-up search (``strongest_rival``): found, or running on ``POOL`` (``RIVAL_APART``)."""
     visit: Visit | None = None
     """The visit's filtered sets (None when every set is empty)."""
@@ -89,16 +89,6 @@ class Selection:
     def runner_up_count(self) -> int:
         """Largest set among anchors that share no pair with the winner (waits for the search)."""
         return self.rival.result()
-
-
-@dataclass(frozen=True)
-class Found:
-    """A runner-up search's answer, read like that of a search still running (``Future.result``)."""
-
-    count: int
-
-    def result(self) -> int:
-        return self.count
 
 
 @numba.njit(cache=True)
@@ -247,7 +237,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
            distance_limit: float) -> Selection:
     """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit."""
     n_ego, n_cav = len(ego_xy), len(cav_xy)
-    empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, rival=Found(0))
+    empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0, rival=Done(0))
     candidate_count = L.count
     if n_ego * n_cav == 0 or not candidate_count.any():
         return empty
@@ -268,7 +258,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
         if L.listing is None and RIVAL_APART[0] <= n_ego * n_cav < RIVAL_APART[1]:
             rival = POOL.submit(strongest_rival, *search, threads=False)
         else:
-            rival = Found(strongest_rival(*search))
+            rival = Done(strongest_rival(*search))
     return Selection(anchor=int(visited[k_win]), pairs=_as_pairs(np.sort(winner), n_cav),
                      candidate_count=int(candidate_count[visited[k_win]]), rival=rival,
                      visit=Visit(order, sizes, offsets, members, common))

@@ -19,9 +19,9 @@ Pair ids are ``i * Nc + j`` throughout.
 from .candidates import NO_LISTING, CandidateSets, Listing, SortedBlocks, member_lookup, members_into, sorted_blocks
 from .counting import MOST_PAIRS, count_candidates
 from .grid import MARGIN, VectorGrid, build_grid, group_signs, heading_groups
-from .join import POOL, THREADS, TRIM_FROM, trim_freed
+from .join import POOL, THREADS, TRIM_FROM, Done, trim_freed
 from .listing import listed_into
 
-__all__ = ["MARGIN", "MOST_PAIRS", "NO_LISTING", "POOL", "THREADS", "CandidateSets", "Listing", "SortedBlocks",
+__all__ = ["MARGIN", "MOST_PAIRS", "NO_LISTING", "POOL", "THREADS", "CandidateSets", "Done", "Listing", "SortedBlocks",
            "TRIM_FROM", "VectorGrid", "build_grid", "count_candidates", "group_signs", "heading_groups",
            "listed_into", "member_lookup", "members_into", "sorted_blocks", "trim_freed"]

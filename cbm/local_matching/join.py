@@ -222,7 +222,8 @@ def run_join(ego: Context, cav: Context, ego_heading: np.ndarray, signs: np.ndar
     if len(groups) > 1 and len(ego.vectors) >= GROUPS_APART_FROM:
         votes = _groups_apart(groups, arguments, parts)
     elif len(ego.vectors) >= PARALLEL_FROM:
-        votes = _join_batch(groups, 0, *arguments, POOL.submit, parts)
+        votes = [rows for k, group in enumerate(groups)
+                 for rows in _group_joined(group, k, *arguments, POOL.submit, parts)]
     else:
         votes = [rows for part in _groups_joined(groups, range(len(groups)), arguments, 1).values() for rows in part]
     if sum(part.rows.nbytes for part in votes) >= TRIM_FROM:
@@ -234,7 +235,7 @@ def _groups_joined(groups: list[np.ndarray], indices, arguments: tuple, parts: i
     """The votes of each heading group ``groups[k]``, k taken in turn from ``indices``: its grid
     built (or taken from ``kept``) and joined on the calling thread, in ``parts`` parts of its ego
     objects one after another."""
-    return {k: _join_batch([groups[k]], k, *arguments, _at_once, parts) for k in indices}
+    return {k: _group_joined(groups[k], k, *arguments, _at_once, parts) for k in indices}
 
 
 def _groups_apart(groups: list[np.ndarray], arguments: tuple, parts: int) -> list[VoteRows]:
@@ -277,19 +278,16 @@ def trim_freed() -> None:
         _MALLOC_TRIM(0)
 
 
-def _join_batch(batch: list[np.ndarray], first: int, ego: Context, cav: Context, per_anchor: int,
-                signs: np.ndarray, sigma1_rad: float, radius: float, sigma2: float, sigma3: float,
-                count2: np.ndarray, kept: dict | None, run, parts: int) -> list[VoteRows]:
-    """The votes of the heading groups ``batch`` (numbered from ``first``), each joined in ``parts``
-    parts of its ego objects, their grids built (or taken from ``kept``) here: without ``kept`` each
-    is held only by its group's jobs, so it is freed as soon as they have run, while the batch's
-    later groups are joined."""
-    grids = _grids(batch, first, cav, signs, radius, run, kept)[::-1]
+def _group_joined(group: np.ndarray, k: int, ego: Context, cav: Context, per_anchor: int, signs: np.ndarray,
+                  sigma1_rad: float, radius: float, sigma2: float, sigma3: float, count2: np.ndarray,
+                  kept: dict | None, run, parts: int) -> list[VoteRows]:
+    """The votes of heading group ``k`` (ego objects ``group``), joined by ``run`` in ``parts`` parts of
+    its ego objects, its grid built (or taken from ``kept``) here: without ``kept`` the grid is held
+    only by the group's jobs, so it is freed as soon as they have run."""
+    grid = _grids([group], k, cav, signs, radius, run, kept)[0]
     n_ego, n_cav = signs.shape
-    jobs = []
-    for group in batch:
-        jobs += _submitted(group, grids.pop(), ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run,
-                           parts)
+    jobs = _submitted(group, grid, ego, per_anchor, signs, sigma1_rad, sigma2, sigma3, count2, run, parts)
+    del grid
     return [VoteRows(job.result(), n_cav, packing(n_ego, n_cav)[1]) for job in jobs]
 
 
@@ -322,8 +320,8 @@ def _grids(batch: list[np.ndarray], first: int, cav: Context, signs: np.ndarray,
     return [known.pop(first + k) if kept is None else known[first + k] for k in range(len(batch))]
 
 
-class _Done:
-    """A result already computed, read like a future's."""
+class Done:
+    """A result already computed, read like a future's (``Future.result``)."""
 
     def __init__(self, value) -> None:
         self.value = value
@@ -332,6 +330,6 @@ class _Done:
         return self.value
 
 
-def _at_once(function, *args) -> _Done:
-    return _Done(function(*args))
+def _at_once(function, *args) -> Done:
+    return Done(function(*args))
 
