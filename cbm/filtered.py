@@ -124,7 +124,7 @@ def kernel_arguments(L: CandidateSets, voted_by: PairSets, rule: str | None, ego
             centres, float(distance_limit))
 
 
-RULE, N_CAV = 5, 7
+LISTING, RULE, N_EGO, N_CAV = 2, 5, 6, 7
 
 
 def listing_held(L: CandidateSets):

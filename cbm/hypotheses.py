@@ -35,7 +35,8 @@ from . import se2
 from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
-from .selection import Visit, anchor_sets
+from .selection import anchor_sets
+from .visit import Visit
 
 HYPOTHESES = 6
 """Anchors refined and verified (the eq. 13 winner and the next best distinct sets)."""
@@ -222,7 +223,7 @@ def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, wides
     refinement) would refine to the same answer: it is skipped, so an easy scene costs about one
     refinement. Only the winner runs the guided re-association (its robust refit every round is the
     costly part); the others go straight to the noise-aware one. The sets eq. 13's ``visit``
-    (``cbm.selection.Visit``) filtered are not filtered again."""
+    (``cbm.visit.Visit``) filtered are not filtered again."""
     density = clutter_density(sets.cav_xy)
     ego, cav = sets.ego_boxes, sets.cav_boxes
     found: list[Hypothesis] = []

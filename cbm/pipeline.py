@@ -19,7 +19,8 @@ from .local_matching.counting import candidate_sets, counts_and_votes
 from .params import CBMParams
 from .result import MatchResult
 from .reuse import Prepared, Reuse, prepare, recall, remember
-from .selection import Visit, select
+from .selection import select
+from .visit import Visit
 
 
 @dataclass(frozen=True)
@@ -146,7 +147,7 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
 
 def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
                        started: float | None = None) -> tuple[MatchResult, Visit | None]:
-    """``match_sets``, and what the selection's visit filtered (``selection.Visit``; None when every
+    """``match_sets``, and what the selection's visit filtered (``cbm.visit.Visit``; None when every
     set is empty): the filtered sizes it computed, for ``cbm.inspect`` to reuse. The selection may
     leave its runner-up search running while the winner is verified; the time waited for it after
     that counts as the selection's."""

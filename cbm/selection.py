@@ -25,14 +25,14 @@ from .filtered import (
     PAPER,
     RULE,
     filtered_sizes_of,
-    final_size,
     kernel_arguments,
-    list_set,
     listing_held,
     rival_free_size,
     work_arrays,
 )
-from .local_matching import POOL, THREADS, CandidateSets, Done
+from .local_matching import POOL, CandidateSets, Done
+from .local_matching.listing import closed_up, two_writers
+from .visit import Visit, eq13_visit, filtered_members, with_listing
 
 RIVAL_FIRST = 64
 """Anchors the runner-up search visits on the calling thread before it hands any to the threads:
@@ -47,29 +47,6 @@ compiles); from the upper end the search is better split over both threads."""
 RIVAL_THREADS_FROM = 10_000
 """Candidate pairs (the chunk's card(L_ij) summed) from which a chunk's halves run on two threads;
 below, handing them over costs more than it saves, and the calling thread runs the chunk."""
-
-
-@dataclass(frozen=True)
-class Visit:
-    """What eq. 13's visit computed, for the hypotheses to reuse (``anchor_sets``): the anchors in
-    ``by_count_descending`` order, the filtered sizes and members (flat, with offsets) of the first
-    ``len(sizes)`` of them, and the kernel arguments they were filtered with (``kernel_arguments``)."""
-
-    order: np.ndarray
-    sizes: np.ndarray
-    offsets: np.ndarray
-    members: np.ndarray
-    common: tuple
-
-    def members_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
-        """Pair ids of one anchor's filtered set, increasing: the visit's when it filtered the anchor
-        (the same kernel, so the same members), else filtered now."""
-        at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
-        return self.members_at(int(at[0])) if len(at) else filtered_members(anchor, L, self.common)
-
-    def members_at(self, position: int) -> np.ndarray:
-        """Pair ids of the filtered set of the anchor at ``position`` of the visit, increasing."""
-        return np.sort(self.members[self.offsets[position]:self.offsets[position + 1]])
 
 
 @dataclass(frozen=True)
@@ -89,41 +66,6 @@ class Selection:
     def runner_up_count(self) -> int:
         """Largest set among anchors that share no pair with the winner (waits for the search)."""
         return self.rival.result()
-
-
-@numba.njit(cache=True)
-def _largest_sets(order, candidate_count, width, signs, lookup, listing, voted_start, voted_by, rule, n_ego, n_cav,
-                  centres, limit):
-    """Visit anchors by decreasing card(L_ij) while one may still reach the best size found.
-
-    Returns the visited anchors, their filtered sizes, their members (flat, with offsets) and the
-    position in ``order`` where the visit stopped. ``width`` is the largest card(L_ij).
-    """
-    work = work_arrays(width, n_ego, n_cav, len(candidate_count))
-    out = work[4]
-    visited = np.empty(len(order), np.int64)
-    sizes = np.empty(len(order), np.int64)
-    offsets = np.zeros(len(order) + 1, np.int64)
-    members = np.empty(16 * width, np.int64)
-    best, n = 0, 0
-    while n < len(order):
-        anchor = order[n]
-        if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
-            break
-        size = final_size(list_set(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
-                          centres, limit, work)
-        if offsets[n] + size > len(members):
-            grown = np.empty(2 * len(members) + size, np.int64)
-            for k in range(offsets[n]):
-                grown[k] = members[k]
-            members = grown
-        for k in range(size):
-            members[offsets[n] + k] = out[k]
-        visited[n], sizes[n] = anchor, size
-        offsets[n + 1] = offsets[n] + size
-        best = max(best, size)
-        n += 1
-    return visited[:n], sizes[:n], offsets[: n + 1], members[: offsets[n]], n
 
 
 @numba.njit(cache=True, nogil=True)
@@ -175,13 +117,16 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if rule != PAPER:
             anchors = anchors[~in_winner[anchors]]
         shared = np.array([runner_up], np.int64)
-        if not threads or L.listing is not None or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
+        if not threads or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
-        jobs = [POOL.submit(_largest_rival, anchors, part, THREADS, L.count, runner_up, shared, L.width, in_winner,
-                            *common) for part in range(1, THREADS)]
-        mine = int(_largest_rival(anchors, 0, THREADS, L.count, runner_up, shared, L.width, in_winner, *common))
-        runner_up = max([mine] + [int(job.result()) for job in jobs])
+        first, second, middle = two_writers(L.listing)
+        job = POOL.submit(_largest_rival, anchors, 1, 2, L.count, runner_up, shared, L.width, in_winner,
+                          *with_listing(common, second))
+        mine = int(_largest_rival(anchors, 0, 2, L.count, runner_up, shared, L.width, in_winner,
+                                  *with_listing(common, first)))
+        runner_up = max(mine, int(job.result()))
+        closed_up(L.listing, second, middle)
     return runner_up
 
 
@@ -244,7 +189,7 @@ def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.nd
     order = by_count_descending(candidate_count)
     common = kernel_arguments(L, voted_by, rule, ego_xy, cav_xy, distance_limit)
     with listing_held(L):
-        visited, sizes, offsets, members, stop = _largest_sets(order, candidate_count, L.width, *common)
+        visited, sizes, offsets, members, stop = eq13_visit(order, L, common)
         best = int(sizes.max(initial=0))
         if best == 0:
             return empty
@@ -281,14 +226,6 @@ def _tie_broken(tied: np.ndarray, visited: np.ndarray, members: np.ndarray, offs
         a = int(visited[k])
         keys[k] = set_keys[fingerprint] + (*ego_xy[a // n_cav], *cav_xy[a % n_cav])
     return int(min(keys, key=keys.__getitem__))
-
-
-def filtered_members(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
-    """Pair ids of one anchor's filtered set L^(2) (eq. 12), increasing (a one-to-one set: in
-    increasing ego index too)."""
-    with listing_held(L):
-        _, _, _, members, _ = _largest_sets(np.array([anchor], np.int64), L.count, L.width, *common)
-    return np.sort(members)
 
 
 def anchor_sets(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,

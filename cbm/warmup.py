@@ -32,6 +32,7 @@ from .hypotheses import evidence, same_pose
 from .interpreted import kernels
 from .local_matching import CandidateSets, member_lookup
 from .local_matching.counting import counts_and_votes
+from .local_matching.listing import closed_up, listing_for, two_writers
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
 from .reassociate import gated_assignment
@@ -110,9 +111,9 @@ def compile_matching() -> None:
 
 def compile_selection() -> None:
     """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up on one thread and on
-    two, the robust fit, the grouping of a large assignment, the evidence, the comparison of poses)
-    with a first call on candidate sets whose sizes are upper bounds, without running the join that
-    counts them."""
+    two, the listing's two writers closed up, the robust fit, the grouping of a large assignment,
+    the evidence, the comparison of poses) with a first call on candidate sets whose sizes are
+    upper bounds, without running the join that counts them."""
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
     cav = se2.apply_boxes(init, cav)
     ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav[:, 6])
@@ -127,6 +128,8 @@ def compile_selection() -> None:
     order = by_count_descending(bound)
     strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
     filtered_sizes(order[:2], *sets)
+    kept = listing_for({}, params.sigma1_rad, params.sigma2, bound)
+    closed_up(kept, *two_writers(kept)[1:])
     robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
     found = gated_assignment(ego, cav, 3.0, 1.0)
     evidence(ego, cav, found, 1.0, 1.0, found)

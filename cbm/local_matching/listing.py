@@ -14,7 +14,7 @@ import numba
 import numpy as np
 
 from ..reuse import recall, remember
-from .candidates import Listing, members_into
+from .candidates import NO_LISTING, Listing, members_into
 
 CAPACITY = 1 << 20
 """Members a listing keeps (16 MB); anchors listed once it is full are listed again when asked."""
@@ -83,3 +83,40 @@ def _with_anchor(i, j, n_cav, out, ego_of, cav_of, distance, size):
         return 0
     out[size], ego_of[size], cav_of[size], distance[size] = i * n_cav + j, i, j, 0.0
     return size + 1
+
+
+def two_writers(listing: Listing | None) -> tuple[tuple, tuple, int]:
+    """``listed_into``'s ``listing`` arguments for two threads listing disjoint anchors at once, and
+    where the second's rows begin: the first keeps rows below the middle of the room left (its
+    arrays end there), the second from the middle on, with a fill of its own. ``closed_up`` moves
+    the second's rows down once both are done. Without a listing both take ``NO_LISTING``'s."""
+    if listing is None:
+        arguments = NO_LISTING.arguments()
+        return arguments, arguments, 0
+    middle = int(listing.fill[0]) + (len(listing.ego) - int(listing.fill[0])) // 2
+    first = (listing.at, listing.length, listing.ego[:middle], listing.cav[:middle], listing.distance[:middle],
+             listing.fill, listing.bound, listing.sigma2)
+    second = (listing.at, listing.length, listing.ego, listing.cav, listing.distance, np.array([middle], np.int64),
+              listing.bound, listing.sigma2)
+    return first, second, middle
+
+
+def closed_up(listing: Listing | None, second: tuple, middle: int) -> None:
+    """The rows the second of ``two_writers`` kept (from ``middle``) moved down to follow the
+    first's, so that the listing has no gap."""
+    if listing is not None:
+        _closed_up(listing.at, listing.ego, listing.cav, listing.distance, listing.fill, middle, second[5][0])
+
+
+@numba.njit(cache=True, nogil=True)
+def _closed_up(at, ego, cav, distance, fill, middle, end):
+    """Rows ``middle:end`` moved to ``fill[0]`` on, the anchors listed there pointed to their new
+    rows, and ``fill[0]`` past them."""
+    shift = middle - fill[0]
+    if end > middle and shift > 0:
+        for k in range(middle, end):
+            ego[k - shift], cav[k - shift], distance[k - shift] = ego[k], cav[k], distance[k]
+        for a in range(len(at)):
+            if at[a] >= middle:
+                at[a] -= shift
+    fill[0] += end - middle

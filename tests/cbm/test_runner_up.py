@@ -5,7 +5,8 @@ import pytest
 
 from cbm import CBMParams
 from cbm.pipeline import build_sets, checked_inputs
-from cbm.selection import filtered_members, kernel_arguments, select
+from cbm.selection import kernel_arguments, select
+from cbm.visit import filtered_members
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 

@@ -1,0 +1,153 @@
+"""Eq. 13's visit (paper eq. 12-13): anchors by decreasing card(L_ij), each one's filtered set
+L^(2)_ij, until no remaining candidate set can reach the largest filtered set found.
+
+Filtering never grows a set, so card(L_ij) bounds card(L^(2)_ij): the visit stops at the first
+anchor whose candidate set is smaller than the best size found (branch and bound). On a large
+scene the anchors after the first ``VISIT_FIRST`` are visited by two threads in interleaved parts
+that share the best size found; the merge keeps exactly the anchors one pass visits, in its order,
+so the answer, and every size and member the hypotheses and the diagnosis read, is the same.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numba
+import numpy as np
+
+from .filtered import LISTING, N_CAV, N_EGO, final_size, list_set, listing_held, work_arrays
+from .local_matching import POOL, CandidateSets
+from .local_matching.listing import closed_up, two_writers
+
+VISIT_FIRST = 128
+"""Anchors eq. 13's visit takes on the calling thread before it shares the rest out (``eq13_visit``)."""
+VISIT_APART_FROM = 5_000
+"""Ego x CAV pairs from which the rest of eq. 13's visit is shared out between two threads; below,
+the hand-over costs more than it saves (and the warm-up's small scene never waits for ``POOL``)."""
+
+@dataclass(frozen=True)
+class Visit:
+    """What eq. 13's visit computed, for the hypotheses to reuse (``anchor_sets``): the anchors in
+    ``by_count_descending`` order, the filtered sizes and members (flat, with offsets) of the first
+    ``len(sizes)`` of them, and the kernel arguments they were filtered with (``kernel_arguments``)."""
+
+    order: np.ndarray
+    sizes: np.ndarray
+    offsets: np.ndarray
+    members: np.ndarray
+    common: tuple
+
+    def members_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
+        """Pair ids of one anchor's filtered set, increasing: the visit's when it filtered the anchor
+        (the same kernel, so the same members), else filtered now."""
+        at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
+        return self.members_at(int(at[0])) if len(at) else filtered_members(anchor, L, self.common)
+
+    def members_at(self, position: int) -> np.ndarray:
+        """Pair ids of the filtered set of the anchor at ``position`` of the visit, increasing."""
+        return np.sort(self.members[self.offsets[position]:self.offsets[position + 1]])
+
+
+@numba.njit(cache=True, nogil=True)
+def _visited_part(order, begin, end, part, parts, candidate_count, best, shared, width, signs, lookup, listing,
+                  voted_start, voted_by, rule, n_ego, n_cav, centres, limit):
+    """Eq. 13's visit of ``order``'s positions ``begin + part``, ``begin + part + parts``, ... below
+    ``end``, while an anchor's card(L_ij) is not 0 and at least the largest size found: ``best``,
+    this part's and ``shared[0]``, the other parts' (read before each anchor, raised on a larger one).
+
+    Returns the visited positions' filtered sizes and members (flat, with offsets), in order. Every
+    position the visit of all of ``order`` in one pass reaches is visited: a size read is one some
+    anchor reaches, no larger than its card(L_ij), so an anchor is passed over only when an earlier
+    anchor's set is larger than its candidate set (``_interleaved``)."""
+    work = work_arrays(width, n_ego, n_cav, len(candidate_count))
+    out = work[4]
+    steps = max((end - begin - part + parts - 1) // parts, 0)
+    sizes = np.empty(steps, np.int64)
+    offsets = np.zeros(steps + 1, np.int64)
+    members = np.empty(16 * width, np.int64)
+    n = 0
+    for position in range(begin + part, end, parts):
+        anchor = order[position]
+        best = max(best, shared[0])
+        if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
+            break
+        size = final_size(list_set(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
+                          centres, limit, work)
+        if offsets[n] + size > len(members):
+            grown = np.empty(2 * len(members) + size, np.int64)
+            grown[:offsets[n]] = members[:offsets[n]]
+            members = grown
+        members[offsets[n]:offsets[n] + size] = out[:size]
+        sizes[n] = size
+        offsets[n + 1] = offsets[n] + size
+        if size > best:
+            best = size
+            shared[0] = max(shared[0], size)
+        n += 1
+    return sizes[:n], offsets[: n + 1], members[: offsets[n]]
+
+
+def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.ndarray, ...]:
+    """Eq. 13's visit of ``order`` (``by_count_descending``) with the kernel arguments ``common``:
+    (visited anchors, their filtered sizes, their members flat with offsets, where it stopped). The
+    first ``VISIT_FIRST`` anchors are visited on the calling thread; from ``VISIT_APART_FROM`` ego x
+    CAV pairs the rest are shared out between it and ``POOL``, in interleaved parts that list into
+    the listing's two halves (``two_writers``), else it visits them too."""
+    shared, first = np.zeros(1, np.int64), min(VISIT_FIRST, len(order))
+    pieces = [_visited_part(order, 0, first, 0, 1, L.count, 0, shared, L.width, *common)]
+    if len(pieces[0][0]) == first < len(order):
+        best = int(pieces[0][0].max(initial=0))
+        if common[N_EGO] * common[N_CAV] < VISIT_APART_FROM:
+            pieces.append(_visited_part(order, first, len(order), 0, 1, L.count, best, shared, L.width, *common))
+        else:
+            pieces.append(_visited_apart(order, first, best, shared, L, common))
+    sizes = np.concatenate([piece[0] for piece in pieces])
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    return order[:len(sizes)], sizes, offsets, np.concatenate([piece[-1] for piece in pieces]), len(sizes)
+
+
+def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray, L: CandidateSets,
+                   common: tuple) -> tuple[np.ndarray, np.ndarray]:
+    """``_visited_part`` of ``order`` from ``begin`` in two interleaved parts at once (the second on
+    ``POOL``), merged into the positions the visit in one pass reaches (``_interleaved``)."""
+    mine, theirs, middle = two_writers(L.listing)
+    job = POOL.submit(_visited_part, order, begin, len(order), 1, 2, L.count, best, shared, L.width,
+                      *with_listing(common, theirs))
+    own = _visited_part(order, begin, len(order), 0, 2, L.count, best, shared, L.width, *with_listing(common, mine))
+    other = job.result()
+    closed_up(L.listing, theirs, middle)
+    return _interleaved(L.count[order[begin:]], best, [own, other])
+
+
+def with_listing(common: tuple, listing: tuple) -> tuple:
+    """The kernel arguments ``common`` with another ``listing`` argument (``two_writers``)."""
+    return common[:LISTING] + (listing,) + common[LISTING + 1:]
+
+
+def _interleaved(counts: np.ndarray, best: int, parts: list[tuple]) -> tuple[np.ndarray, np.ndarray]:
+    """The parts' results (part k visited positions k, k + len(parts), ...; ``counts`` their
+    card(L_ij)) merged in order up to where the visit in one pass stops: the first position whose
+    count is 0 or below the largest size before it (``best`` and the sizes of the positions before)."""
+    n = len(parts)
+    reached = max((k + n * (len(part[0]) - 1) + 1 for k, part in enumerate(parts) if len(part[0])), default=0)
+    size_at, start_at = np.zeros(reached, np.int64), np.zeros(reached, np.int64)
+    base = 0
+    for k, (sizes, offsets, members) in enumerate(parts):
+        size_at[k::n][:len(sizes)] = sizes
+        start_at[k::n][:len(sizes)] = base + offsets[:-1]
+        base += len(members)
+    before = np.maximum.accumulate(np.concatenate([[best], size_at[:-1]]))
+    passed = (counts[:reached] == 0) | (counts[:reached] < before)
+    stop = int(np.argmax(passed)) if passed.any() else reached
+    sizes, starts = size_at[:stop], start_at[:stop]
+    total = int(sizes.sum())
+    gather = np.repeat(starts - np.cumsum(sizes) + sizes, sizes) + np.arange(total)
+    return sizes, np.concatenate([part[2] for part in parts])[gather]
+
+
+def filtered_members(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
+    """Pair ids of one anchor's filtered set L^(2) (eq. 12), increasing (a one-to-one set: in
+    increasing ego index too)."""
+    with listing_held(L):
+        members = _visited_part(np.array([anchor], np.int64), 0, 1, 0, 1, L.count, 0, np.zeros(1, np.int64), L.width,
+                                *common)[2]
+    return np.sort(members)
