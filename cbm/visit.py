@@ -18,7 +18,7 @@ from .filtered import LISTING, N_CAV, N_EGO, final_size, list_set, listing_held,
 from .local_matching import POOL, CandidateSets
 from .local_matching.listing import closed_up, two_writers
 
-VISIT_FIRST = 128
+VISIT_FIRST = 32
 """Anchors eq. 13's visit takes on the calling thread before it shares the rest out (``eq13_visit``)."""
 VISIT_APART_FROM = 5_000
 """Ego x CAV pairs from which the rest of eq. 13's visit is shared out between two threads; below,
