@@ -23,6 +23,8 @@ HEADROOM = 1.5
 """The radius kept, as a factor of the sigma2 that asked for it: room for the next edits upward."""
 MOST_QUADRUPLES = 8 * 2**20
 """Most quadruples kept (12 bytes each: about 100 MB)."""
+COUNT_APART_FROM = 200_000
+"""Quadruples kept from which a sigma2 edit counts them on both threads (``counted``)."""
 PARALLEL_FROM = 5_000
 """Context vectors per agent from which the pass runs on both threads: it writes every quadruple
 it accepts, so it pays for the handover from fewer vectors than the join (first sigma2 edit on
@@ -107,7 +109,16 @@ def _count_within(anchor, distance, sigma2, count2):
 
 def counted(kept: Distances, sigma2: float, n_pairs: int) -> np.ndarray:
     """card(L_ij) at ``sigma2`` (at most ``kept.radius``) of every anchor pair, without the pair itself
-    (the join's counters)."""
+    (the join's counters); from ``COUNT_APART_FROM`` quadruples the second half is counted on
+    ``POOL`` into counters of its own, added after."""
     count2 = np.zeros(n_pairs, np.int64)
-    _count_within(kept.anchor, kept.distance, sigma2, count2)
+    half = len(kept.anchor) // 2
+    if half < COUNT_APART_FROM // 2:
+        _count_within(kept.anchor, kept.distance, sigma2, count2)
+        return count2
+    theirs = np.zeros(n_pairs, np.int64)
+    job = POOL.submit(_count_within, kept.anchor[half:], kept.distance[half:], sigma2, theirs)
+    _count_within(kept.anchor[:half], kept.distance[:half], sigma2, count2)
+    job.result()
+    count2 += theirs
     return count2

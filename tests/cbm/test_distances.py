@@ -21,10 +21,12 @@ def passes(reuse: Reuse, name: str) -> int:
     return next(iter(reuse._entries.values())).passes(name)
 
 
-@pytest.mark.parametrize("threads_from", [distances.PARALLEL_FROM, 0], ids=["as-shipped", "both-threads"])
+@pytest.mark.parametrize("threads_from", [(distances.PARALLEL_FROM, distances.COUNT_APART_FROM), (0, 0)],
+                         ids=["as-shipped", "both-threads"])
 @pytest.mark.parametrize("layout", ["street", "dense"])
 def test_sigma2_edits_count_from_the_kept_distances_and_give_a_fresh_matchs_results(layout, threads_from, monkeypatch):
-    monkeypatch.setattr(distances, "PARALLEL_FROM", threads_from)
+    monkeypatch.setattr(distances, "PARALLEL_FROM", threads_from[0])
+    monkeypatch.setattr(distances, "COUNT_APART_FROM", threads_from[1])
     t, reuse = trial(layout, 3), Reuse()
     for edit, kept in zip(EDITS, KEPT_AFTER):
         with_reuse, fresh = outcome(t, CBMParams(**edit), reuse), outcome(t, CBMParams(**edit), None)
