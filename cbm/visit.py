@@ -9,6 +9,7 @@ so the answer, and every size and member the hypotheses and the diagnosis read, 
 """
 from __future__ import annotations
 
+import bisect
 from dataclasses import dataclass
 
 import numba
@@ -20,9 +21,11 @@ from .local_matching.listing import closed_up, two_writers
 
 VISIT_FIRST = 32
 """Anchors eq. 13's visit takes on the calling thread before it shares the rest out (``eq13_visit``)."""
-VISIT_APART_FROM = 5_000
-"""Ego x CAV pairs from which the rest of eq. 13's visit is shared out between two threads; below,
-the hand-over costs more than it saves (and the warm-up's small scene never waits for ``POOL``)."""
+VISIT_APART_FROM = (5_000, 10_000)
+"""Ego x CAV pairs, and candidate pairs ahead (``_work_ahead``), from which the rest of eq. 13's
+visit is shared out between two threads; below, the hand-over costs more than it saves (and the
+warm-up's small scene never waits for ``POOL``)."""
+
 
 @dataclass(frozen=True)
 class Visit:
@@ -89,20 +92,28 @@ def _visited_part(order, begin, end, part, parts, candidate_count, best, shared,
 def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.ndarray, ...]:
     """Eq. 13's visit of ``order`` (``by_count_descending``) with the kernel arguments ``common``:
     (visited anchors, their filtered sizes, their members flat with offsets, where it stopped). The
-    first ``VISIT_FIRST`` anchors are visited on the calling thread; from ``VISIT_APART_FROM`` ego x
-    CAV pairs the rest are shared out between it and ``POOL``, in interleaved parts that list into
-    the listing's two halves (``two_writers``), else it visits them too."""
+    first ``VISIT_FIRST`` anchors are visited on the calling thread; on a scene and a visit large
+    enough (``VISIT_APART_FROM``) the rest are shared out between it and ``POOL``, in interleaved
+    parts that list into the listing's two halves (``two_writers``), else it visits them too."""
     shared, first = np.zeros(1, np.int64), min(VISIT_FIRST, len(order))
     pieces = [_visited_part(order, 0, first, 0, 1, L.count, 0, shared, L.width, *common)]
     if len(pieces[0][0]) == first < len(order):
         best = int(pieces[0][0].max(initial=0))
-        if common[N_EGO] * common[N_CAV] < VISIT_APART_FROM:
+        pairs, ahead = VISIT_APART_FROM
+        if common[N_EGO] * common[N_CAV] < pairs or _work_ahead(order, first, best, L.count) < ahead:
             pieces.append(_visited_part(order, first, len(order), 0, 1, L.count, best, shared, L.width, *common))
         else:
             pieces.append(_visited_apart(order, first, best, shared, L, common))
     sizes = np.concatenate([piece[0] for piece in pieces])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     return order[:len(sizes)], sizes, offsets, np.concatenate([piece[-1] for piece in pieces]), len(sizes)
+
+
+def _work_ahead(order: np.ndarray, first: int, best: int, count: np.ndarray) -> int:
+    """The candidate pairs of the anchors from ``order[first]`` on whose card(L_ij) is at least
+    ``best``: the most the rest of the visit can filter (``order`` is by decreasing count)."""
+    reach = bisect.bisect_right(order, -best, first, len(order), key=lambda anchor: -count[anchor])
+    return int(count[order[first:reach]].sum())
 
 
 def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray, L: CandidateSets,

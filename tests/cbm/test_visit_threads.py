@@ -12,8 +12,10 @@ from cbm.reuse import Reuse
 from .join_reference import NOISE, layouts
 from .test_listing import assert_same_listing, candidate_sets, listed
 
-ONE_THREAD = {visit: dict(VISIT_FIRST=2**62, VISIT_APART_FROM=2**62), selection: dict(RIVAL_THREADS_FROM=2**62)}
-SHARED_OUT = {visit: dict(VISIT_FIRST=8, VISIT_APART_FROM=0), selection: dict(RIVAL_FIRST=8, RIVAL_THREADS_FROM=0)}
+NEVER = 2**62
+ONE_THREAD = {visit: dict(VISIT_FIRST=NEVER, VISIT_APART_FROM=(NEVER, NEVER)),
+              selection: dict(RIVAL_THREADS_FROM=NEVER)}
+SHARED_OUT = {visit: dict(VISIT_FIRST=8, VISIT_APART_FROM=(0, 0)), selection: dict(RIVAL_FIRST=8, RIVAL_THREADS_FROM=0)}
 """Module constants of the visit and the runner-up search that keep every anchor on the calling
 thread, and that share out all but the first few."""
 
