@@ -102,11 +102,9 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     survives into its filtered set: an anchor that is one of the winner's pairs shares it, unseen.
     The anchors go in chunks (the first ``RIVAL_FIRST`` anchors, then ``RIVAL_CHUNK`` at a time),
     each visited by ``_largest_rival`` on the calling thread or, from ``RIVAL_THREADS_FROM``
-    candidate pairs, with ``threads`` and without a listing, in two interleaved parts at once (the
-    second on ``POOL``) that share the largest size found. With a listing (the app's edits) the
-    calling thread visits them all, adding each anchor it lists to the listing, which later edits
-    read (only one thread may add to it): listed on two threads and not kept, a sigma2 edit on
-    ``synthetic:300``'s frame took 1.2x as long."""
+    candidate pairs and with ``threads``, in two interleaved parts at once (the second on ``POOL``)
+    that share the largest size found; with a listing each part keeps what it lists in its half of
+    the room (``two_writers``)."""
     rule = common[RULE]
     ends = range(first + RIVAL_FIRST, len(order) + RIVAL_CHUNK, RIVAL_CHUNK)
     for chunk, end in zip([first, *ends], ends):
@@ -120,13 +118,13 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if not threads or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
-        first, second, middle = two_writers(L.listing)
+        mine, theirs, middle = two_writers(L.listing)
         job = POOL.submit(_largest_rival, anchors, 1, 2, L.count, runner_up, shared, L.width, in_winner,
-                          *with_listing(common, second))
-        mine = int(_largest_rival(anchors, 0, 2, L.count, runner_up, shared, L.width, in_winner,
-                                  *with_listing(common, first)))
-        runner_up = max(mine, int(job.result()))
-        closed_up(L.listing, second, middle)
+                          *with_listing(common, theirs))
+        own = int(_largest_rival(anchors, 0, 2, L.count, runner_up, shared, L.width, in_winner,
+                                 *with_listing(common, mine)))
+        runner_up = max(own, int(job.result()))
+        closed_up(L.listing, theirs, middle)
     return runner_up
 
 
