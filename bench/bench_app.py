@@ -18,7 +18,9 @@ what a person waits for, so they are timed like any other.
 The server's share of each edit is split out by timing the tab's worker: the recompute (trial,
 method, metrics, diagnosis, drawing; CBM's own time apart) and the delivery (updating the scene's
 nodes and the panels). What remains is the websocket and the browser (decoding, rebuilding the
-three.js geometry, rendering).
+three.js geometry, rendering). The CPU chromium's processes take per edit (``/proc``) shows how
+much of the two cores the browser holds while the server computes: with software WebGL, its
+renderer and GPU processes take about as much as CBM itself.
 
 Needs the test extras (Playwright) and Debian's chromium, as ``make test`` installs them.
 
@@ -28,6 +30,7 @@ from __future__ import annotations
 
 import argparse
 import contextlib
+import os
 import statistics
 import sys
 import time
@@ -134,6 +137,29 @@ class Run:
     redrawn: int
     """Edits whose result changed the 3D view (the others changed the panels only)."""
     worker: Worker
+    browser_cpu: float
+    """Seconds of CPU chromium's processes took per edit, on the cores the server computes on."""
+
+
+def browser_cpu_seconds() -> float:
+    """CPU seconds (user and system) chromium's processes under this one have taken so far."""
+    tick, parents, spent = os.sysconf("SC_CLK_TCK"), {}, {}
+    for pid in filter(str.isdigit, os.listdir("/proc")):
+        with contextlib.suppress(OSError):
+            with open(f"/proc/{pid}/stat") as f:
+                fields = f.read().rsplit(")", 1)[1].split()
+            with open(f"/proc/{pid}/cmdline", "rb") as f:
+                chromium = b"chromium" in f.read().split(b"\0")[0]
+            parents[int(pid)] = int(fields[1])
+            spent[int(pid)] = (int(fields[11]) + int(fields[12])) / tick if chromium else 0.0
+    mine, total = os.getpid(), 0.0
+    for pid in parents:
+        chain = pid
+        while chain in parents and chain != mine:
+            chain = parents[chain]
+        if chain == mine:
+            total += spent[pid]
+    return total
 
 
 def number_box(page, text: str):
@@ -185,9 +211,10 @@ def measure(dataset: str, edits: int, browser) -> list[Run]:
         runs = []
         for edit, box, (values, markers) in (("σ2", sigma2, sigma2_edits(edits)),
                                              ("frame", number_box(page, "frame"), frame_edits(edits, len(explorer)))):
+            cpu = browser_cpu_seconds()
             with timed_worker(session) as spent:
                 times, redrawn = timed_edits(page, box, values, markers)
-            runs.append(Run(dataset, edit, times, redrawn, spent))
+            runs.append(Run(dataset, edit, times, redrawn, spent, (browser_cpu_seconds() - cpu) / len(times)))
         return runs
     finally:
         page.close()
@@ -203,15 +230,16 @@ def table(runs: list[Run]) -> str:
         lines.append(f"| `{run.dataset}` | {run.edit} | {ego:.0f} / {cav:.0f} | {statistics.median(run.times):.1f} | "
                      f"{max(run.times):.1f} | {len(run.times)} | {run.redrawn} |")
     lines += ["", "Where the median goes (ms): CBM, the rest of the recompute (trial, metrics, diagnosis, drawing), "
-              "the delivery (updating the nodes and panels), and the websocket plus the browser.", "",
-              "| dataset | edit | total | CBM | rest of recompute | delivery | socket + browser |",
-              "|---|---|---:|---:|---:|---:|---:|"]
+              "the delivery (updating the nodes and panels), and the websocket plus the browser; then the CPU "
+              "chromium's processes took per edit (on the same cores).", "",
+              "| dataset | edit | total | CBM | rest of recompute | delivery | socket + browser | browser CPU |",
+              "|---|---|---:|---:|---:|---:|---:|---:|"]
     for run in runs:
         total, w = statistics.median(run.times), run.worker
         cbm = 1000 * statistics.median(w.cbm)
         compute, deliver = 1000 * statistics.median(w.compute), 1000 * statistics.median(w.deliver)
         lines.append(f"| `{run.dataset}` | {run.edit} | {total:.1f} | {cbm:.1f} | {compute - cbm:.1f} | "
-                     f"{deliver:.1f} | {total - compute - deliver:.1f} |")
+                     f"{deliver:.1f} | {total - compute - deliver:.1f} | {1000 * run.browser_cpu:.0f} |")
     return "\n".join(lines)
 
 

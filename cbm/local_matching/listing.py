@@ -6,7 +6,9 @@ larger one without the members whose L1 distance (eq. 7) exceeds it, in the same
 listing's window only shrinks and its test reads the same numbers. So per input and sigma1 the
 members of the anchors visited so far are kept with their distances (``Listing``), listed at the
 largest sigma2 asked for, and a later call at a sigma2 up to that one filters them instead of
-listing them again; a larger sigma2 starts a new listing there.
+listing them again; a larger sigma2 starts a new listing there. Two threads that list disjoint
+anchors at once keep their rows in the two halves of the room left (``two_writers``), closed up
+after (``closed_up``).
 """
 from __future__ import annotations
 
