@@ -100,7 +100,7 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.n
     if len(pieces[0][0]) == first < len(order):
         best = int(pieces[0][0].max(initial=0))
         pairs, ahead = VISIT_APART_FROM
-        if common[N_EGO] * common[N_CAV] < pairs or _work_ahead(order, first, best, L.count) < ahead:
+        if common[N_EGO] * common[N_CAV] < pairs or _work_ahead(order, first, best, L.count, ahead) < ahead:
             pieces.append(_visited_part(order, first, len(order), 0, 1, L.count, best, shared, L.width, *common))
         else:
             pieces.append(_visited_apart(order, first, best, shared, L, common))
@@ -109,11 +109,12 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.n
     return order[:len(sizes)], sizes, offsets, np.concatenate([piece[-1] for piece in pieces]), len(sizes)
 
 
-def _work_ahead(order: np.ndarray, first: int, best: int, count: np.ndarray) -> int:
+def _work_ahead(order: np.ndarray, first: int, best: int, count: np.ndarray, enough: int) -> int:
     """The candidate pairs of the anchors from ``order[first]`` on whose card(L_ij) is at least
-    ``best``: the most the rest of the visit can filter (``order`` is by decreasing count)."""
+    ``best``: the most the rest of the visit can filter (``order`` is by decreasing count); summed
+    over ``enough`` anchors at most (each holds one pair or more, so more reach ``enough`` anyway)."""
     reach = bisect.bisect_right(order, -best, first, len(order), key=lambda anchor: -count[anchor])
-    return int(count[order[first:reach]].sum())
+    return int(count[order[first:min(reach, first + enough)]].sum())
 
 
 def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray, L: CandidateSets,
@@ -126,7 +127,7 @@ def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray,
     own = _visited_part(order, begin, len(order), 0, 2, L.count, best, shared, L.width, *with_listing(common, mine))
     other = job.result()
     closed_up(L.listing, theirs, middle)
-    return _interleaved(L.count[order[begin:]], best, [own, other])
+    return _interleaved(order[begin:], L.count, best, [own, other])
 
 
 def with_listing(common: tuple, listing: tuple) -> tuple:
@@ -134,12 +135,14 @@ def with_listing(common: tuple, listing: tuple) -> tuple:
     return common[:LISTING] + (listing,) + common[LISTING + 1:]
 
 
-def _interleaved(counts: np.ndarray, best: int, parts: list[tuple]) -> tuple[np.ndarray, np.ndarray]:
-    """The parts' results (part k visited positions k, k + len(parts), ...; ``counts`` their
+def _interleaved(anchors: np.ndarray, count: np.ndarray, best: int,
+                 parts: list[tuple]) -> tuple[np.ndarray, np.ndarray]:
+    """The parts' results (part k visited ``anchors`` k, k + len(parts), ...; ``count`` their
     card(L_ij)) merged in order up to where the visit in one pass stops: the first position whose
     count is 0 or below the largest size before it (``best`` and the sizes of the positions before)."""
     n = len(parts)
     reached = max((k + n * (len(part[0]) - 1) + 1 for k, part in enumerate(parts) if len(part[0])), default=0)
+    counts = count[anchors[:reached]]
     size_at, start_at = np.zeros(reached, np.int64), np.zeros(reached, np.int64)
     base = 0
     for k, (sizes, offsets, members) in enumerate(parts):
@@ -147,7 +150,7 @@ def _interleaved(counts: np.ndarray, best: int, parts: list[tuple]) -> tuple[np.
         start_at[k::n][:len(sizes)] = base + offsets[:-1]
         base += len(members)
     before = np.maximum.accumulate(np.concatenate([[best], size_at[:-1]]))
-    passed = (counts[:reached] == 0) | (counts[:reached] < before)
+    passed = (counts == 0) | (counts < before)
     stop = int(np.argmax(passed)) if passed.any() else reached
     sizes, starts = size_at[:stop], start_at[:stop]
     total = int(sizes.sum())

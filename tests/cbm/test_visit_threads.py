@@ -103,12 +103,13 @@ def test_the_parts_are_merged_in_order_up_to_where_one_pass_stops():
         offsets = np.concatenate([[0], np.cumsum(sizes)])
         return sizes, offsets, np.concatenate([np.full(s, 10 * len(sizes) + s) for s in sizes]).astype(np.int64)
 
-    counts = np.array([9, 8, 7, 7, 7])
+    counts, anchors = np.array([9, 8, 7, 7, 7]), np.arange(5)
     even, odd = part([5, 7, 6]), part([3, 4])
-    sizes, members = visit._interleaved(counts, 0, [even, odd])
+    sizes, members = visit._interleaved(anchors, counts, 0, [even, odd])
     np.testing.assert_array_equal(sizes, [5, 3, 7, 4, 6])
     np.testing.assert_array_equal(members, np.concatenate([even[2][:5], odd[2][:3], even[2][5:12], odd[2][3:],
                                                            even[2][12:]]))
-    sizes, members = visit._interleaved(np.array([9, 8, 7, 7, 6, 6]), 0, [part([5, 8, 2]), part([3, 4])])
+    sizes, members = visit._interleaved(np.arange(6), np.array([9, 8, 7, 7, 6, 6]), 0,
+                                        [part([5, 8, 2]), part([3, 4])])
     np.testing.assert_array_equal(sizes, [5, 3, 8])
     assert len(members) == 16
