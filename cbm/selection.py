@@ -31,7 +31,7 @@ from .filtered import (
     work_arrays,
 )
 from .local_matching import POOL, CandidateSets, Done
-from .local_matching.listing import closed_up, two_writers
+from .local_matching.listing import in_two_parts
 from .visit import Visit, eq13_visit, filtered_members, with_listing
 
 RIVAL_FIRST = 64
@@ -104,7 +104,7 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
     each visited by ``_largest_rival`` on the calling thread or, from ``RIVAL_THREADS_FROM``
     candidate pairs and with ``threads``, in two interleaved parts at once (the second on ``POOL``)
     that share the largest size found; with a listing each part keeps what it lists in its half of
-    the room (``two_writers``)."""
+    the room (``in_two_parts``)."""
     rule = common[RULE]
     ends = range(first + RIVAL_FIRST, len(order) + RIVAL_CHUNK, RIVAL_CHUNK)
     for chunk, end in zip([first, *ends], ends):
@@ -118,14 +118,15 @@ def strongest_rival(order: np.ndarray, first: int, L: CandidateSets, runner_up: 
         if not threads or int(L.count[anchors].sum()) < RIVAL_THREADS_FROM:
             runner_up = int(_largest_rival(anchors, 0, 1, L.count, runner_up, shared, L.width, in_winner, *common))
             continue
-        mine, theirs, middle = two_writers(L.listing)
-        job = POOL.submit(_largest_rival, anchors, 1, 2, L.count, runner_up, shared, L.width, in_winner,
-                          *with_listing(common, theirs))
-        own = int(_largest_rival(anchors, 0, 2, L.count, runner_up, shared, L.width, in_winner,
-                                 *with_listing(common, mine)))
-        runner_up = max(own, int(job.result()))
-        closed_up(L.listing, theirs, middle)
+        runner_up = int(max(in_two_parts(L.listing, _rival_part, anchors, runner_up, shared, L, in_winner, common)))
     return runner_up
+
+
+def _rival_part(part: int, listing: tuple, anchors: np.ndarray, runner_up: int, shared: np.ndarray,
+                L: CandidateSets, in_winner: np.ndarray, common: tuple) -> int:
+    """``_largest_rival`` of one of two interleaved parts of ``anchors``, listing with ``listing``."""
+    return _largest_rival(anchors, part, 2, L.count, runner_up, shared, L.width, in_winner,
+                          *with_listing(common, listing))
 
 
 @numba.njit(cache=True)

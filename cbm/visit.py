@@ -16,8 +16,8 @@ import numba
 import numpy as np
 
 from .filtered import LISTING, N_CAV, N_EGO, final_size, list_set, listing_held, work_arrays
-from .local_matching import POOL, CandidateSets
-from .local_matching.listing import closed_up, two_writers
+from .local_matching import CandidateSets
+from .local_matching.listing import in_two_parts
 
 VISIT_FIRST = 32
 """Anchors eq. 13's visit takes on the calling thread before it shares the rest out (``eq13_visit``)."""
@@ -94,7 +94,7 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.n
     (visited anchors, their filtered sizes, their members flat with offsets, where it stopped). The
     first ``VISIT_FIRST`` anchors are visited on the calling thread; on a scene and a visit large
     enough (``VISIT_APART_FROM``) the rest are shared out between it and ``POOL``, in interleaved
-    parts that list into the listing's two halves (``two_writers``), else it visits them too."""
+    parts that list into the listing's two halves (``in_two_parts``), else it visits them too."""
     shared, first = np.zeros(1, np.int64), min(VISIT_FIRST, len(order))
     pieces = [_visited_part(order, 0, first, 0, 1, L.count, 0, shared, L.width, *common)]
     if len(pieces[0][0]) == first < len(order):
@@ -121,17 +121,20 @@ def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray,
                    common: tuple) -> tuple[np.ndarray, np.ndarray]:
     """``_visited_part`` of ``order`` from ``begin`` in two interleaved parts at once (the second on
     ``POOL``), merged into the positions the visit in one pass reaches (``_interleaved``)."""
-    mine, theirs, middle = two_writers(L.listing)
-    job = POOL.submit(_visited_part, order, begin, len(order), 1, 2, L.count, best, shared, L.width,
-                      *with_listing(common, theirs))
-    own = _visited_part(order, begin, len(order), 0, 2, L.count, best, shared, L.width, *with_listing(common, mine))
-    other = job.result()
-    closed_up(L.listing, theirs, middle)
+    own, other = in_two_parts(L.listing, _visit_part, order, begin, best, shared, L, common)
     return _interleaved(order[begin:], L.count, best, [own, other])
 
 
+def _visit_part(part: int, listing: tuple, order: np.ndarray, begin: int, best: int, shared: np.ndarray,
+                L: CandidateSets, common: tuple) -> tuple[np.ndarray, ...]:
+    """``_visited_part`` of one of two interleaved parts of ``order`` from ``begin``, listing with
+    ``listing``."""
+    return _visited_part(order, begin, len(order), part, 2, L.count, best, shared, L.width,
+                         *with_listing(common, listing))
+
+
 def with_listing(common: tuple, listing: tuple) -> tuple:
-    """The kernel arguments ``common`` with another ``listing`` argument (``two_writers``)."""
+    """The kernel arguments ``common`` with another ``listing`` argument (``in_two_parts``)."""
     return common[:LISTING] + (listing,) + common[LISTING + 1:]
 
 

@@ -12,11 +12,17 @@ after (``closed_up``).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
+from typing import TypeVar
+
 import numba
 import numpy as np
 
 from ..reuse import recall, remember
 from .candidates import NO_LISTING, Listing, members_into
+from .join import POOL
+
+T = TypeVar("T")
 
 CAPACITY = 1 << 20
 """Members a listing keeps (16 MB); anchors listed once it is full are listed again when asked."""
@@ -85,6 +91,18 @@ def _with_anchor(i, j, n_cav, out, ego_of, cav_of, distance, size):
         return 0
     out[size], ego_of[size], cav_of[size], distance[size] = i * n_cav + j, i, j, 0.0
     return size + 1
+
+
+def in_two_parts(listing: Listing | None, part: Callable[..., T], *args) -> tuple[T, T]:
+    """``part(0, arguments, *args)`` on the calling thread while ``part(1, arguments, *args)`` runs
+    on ``POOL``, each with ``listed_into``'s ``listing`` arguments for its half of the room
+    (``two_writers``), the listing closed up once both are done (``closed_up``); their two results."""
+    mine, theirs, middle = two_writers(listing)
+    job = POOL.submit(part, 1, theirs, *args)
+    own = part(0, mine, *args)
+    other = job.result()
+    closed_up(listing, theirs, middle)
+    return own, other
 
 
 def two_writers(listing: Listing | None) -> tuple[tuple, tuple, int]:

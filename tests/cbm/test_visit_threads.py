@@ -4,7 +4,7 @@ set they kept reads back as listed anew, with no gap between their rows."""
 import numpy as np
 import pytest
 
-from cbm import CBMParams, selection, visit
+from cbm import CBMParams, local_matching, selection, visit
 from cbm.local_matching import listing
 from cbm.pipeline import build_sets, checked_inputs, match_sets
 from cbm.reuse import Reuse
@@ -44,10 +44,10 @@ def test_the_visit_shared_out_is_the_visit_on_one_thread(layout, rule, monkeypat
     t, params = trial(layout), CBMParams(sigma2=4.0, consensus_rule=rule)
     one, one_result, _ = visit_and_match(t, params, None, ONE_THREAD, monkeypatch)
     handed = []
-    submit = visit.POOL.submit
-    monkeypatch.setattr(visit.POOL, "submit", lambda *a, **k: handed.append(a[0]) or submit(*a, **k))
+    submit = local_matching.POOL.submit
+    monkeypatch.setattr(local_matching.POOL, "submit", lambda *a, **k: handed.append(a[0]) or submit(*a, **k))
     two, two_result, _ = visit_and_match(t, params, None, SHARED_OUT, monkeypatch)
-    assert visit._visited_part in handed
+    assert visit._visit_part in handed
     assert len(one.visit.sizes) > SHARED_OUT[visit]["VISIT_FIRST"]
     for field in ("order", "sizes", "offsets", "members"):
         np.testing.assert_array_equal(getattr(two.visit, field), getattr(one.visit, field), err_msg=field)
