@@ -124,6 +124,9 @@ class ExplorerServer:
             self.server.stop()
             raise AddressError(f"port {port} was taken while the server started; choose another --port")
         self.server.gui.configure_theme(**THEME)
+        # Docked, the control panel covers no part of the scene's canvas: a camera framed for the
+        # canvas needs only its aspect ratio, whatever the screen's pixel ratio (``layouts.screen_of``).
+        self.server.gui.main_panel.dock_right()
         self.server.scene.set_up_direction("+z")
         # Plain lighting: no environment map (it washes the boxes' tops out, and costs most of a frame in
         # software WebGL) and no shadows (nothing casts one).

@@ -274,13 +274,11 @@ class ExplorePanel:
         if self.shown is None:
             self.tab.notify("Nothing inspected", "click a box first", "yellow")
             return
-        x, y = self.shown.centre
         client = self.tab.client
         if self.camera_before is None:
             self.camera_before = (tuple(client.camera.position), tuple(client.camera.look_at))
-        screen = layouts.screen_of(client.camera)
-        z = layouts.fitting_height(self.shown.span, screen)
-        position, look_at = layouts.slid_clear_of_panel((x - 0.15 * z, y, z), (x, y, 0.0), screen)
+        height = layouts.fitting_height(self.shown.span, layouts.screen_of(client.camera))
+        position, look_at = layouts.looking_down(self.shown.centre, height, 0.15)
         client.flush()
         layouts.move_camera(client, position, look_at)
         client.flush()

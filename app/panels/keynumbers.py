@@ -13,7 +13,7 @@ import viser
 from evaluation.metrics import TrialMetrics, is_success
 from loaders import is_vehicle
 
-from ..scene import cavs
+from ..scene import cavs, layouts
 from ..scene.colours import Palette, palette
 from ..scene.text import number
 from ..session.explorer import Explorer, Outcome
@@ -23,8 +23,8 @@ ELEMENT_ID = "cbm-key-numbers"
 WARNING_ID = "cbm-not-enough-evidence"
 WARNING_COLOUR = "#c77700"
 """The warning light of a pose CBM has not enough evidence for (amber: shown, but not to be trusted)."""
-PANEL_SPAN = 384 + 16 + 24
-"""CSS pixels from the page's right edge to just left of the control panel (viser's "large" width)."""
+PANEL_SPAN = layouts.PANEL_PX + 24
+"""CSS pixels from the page's right edge to the box: the docked control panel and a gap."""
 STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
          "border-radius:6px;background:rgba(255,255,255,0.92);box-shadow:0 1px 4px rgba(0,0,0,0.25);"
          "font:13px/1.4 system-ui,sans-serif;color:#222;pointer-events:none")

@@ -184,7 +184,7 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
 
 def looked_at_scale(span: float, screen: tuple[float, int, int] = layouts.SCREEN) -> float:
     """Metres per CSS pixel of the camera that looks at panels ``span`` metres across (``look at
-    the context panels``: they fill the page left of the control panel)."""
+    the context panels``: they fill the canvas)."""
     fov, _, height = screen
     return 2.0 * layouts.fitting_height(span, screen) * float(np.tan(fov / 2.0)) / height
 

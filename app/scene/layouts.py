@@ -19,11 +19,13 @@ SIDE_GAP = 20.0
 """Metres between the two copies of the side-by-side layout."""
 TITLE_AT = (-12.0, 3.0)
 """(x, height) of a copy's title."""
-PANEL_PX = 384 + 2 * 16
-"""CSS pixels the control panel takes from the right of the page: viser's ``large`` width (24 em)
-and its margins."""
-SCREEN = (math.radians(50.0), 1280, 720)
-"""(vertical field of view, width, height) assumed before the browser reports its camera."""
+PANEL_PX = 388
+"""CSS pixels the control panel, docked at the page's right (``app.server``), takes from a page's
+width: viser's ``large`` width (24 em of its 16 px font) and the dock's 4 px seam. The scene's canvas
+is the rest."""
+SCREEN = (math.radians(50.0), 1280 - PANEL_PX, 720)
+"""(vertical field of view, width, height) of the canvas assumed before the browser reports its
+camera: a 1280x720 window's part left of the control panel."""
 ASIDE = (0.0, 0.0, 0.05)
 """Metres a camera move first steps aside (``move_camera``)."""
 MOVING = threading.Lock()
@@ -74,16 +76,15 @@ LAYOUTS: dict[str, Layout] = {layout.name: layout for layout in (
 )}
 
 
-def clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, float, float], centre_y: float,
-                   screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """The default top-down camera (``position``, ``look_at``) for the layout centred on ``centre_y``,
-    shown in the part of the page left of the control panel: raised so that two copies side by side
-    fit in that part (the copies are ``2 |centre_y|`` apart, each about as wide), then
-    ``slid_clear_of_panel``."""
+def over_layout(position: tuple[float, float, float], look_at: tuple[float, float, float], centre_y: float,
+                screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The default top-down camera (``position``, ``look_at``) moved sideways onto the layout's
+    centre ``centre_y`` and raised so that two copies side by side fit the canvas (the copies are
+    ``2 |centre_y|`` apart, each about as wide)."""
     x, _, z = position
     if centre_y:
         z = max(z, fitting_height(4.0 * abs(centre_y), screen))
-    return slid_clear_of_panel((x, centre_y, z), (look_at[0], centre_y, 0.0), screen)
+    return (x, centre_y, z), (look_at[0], centre_y, 0.0)
 
 
 def move_camera(client: Any, position: Sequence[float], look_at: Sequence[float]) -> None:
@@ -102,29 +103,24 @@ def move_camera(client: Any, position: Sequence[float], look_at: Sequence[float]
 
 
 def screen_of(camera: Any) -> tuple[float, int, int]:
-    """(vertical field of view, width, height) of a viser camera, ``SCREEN`` until the browser reports it."""
+    """(vertical field of view, width, height) of a viser camera's canvas, ``SCREEN`` until the
+    browser reports it. Width and height are the drawing buffer's pixels: CSS pixels times the
+    screen's pixel ratio (2 on most laptops' screens, and lowered by viser when frames come
+    slowly), so only their ratio is read as a length on the page."""
     return (camera.fov, camera.image_width, camera.image_height) if camera.update_timestamp else SCREEN
 
 
-def free_width(width: int) -> float:
-    """CSS pixels of the page left of the control panel."""
-    return max(width - PANEL_PX, width / 3)
-
-
-def slid_clear_of_panel(position: tuple[float, float, float], look_at: tuple[float, float, float],
-                        screen: tuple[float, int, int] = SCREEN) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """A top-down camera slid sideways (to -y, the screen's right) so that what it looked at shows in
-    the middle of the page's part left of the control panel: by half the panel's width, in metres at
-    the look-at distance (from the vertical field of view ``screen[0]`` and the page's height)."""
-    fov, width, height = screen
-    metres_per_px = 2.0 * math.dist(position, look_at) * math.tan(fov / 2.0) / height
-    shift = metres_per_px * (width - free_width(width)) / 2.0
-    return ((position[0], position[1] - shift, position[2]), (look_at[0], look_at[1] - shift, look_at[2]))
+def looking_down(focus: tuple[float, float], height: float, tilt: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """A camera ``height`` metres above ``focus`` looking at it, standing ``tilt`` metres behind it
+    per metre of height (a camera looking straight down has no 'up' to keep x pointing up the
+    screen)."""
+    x, y = focus
+    return (x - tilt * height, y, height), (x, y, 0.0)
 
 
 def fitting_height(span: float, screen: tuple[float, int, int] = SCREEN, margin: float = 1.25) -> float:
     """Height of a camera looking straight down at which ``span`` metres across (screen x) fill the
-    part of the page left of the control panel, with ``margin`` to spare."""
+    canvas, with ``margin`` to spare: the canvas shows ``2 z tan(fov / 2) width / height`` metres
+    across at height z."""
     fov, width, height = screen
-    metres_per_px_per_metre = 2.0 * math.tan(fov / 2.0) / height
-    return margin * span / (free_width(width) * metres_per_px_per_metre)
+    return margin * span / (2.0 * math.tan(fov / 2.0) * width / height)

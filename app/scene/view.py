@@ -14,7 +14,7 @@ from cbm import se2
 
 from .captions import LABEL_PX
 from .drawing import Drawing, Lines, Mesh
-from .layouts import clear_of_panel, move_camera, screen_of
+from .layouts import move_camera, over_layout, screen_of
 from .points import POINT_SIZE, PointCloud
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
@@ -80,7 +80,7 @@ class SceneView:
         by side), in the part of the page the control panel leaves free."""
         camera, start = self.client.camera, OBLIQUE if oblique else TOP_DOWN
         camera.near = NEAR
-        move_camera(self.client, *clear_of_panel(start["position"], start["look_at"], centre_y, screen_of(camera)))
+        move_camera(self.client, *over_layout(start["position"], start["look_at"], centre_y, screen_of(camera)))
 
     def show(self, drawing: Drawing) -> None:
         """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""

@@ -148,8 +148,5 @@ class WalkthroughPanel:
 
 def camera_over(focus: tuple[float, float], span: float,
                 screen: tuple[float, int, int]) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """A camera looking down on ``focus`` from the height at which ``span`` metres fit the page left
-    of the control panel, slid so that ``focus`` shows in the middle of that part."""
-    x, y = focus
-    z = layouts.fitting_height(span, screen)
-    return layouts.slid_clear_of_panel((x - TILT * z, y, z), (x, y, 0.0), screen)
+    """A camera looking down on ``focus`` from the height at which ``span`` metres fit the canvas."""
+    return layouts.looking_down(focus, layouts.fitting_height(span, screen), TILT)

@@ -50,14 +50,18 @@ def test_the_simulated_localization_sliders_are_unread_under_the_datasets_own_po
     assert unread_reason(own, "eta") == "no effect under the range protocol"
 
 
-def test_the_default_camera_centres_the_layout_left_of_the_panel() -> None:
-    screen = (math.radians(50.0), 1280, 720)
-    position, look_at = layouts.clear_of_panel((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 0.0, screen)
-    metres_per_px = 2 * math.dist(position, look_at) * math.tan(screen[0] / 2) / 720
-    assert look_at[1] == position[1] < 0
-    assert math.isclose(-look_at[1] / metres_per_px, layouts.PANEL_PX / 2)
-    raised, _ = layouts.clear_of_panel((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 30.0, screen)
-    assert raised[2] > (60.0 + 1.3 * 30.0) * 1.2, "side by side: raised to fit the free part"
+def test_the_default_camera_centres_the_layout_on_the_canvas_at_any_pixel_ratio() -> None:
+    screen = (math.radians(50.0), 1280 - layouts.PANEL_PX, 720)
+    position, look_at = layouts.over_layout((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 0.0, screen)
+    assert position == (-10.0, 0.0, 60.0) and look_at == (8.0, 0.0, 0.0)
+    position, look_at = layouts.over_layout((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 30.0, screen)
+    assert look_at[1] == position[1] == 30.0
+    across = 2 * position[2] * math.tan(screen[0] / 2) * screen[1] / screen[2]
+    assert math.isclose(across, 1.25 * 4 * 30.0), "side by side: raised so that both copies fill the canvas"
+    for ratio in (0.75, 2.0, 3.0):
+        drawn = (screen[0], round(ratio * screen[1]), round(ratio * screen[2]))
+        again = layouts.over_layout((-10.0, 0.0, 60.0), (8.0, 0.0, 0.0), 30.0, drawn)
+        assert np.allclose(again, (position, look_at), atol=0.05), ratio
 
 
 def test_the_screenshot_panel_is_the_metrics_as_plain_lines() -> None:

@@ -1,5 +1,6 @@
 """Real-browser tests of issue 13's fixes at 1280x720: key numbers that never scroll away, a camera
-that keeps the layouts clear of the control panel, an inspector beside the scene that is never blank,
+that frames the layouts on the canvas left of the docked control panel (also at two pixels per CSS
+pixel), an inspector beside the scene that is never blank,
 inactive controls disabled with the reason, and a screenshot that can include the panel."""
 from __future__ import annotations
 
@@ -27,9 +28,9 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
         yield running
 
 
-def open_small_page(browser, server: ExplorerServer):
-    page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT})
-    page.goto(ui.address(server))
+def open_small_page(browser, server: ExplorerServer, pixel_ratio: int = 1):
+    page = browser.new_page(viewport={"width": WIDTH, "height": HEIGHT}, device_scale_factor=pixel_ratio)
+    page.goto(ui.address(server, pixel_ratio))
     page.get_by_text("precision / recall").first.wait_for(timeout=60_000)
     return page
 
@@ -38,15 +39,16 @@ def inside_viewport(box: dict | None) -> bool:
     return box is not None and box["y"] >= 0 and box["y"] + box["height"] <= HEIGHT and box["x"] >= 0
 
 
-def screen_x(camera, point: tuple[float, float, float]) -> float:
-    """Where ``point`` shows across the page, in CSS pixels, through a viser camera (+z up)."""
+def across(camera, point: tuple[float, float, float]) -> float:
+    """Where ``point`` shows across the scene's canvas through a viser camera (+z up): 0 at its left
+    edge, 1 at its right."""
     position, look_at = np.asarray(camera.position), np.asarray(camera.look_at)
     forward = (look_at - position) / np.linalg.norm(look_at - position)
     right = np.cross(forward, (0.0, 0.0, 1.0))
     right /= np.linalg.norm(right)
     offset = np.asarray(point) - position
     ndc = (offset @ right) / ((offset @ forward) * math.tan(camera.fov / 2) * camera.aspect)
-    return (ndc + 1.0) / 2.0 * camera.image_width
+    return (ndc + 1.0) / 2.0
 
 
 def test_key_numbers_stay_in_view_while_a_deep_method_control_is_edited(browser, server: ExplorerServer) -> None:
@@ -71,20 +73,25 @@ def test_key_numbers_stay_in_view_while_a_deep_method_control_is_edited(browser,
     page.close()
 
 
-def test_side_by_side_keeps_both_copies_left_of_the_panel(browser, server: ExplorerServer) -> None:
-    page = open_small_page(browser, server)
+@pytest.mark.parametrize("pixel_ratio", [1, 2])
+def test_side_by_side_keeps_both_copies_left_of_the_panel(browser, server: ExplorerServer, pixel_ratio: int) -> None:
+    """Also on a screen of two pixels per CSS pixel (most laptops'), whose camera reports twice the
+    page's pixels: the canvas stops at the docked panel, and both copies show on it."""
+    page = open_small_page(browser, server, pixel_ratio)
     tab = ui.session(server, 1)
     ui.wait_until(lambda: tab.client.camera.update_timestamp > 0)
     page.get_by_role("tab", name="View").click()
     ui.pick_option(page, "CAV boxes", "side by side")
     ui.wait_until(lambda: tab.last.settings.view.layout == "side by side")
+    canvas, panel_left = ui.scene_canvas(page), ui.label(page, "CAV boxes").bounding_box()["x"]
+    assert canvas["x"] == 0 and canvas["x"] + canvas["width"] <= panel_left
     camera = tab.client.camera
-    assert camera.image_width == WIDTH
-    after = screen_x(camera, tab.view.labels["after"].position)
-    before = screen_x(camera, tab.view.labels["before"].position)
-    assert 0 < before < after < WIDTH - PANEL_PX, (before, after)
+    ui.wait_until(lambda: camera.image_width == round(pixel_ratio * canvas["width"]))
+    after = across(camera, tab.view.labels["after"].position)
+    before = across(camera, tab.view.labels["before"].position)
+    assert 0.05 < before < 0.5 < after < 0.95, (before, after)
     page.get_by_role("button", name="reset camera").click()
-    assert 0 < screen_x(tab.client.camera, tab.view.labels["after"].position) < WIDTH - PANEL_PX
+    assert 0.05 < across(tab.client.camera, tab.view.labels["after"].position) < 0.95
     page.close()
 
 
@@ -114,7 +121,7 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
         page.get_by_role("button", name="look at the context panels").click()
         ui.wait_until(lambda: abs(tab.client.camera.look_at[1] - shown.centre[1]) < shown.span, timeout=30)
         ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
-        assert 0 < screen_x(tab.client.camera, (*shown.centre, 0.0)) < WIDTH - PANEL_PX, attempt
+        assert 0.25 < across(tab.client.camera, (*shown.centre, 0.0)) < 0.75, attempt
     ego_id = str(tab.last.trial.ego_ids[int(tab.last.result.anchor[0])])[:8]
     labels = tab.explore.inspector_view.labels
     assert labels["inspector_ego"].text == f"EGO {ego_id}: context in its own frame"

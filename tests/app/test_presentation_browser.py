@@ -86,7 +86,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     middle = (agents.min(axis=0) + agents.max(axis=0)) / 2
     ui.wait_until(lambda: tuple(tab.client.camera.position) != before)
     assert np.allclose(tab.client.camera.look_at[:2], middle, atol=0.5)
-    expand = page.get_by_role("button", name="Expand panel")
+    expand = page.get_by_role("button", name="Expand column")
     expand.wait_for(timeout=20_000)
     ui.label(page, "presentation mode").wait_for(state="hidden", timeout=20_000)
     assert _scheme(other) == "light" and other.locator("#cbm-caption").count() == 0

@@ -13,6 +13,7 @@ from app.scene import planes
 from app.scene.colours import CAV_COLOURS
 from app.scene.drawing import draw
 from app.scene.geometry import footprints
+from app.scene.layouts import PANEL_PX
 from app.server import ExplorerServer
 from app.session.explorer import Explorer, classified_pairs
 from app.session.presets import SHIPPED_DIR, read
@@ -43,9 +44,10 @@ def teaching(frame: int) -> Settings:
 
 
 def settled_camera(tab):
-    """The tab's camera once the browser has reported it, at the page's size."""
+    """The tab's camera once the browser has reported it, at the size of the canvas left of the panel."""
     camera = tab.client.camera
-    ui.wait_until(lambda: camera.update_timestamp and camera.image_width == 1280 and camera.image_height == 720, 60)
+    canvas = (1280 - PANEL_PX, 720)
+    ui.wait_until(lambda: camera.update_timestamp and (camera.image_width, camera.image_height) == canvas, 60)
     return camera
 
 

@@ -24,12 +24,12 @@ FIRST_SCREEN = {"width": 1280, "height": 720}
 """A projector's or a laptop's window: what must show in it without scrolling."""
 
 
-def address(server) -> str:
-    """``server``'s address with the browser's drawing buffer held at the page's own pixels: viser's
-    client otherwise lowers its resolution to 0.875 or 0.75 of them when frames come slowly (a
-    loaded machine), and the camera the browser reports (``image_width``, ``image_height``) then
-    changes size between a move and the test's check of it."""
-    return f"{server.url}/?fixedDpr=1"
+def address(server, pixel_ratio: int = 1) -> str:
+    """``server``'s address with the browser's drawing buffer held at ``pixel_ratio`` pixels per CSS
+    pixel (the page's device scale factor): viser's client otherwise lowers its resolution to 0.875
+    or 0.75 of it when frames come slowly (a loaded machine), and the camera the browser reports
+    (``image_width``, ``image_height``) then changes size between a move and the test's check of it."""
+    return f"{server.url}/?fixedDpr={pixel_ratio}"
 
 
 def launch(sync_api) -> Iterator:
@@ -61,6 +61,12 @@ def in_first_screen(locator) -> bool:
     box = locator.bounding_box()
     return box is not None and box["x"] >= 0 and box["y"] >= 0 \
         and box["x"] + box["width"] <= FIRST_SCREEN["width"] and box["y"] + box["height"] <= FIRST_SCREEN["height"]
+
+
+def scene_canvas(page) -> dict:
+    """The bounding box (CSS pixels) of the scene's canvas: the page's widest canvas."""
+    return max((canvas.bounding_box() for canvas in page.locator("canvas").all()),
+               key=lambda box: box["width"] if box else -1.0)
 
 
 def metrics(page) -> str:
