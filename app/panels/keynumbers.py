@@ -1,7 +1,9 @@
 """The key numbers of the frame on screen, pinned beside the top of the control panel: the panel is
 one scroll area, so the metrics at its top scroll away while a slider deep in a tab is moved; this
-box never does, and sits where the eye is while editing (notifications open top-left). It also
-carries the lasting message of a frame CBM cannot run on (``unusable_markdown``)."""
+box never does, and sits where the eye is while editing (notifications open top-left). It is a
+small panel of its own floating at the canvas's top right (viser's ``add_panel``), so it follows the
+docked control panel's edge when that is dragged wider. It also carries the lasting message of a
+frame CBM cannot run on (``unusable_markdown``)."""
 from __future__ import annotations
 
 import html
@@ -13,7 +15,7 @@ import viser
 from evaluation.metrics import TrialMetrics, is_success
 from loaders import is_vehicle
 
-from ..scene import cavs, layouts
+from ..scene import cavs
 from ..scene.colours import Palette, palette
 from ..scene.text import number
 from ..session.explorer import Explorer, Outcome
@@ -23,11 +25,10 @@ ELEMENT_ID = "cbm-key-numbers"
 WARNING_ID = "cbm-not-enough-evidence"
 WARNING_COLOUR = "#c77700"
 """The warning light of a pose CBM has not enough evidence for (amber: shown, but not to be trusted)."""
-PANEL_SPAN = layouts.PANEL_PX + 24
-"""CSS pixels from the page's right edge to the box: the docked control panel and a gap."""
-STYLE = (f"position:fixed;right:{PANEL_SPAN}px;top:16px;z-index:150;max-width:min(560px,60vw);padding:6px 10px;"
-         "border-radius:6px;background:rgba(255,255,255,0.92);box-shadow:0 1px 4px rgba(0,0,0,0.25);"
-         "font:13px/1.4 system-ui,sans-serif;color:#222;pointer-events:none")
+TAB = "Key numbers"
+GAP, WIDTH = 16.0, 360.0
+"""CSS pixels from the canvas's top right corner to the panel, and its width."""
+STYLE = "font:13px/1.4 system-ui,sans-serif;padding:2px 12px 8px;color:inherit"
 
 
 def key_numbers_html(outcome: Outcome) -> str:
@@ -108,13 +109,17 @@ def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseExcepti
 
 
 class KeyNumbers:
-    """The pinned line of one tab."""
+    """The pinned key numbers of one tab, hidden in presentation mode (its caption shows them)."""
 
     def __init__(self, gui: viser.GuiApi) -> None:
-        self.handle = gui.add_html(problem_html("Computing the first frame…"), order=1_000_000.0)
+        self.panel = gui.add_panel()
+        with self.panel.add_tab(TAB):
+            self.handle = gui.add_html(problem_html("Computing the first frame…"))
+        self.panel.float(x=-GAP, y=GAP, width=WIDTH)
 
     def show(self, outcome: Outcome) -> None:
         self.handle.content = key_numbers_html(outcome)
+        self.panel.visible = not outcome.settings.view.presentation
 
     def problem(self, title: str) -> None:
         self.handle.content = problem_html(title)

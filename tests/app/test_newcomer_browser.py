@@ -25,7 +25,7 @@ def server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 def slider_labels(page) -> list[str]:
     """The labels of every slider on the page, in every tab of the panel (each slider once)."""
     found: dict[str, str] = {}
-    for tab in page.get_by_role("tab").all():
+    for tab in ui.panel_tabs(page):
         tab.click()
         for label in page.locator("label").all():
             control = label.get_attribute("for")
@@ -53,7 +53,7 @@ def test_the_frame_slider_and_play_are_in_the_first_screen_and_the_tabs_on_one_r
     assert ui.in_first_screen(ui.slider(page, "frame"))
     play = page.get_by_role("button", name="▶ play")
     assert ui.in_first_screen(play) and ui.in_first_screen(page.get_by_role("button", name="next ▶"))
-    tabs = page.get_by_role("tab").all()
+    tabs = ui.panel_tabs(page)
     assert len(tabs) == 6 and len({round(t.bounding_box()["y"]) for t in tabs}) == 1
     assert [name for name in slider_labels(page) if re.search(r"\bframe\b", name)] == ["frame"]
 

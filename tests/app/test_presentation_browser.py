@@ -81,6 +81,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
                                                  f"precision {m.precision:.2f} · recall {m.recall:.2f}",
                                                  f"RTE {m.rte:.2f} m · RRE {m.rre:.1f}°"]
     assert ui.in_first_screen(caption)
+    page.locator("#cbm-key-numbers").wait_for(state="hidden", timeout=20_000)
     assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in tab.view.labels.values() if label.visible)
     agents = np.array(tab.last_drawing.agents)
     middle = (agents.min(axis=0) + agents.max(axis=0)) / 2
@@ -113,6 +114,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     page.get_by_text("green right pair").first.wait_for(timeout=20_000)
     assert _colour(tab.view.lines["right"]) == colours.RIGHT
     caption.wait_for(state="hidden", timeout=20_000)
+    page.locator("#cbm-key-numbers").wait_for(timeout=20_000)
     page.close()
     other.close()
 

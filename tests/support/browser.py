@@ -63,6 +63,13 @@ def in_first_screen(locator) -> bool:
         and box["x"] + box["width"] <= FIRST_SCREEN["width"] and box["y"] + box["height"] <= FIRST_SCREEN["height"]
 
 
+def panel_tabs(page) -> list:
+    """The control panel's tabs (Scenario, Method, ...), not those of the panels floating over the
+    scene (the key numbers, presentation mode's caption)."""
+    tablist = page.get_by_role("tablist").filter(has=page.get_by_role("tab", name="Scenario", exact=True))
+    return tablist.get_by_role("tab").all()
+
+
 def scene_canvas(page) -> dict:
     """The bounding box (CSS pixels) of the scene's canvas: the page's widest canvas."""
     return max((canvas.bounding_box() for canvas in page.locator("canvas").all()),
