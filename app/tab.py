@@ -9,7 +9,7 @@ import time
 import numpy as np
 import viser
 
-from cbm.interpreted import SMALL
+from cbm.engine.interpreted import SMALL
 
 from . import panels
 from .panels.actions import Edit

@@ -47,7 +47,7 @@ def app_edits(dataset: str, edits: int) -> dict[str, float]:
         for k in range(edits):
             timings = explorer.compute(settings.with_params("cbm", **{name: values[k % 2]})).result.timings
             spent.append(1000 * timings["total"])
-            joined.append(1000 * (timings["local_matching"] + timings["voting_sets"]))
+            joined.append(1000 * (timings["local_matching"] + timings.get("voting_sets", 0.0)))
         times[f"{dataset} {name} edit"] = statistics.median(spent)
         times[f"{dataset} {name} edit: local matching + voting sets"] = statistics.median(joined)
     return times

@@ -1,9 +1,9 @@
 """The floor of the exact count: a bare kernel that only counts the quadruples eq. 7 accepts.
 
-It reads the same grids the join reads (``cbm.local_matching.build_grid``, built beforehand and not
+It reads the same grids the join reads (``cbm.engine.grid.build_grid``, built beforehand and not
 timed), visits each ego context vector's cells in one tight loop and adds 1 per accepted quadruple
-to a single counter: no per-anchor counters, no voting lists; each group's objects in ``THREADS``
-parts on the join's threads, as the join runs at 1000 objects. What the join spends
+to a single counter: no per-anchor counters, no voting lists; each group's objects in as many
+parts as the engine has threads, shared out as the join's work is (``cbm.engine.threads``). What the join spends
 beyond it is the cost of how it counts, the measure ``bench_match.py`` prints beside it.
 """
 from __future__ import annotations
@@ -15,14 +15,18 @@ import numba
 import numpy as np
 
 from cbm import CBMParams, se2
-from cbm.context import build_context, fold_heading, pair_signs
-from cbm.local_matching import POOL, THREADS, build_grid, group_signs, heading_groups
+from cbm.context import build_context
+from cbm.engine import tuning
+from cbm.engine.grid import build_grid, group_signs, heading_groups
+from cbm.engine.threads import shared_out
+from cbm.reference import fold_heading, pair_signs
 
 
 @numba.njit(cache=True, nogil=True)
-def _count(ego_ids, ego_vectors, per_anchor, signs, u0, v0, cell, nx, ny, start, gx, gy, g_anchor, g_check,
-           cos2_sigma1, radius):
+def _count(ego_ids, ego_vectors, per_anchor, signs, grid, cos2_sigma1, radius):
     """Accepted quadruples (eq. 7) of the ego objects ``ego_ids`` against one grid."""
+    u0, v0, cell, nx, ny = grid.cells
+    start, gx, gy, g_anchor, g_check = grid.start, grid.x, grid.y, grid.anchor, grid.check
     total = 0
     for n in range(len(ego_ids)):
         i = ego_ids[n]
@@ -58,8 +62,7 @@ def floor_seconds(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray
     grids = [build_grid(cav_context, group_signs(signs, g), params.sigma2) for g in groups]
     cos2 = math.cos(params.sigma1_rad) ** 2
     started = time.perf_counter()
-    jobs = [POOL.submit(_count, part, ego.vectors, per_anchor, signs, g.u0, g.v0, g.cell, g.nx, g.ny, g.start, g.x,
-                        g.y, g.anchor, g.check, cos2, params.sigma2)
-            for group, g in zip(groups, grids) for part in np.array_split(group, THREADS) if len(part)]
-    total = sum(job.result() for job in jobs)
+    tasks = [lambda part=part, g=g: _count(part, ego.vectors, per_anchor, signs, g, cos2, params.sigma2)
+             for group, g in zip(groups, grids) for part in np.array_split(group, tuning.THREADS) if len(part)]
+    total = sum(shared_out(tasks))
     return time.perf_counter() - started, int(total)

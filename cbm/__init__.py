@@ -2,12 +2,11 @@
 
     from cbm import CBMParams, match
     result = match(ego_boxes, cav_boxes, init=T_tilde, params=CBMParams())
+
+``cbm.reference`` states eq. 5-13 plainly; ``cbm.match`` runs them fast (``cbm.engine``).
 """
-from . import moved
 from .params import CBMParams
 from .pipeline import match
 from .result import MatchResult
 
 __all__ = ["CBMParams", "MatchResult", "match"]
-
-moved.install()

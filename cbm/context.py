@@ -1,46 +1,19 @@
-"""Heading handling (step 2) and intra-agent context construction (paper eq. 5-6)."""
+"""Steps 1-3 as the engine holds them: the CAV boxes in the ego frame, the folded headings and
+the signs (``cbm.reference``'s steps 1-2), and every object's context vectors (eq. 5-6,
+``cbm.reference.context_vectors``) stacked anchor by anchor, with the extent the join's grid needs."""
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
 
-from .params import HeadingMode
+from . import se2
+from .reference import fold_heading, pair_signs
 
 
-def fold_heading(yaw: np.ndarray) -> np.ndarray:
-    """Fold headings into (-pi/2, pi/2], as the released code does before building contexts."""
-    folded = np.mod(np.asarray(yaw, dtype=float) + np.pi / 2, np.pi) - np.pi / 2
-    return np.where(folded == -np.pi / 2, np.pi / 2, folded)
-
-
-def pair_signs(ego_heading: np.ndarray, cav_heading: np.ndarray, mode: HeadingMode) -> np.ndarray:
-    """(Ne, Nc) sign applied to a CAV object's local frame when it is compared with an ego object.
-
-    Headings are folded. ``fold``: always +1, so an object near +-90 degrees may fold to opposite
-    directions for the two agents and its local frame flips. ``align``: -1 where the two folded
-    headings differ by more than 90 degrees, which turns the CAV frame by pi so that it lies within
-    90 degrees of the ego frame it is compared with; a co-visible object's frames then never flip.
-    """
-    if mode == "fold":
-        return np.ones((len(ego_heading), len(cav_heading)))
-    signs = np.empty((len(ego_heading), len(cav_heading)))
-    _fill_signs(np.asarray(ego_heading, dtype=float), np.asarray(cav_heading, dtype=float), signs)
-    return signs
-
-
-@numba.njit(cache=True, nogil=True)
-def _fill_signs(ego_heading, cav_heading, signs):
-    """``signs[i, j]`` = +1 where |cav_heading[j] - ego_heading[i]| <= pi / 2, else -1 (one pass,
-    no (Ne, Nc) temporaries)."""
-    for i in range(len(ego_heading)):
-        for j in range(len(cav_heading)):
-            signs[i, j] = 1.0 if abs(cav_heading[j] - ego_heading[i]) <= np.pi / 2 else -1.0
-
-
-@dataclass(frozen=True)
-class Context:
+class Context(NamedTuple):
     """All context vectors of one agent: ``vectors[k] = R(theta_anchor)^T (p_member - p_anchor)``."""
 
     anchor: np.ndarray
@@ -82,3 +55,44 @@ def _fill_context(xy, c, s, anchor, member, vectors, bounds):
             u0, u1, v0, v1 = min(u0, x + y), max(u1, x + y), min(v0, x - y), max(v1, x - y)
             k += 1
         bounds[i, 0], bounds[i, 1], bounds[i, 2], bounds[i, 3] = u0, u1, v0, v1
+
+
+@dataclass(frozen=True)
+class Prepared:
+    """Steps 1-3 of one input: what no threshold changes."""
+
+    cav_boxes: np.ndarray
+    """(Nc, 7) CAV boxes in the ego frame after ``init`` (step 1)."""
+    ego_heading: np.ndarray
+    """(Ne,) folded ego headings (step 2)."""
+    cav_heading: np.ndarray
+    """(Nc,) folded CAV headings after ``init`` (step 2)."""
+    signs: np.ndarray
+    """(Ne, Nc) +1 or -1: how the CAV frame is turned against each ego frame (step 2)."""
+    ego_context: Context
+    cav_context: Context
+
+
+def prepare(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str) -> Prepared:
+    """Steps 1-3: the CAV boxes in the ego frame, folded headings, signs and context vectors."""
+    cav_in_ego = se2.apply_boxes(init, cav)
+    ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav_in_ego[:, 6])
+    signs = aligned_signs(ego_heading, cav_heading) if heading == "align" else pair_signs(ego_heading, cav_heading,
+                                                                                             heading)
+    return Prepared(cav_in_ego, ego_heading, cav_heading, signs, build_context(ego[:, :2], ego_heading),
+                    build_context(cav_in_ego[:, :2], cav_heading))
+
+
+def aligned_signs(ego_heading: np.ndarray, cav_heading: np.ndarray) -> np.ndarray:
+    """``cbm.reference.pair_signs`` with ``mode="align"``, in one pass without (Ne, Nc) temporaries."""
+    signs = np.empty((len(ego_heading), len(cav_heading)))
+    _fill_signs(np.asarray(ego_heading, dtype=float), np.asarray(cav_heading, dtype=float), signs)
+    return signs
+
+
+@numba.njit(cache=True, nogil=True)
+def _fill_signs(ego_heading, cav_heading, signs):
+    """``signs[i, j]`` = +1 where |cav_heading[j] - ego_heading[i]| <= pi / 2, else -1."""
+    for i in range(len(ego_heading)):
+        for j in range(len(cav_heading)):
+            signs[i, j] = 1.0 if abs(cav_heading[j] - ego_heading[i]) <= np.pi / 2 else -1.0

@@ -1,4 +1,4 @@
-"""Noise-aware gates (beyond the paper; DESIGN.md step 7c): how far apart two detections of one
+"""Noise-aware gates (beyond the paper, step 7c): how far apart two detections of one
 object may lie, read from the scene itself rather than fixed.
 
 The scale is the pairs' own: the residuals' per-axis std-dev (``scene_sigma``), read from pairs the

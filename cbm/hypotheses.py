@@ -1,4 +1,4 @@
-"""Hypotheses, verified (beyond the paper; DESIGN.md step 7c): several anchors' answers refined and
+"""Hypotheses, verified (beyond the paper, step 7c): several anchors' answers refined and
 the one that explains the scene best kept, as RANSAC-style verification does in registration.
 
 Eq. 13 keeps one anchor; under heavy noise its set can be a coincidence, and nothing checks it.
@@ -32,11 +32,10 @@ import numba
 import numpy as np
 
 from . import se2
+from .engine import Visit, anchor_sets
 from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
-from .selection import anchor_sets
-from .visit import Visit
 
 HYPOTHESES = 6
 """Anchors refined and verified (the eq. 13 winner and the next best distinct sets)."""
@@ -223,7 +222,7 @@ def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, wides
     refinement) would refine to the same answer: it is skipped, so an easy scene costs about one
     refinement. Only the winner runs the guided re-association (its robust refit every round is the
     costly part); the others go straight to the noise-aware one. The sets eq. 13's ``visit``
-    (``cbm.visit.Visit``) filtered are not filtered again."""
+    (``cbm.engine.Visit``) filtered are not filtered again."""
     density = clutter_density(sets.cav_xy)
     ego, cav = sets.ego_boxes, sets.cav_boxes
     found: list[Hypothesis] = []

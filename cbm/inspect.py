@@ -1,7 +1,9 @@
 """Explain CBM on one input: any anchor's context, candidate set, votes and filtered set.
 
-``Inspection`` runs steps 1-4 once (``cbm.pipeline.build_sets``) and then answers questions about
-single anchors with plain numpy, so the app can show why a pair was kept or dropped.
+``Inspection`` runs steps 1-4 once (``cbm.pipeline.build_sets``) and then explains single anchors
+with the paper's own steps (``cbm.reference``: the consensus, the one-to-one rule and the distance
+limit) on the sets the engine built, so the app shows why a pair was kept or dropped in the terms
+a reader of the reference finds there.
 """
 from __future__ import annotations
 
@@ -10,12 +12,11 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .consensus import PairSets
+from . import reference
+from .engine import PairSets, Reuse, filtered_sizes
 from .params import CBMParams
 from .pipeline import Sets, build_sets, checked_inputs, match_sets_visited
 from .result import MatchResult
-from .reuse import Reuse
-from .selection import filtered_sizes
 
 
 @dataclass(frozen=True)
@@ -42,27 +43,16 @@ class AnchorDetail:
         return 0 if self.rejected else len(self.final)
 
 
-def _occurs_once(values: np.ndarray) -> np.ndarray:
-    """Whether each of ``values`` (object indices, not negative) occurs once among them."""
-    return np.bincount(values)[values] == 1
-
-
-def _votes_from(voted_by: PairSets, members: np.ndarray, voters: np.ndarray, n_pairs: int) -> np.ndarray:
-    """For each member: how many ``voters`` hold it in their voting set."""
-    is_voter = np.zeros(n_pairs, dtype=bool)
-    is_voter[voters] = True
+def votes_from(voted_by: PairSets, members: np.ndarray, by: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
+    """``cbm.reference.votes`` at the pair ids ``members`` (0 elsewhere), from the engine's voting
+    sets grouped by member: how many of the pairs ``by`` (an (Ne, Nc) boolean matrix) hold each."""
     starts = voted_by.start[members]
     lengths = voted_by.start[members + 1] - starts
     owner = np.repeat(np.arange(len(members)), lengths)
     rows = starts[owner] + np.arange(lengths.sum()) - np.repeat(np.cumsum(lengths) - lengths, lengths)
-    return np.bincount(owner, weights=is_voter[voted_by.member[rows]], minlength=len(members)).astype(int)
-
-
-def one_to_one_mask(pairs: np.ndarray) -> np.ndarray:
-    """Eq. 11: pairs whose ego object and CAV object each occur once."""
-    if len(pairs) == 0:
-        return np.zeros(0, dtype=bool)
-    return _occurs_once(pairs[:, 0]) & _occurs_once(pairs[:, 1])
+    counted = np.zeros(shape, np.int64)
+    counted.flat[members] = np.bincount(owner, weights=by.ravel()[voted_by.member[rows]], minlength=len(members))
+    return counted
 
 
 class Inspection:
@@ -94,13 +84,14 @@ class Inspection:
 
     def context(self, agent: str, index: int, against: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(neighbour indices, (n - 1, 2) context vectors) of one object in its own local frame
-        (eq. 5-6). For a CAV object compared ``against`` an ego object, the frame as CBM turns it."""
-        context = self.sets.ego_context if agent == "ego" else self.sets.cav_context
-        rows = context.anchor == index
-        vectors = context.vectors[rows]
+        (eq. 5-6, ``cbm.reference.context_vectors``). For a CAV object compared ``against`` an ego
+        object, the frame as CBM turns it (step 2)."""
+        sets = self.sets
+        xy, heading = (sets.ego_xy, sets.ego_heading) if agent == "ego" else (sets.cav_xy, sets.cav_heading)
+        vectors = np.delete(reference.context_vectors(xy, heading, index), index, axis=0)
         if agent == "cav" and against is not None:
-            vectors = vectors * self.sets.signs[against, index]
-        return context.member[rows], vectors
+            vectors = vectors * sets.signs[against, index]
+        return np.delete(np.arange(len(xy)), index), vectors
 
     def anchor(self, i: int, j: int) -> AnchorDetail:
         """Anchor (i, j) through candidate set, consensus, one-to-one rule and distance limit."""
@@ -110,21 +101,26 @@ class Inspection:
         return self._anchors[key]
 
     def _explain(self, i: int, j: int) -> AnchorDetail:
+        """Anchor (i, j) through the reference's eq. 10-12, on the engine's candidate and voting sets."""
         sets = self.sets
-        a = i * self.n_cav + j
-        members = sets.candidates.members(a)
+        shape = sets.signs.shape
+        members = sets.candidates.members(i * self.n_cav + j)
         candidates = self._pairs(members)
-        lone = one_to_one_mask(candidates)
-        voters = members[lone] if sets.rule == "released" else members
-        votes = _votes_from(sets.voted_by, members, voters, len(sets.signs.ravel()))
-        kept = {None: np.ones(len(members), dtype=bool), "paper": votes > 1, "released": lone | (votes >= 1)}[sets.rule]
-        survivors = candidates[kept]
-        final = survivors[one_to_one_mask(survivors)]
-        final = final[np.argsort(final[:, 0], kind="stable")]
-        distance = (float(np.linalg.norm(sets.ego_xy[final[:, 0]] - sets.cav_xy[final[:, 1]], axis=1).mean())
-                    if len(final) else float("nan"))
-        return AnchorDetail(anchor=(i, j), candidates=candidates, votes=votes, kept_by_consensus=kept, final=final,
-                            mean_distance=distance, rejected=bool(len(final)) and distance > sets.params.distance_limit)
+        in_set = np.zeros(shape, dtype=bool)
+        in_set.flat[members] = True
+
+        def votes_of(by: np.ndarray) -> np.ndarray:
+            return votes_from(sets.voted_by, members, by, shape)
+
+        agents = reference.Agents(sets.ego_xy, sets.ego_heading, sets.cav_xy, sets.cav_heading, sets.signs)
+        kept = reference.consensus(in_set, votes_of, sets.rule)
+        final = reference.one_to_one(kept)
+        distance = reference.mean_distance(agents, final)
+        return AnchorDetail(anchor=(i, j), candidates=candidates,
+                            votes=votes_of(reference.voters(in_set, sets.rule)).flat[members].astype(int),
+                            kept_by_consensus=kept.flat[members], final=np.argwhere(final),
+                            mean_distance=distance,
+                            rejected=bool(final.any()) and distance > sets.params.distance_limit)
 
     def best_anchor_among(self, pairs: np.ndarray) -> AnchorDetail | None:
         """The anchor with the largest score among the given pairs (ties: the first), or None.

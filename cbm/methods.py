@@ -16,7 +16,7 @@ import numpy as np
 
 from .baselines import (
     ICPParams,
-    ReferenceParams,
+    NoParams,
     RICPParams,
     VIPSParams,
     match_icp,
@@ -105,7 +105,7 @@ CBM_REQUIRES = {"sigma3": ("consensus", True), "consensus_rule": ("consensus", T
 """CBM's parameters that act only with the consensus or the re-association on."""
 
 METHODS: dict[str, Method] = {m.name: m for m in (
-    Method("none", "none (no calibration)", ReferenceParams, match_none),
+    Method("none", "none (no calibration)", NoParams, match_none),
     Method("cbm", "CBM", CBMParams, match, explains=True, requires=CBM_REQUIRES),
     Method("cbm-no-consensus", "CBM without consensus", CBMParams, match, forced={"consensus": False},
            shares="cbm", explains=True, requires=CBM_REQUIRES),
@@ -114,7 +114,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("icp", "ICP", ICPParams, match_icp),
     Method("ricp", "RICP", RICPParams, match_ricp),
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),
-    Method("oracle", "oracle (true pairs)", ReferenceParams, match_oracle, takes_truth=True),
+    Method("oracle", "oracle (true pairs)", NoParams, match_oracle, takes_truth=True),
 )}
 """The methods in the order tables and lists show them: the references bound the others."""
 

@@ -38,7 +38,7 @@ class CBMParams:
     """Global consensus (eq. 9-10) on or off (off is the paper's ablation)."""
     consensus_rule: ConsensusRule = "released"
     """``paper``: eq. 9-10, every candidate needs another member's vote. ``released``: the authors'
-    code, only candidates sharing a row or column of their set need a vote (see ``cbm.consensus``)."""
+    code, only candidates sharing a row or column of their set need a vote (see ``cbm.reference.consensus``)."""
     heading: HeadingMode = "align"
     """``fold``: fold every heading into (-pi/2, pi/2] (released code). ``align``: turn each CAV
     object's heading by pi where that brings it closer to the ego object it is compared with."""

@@ -1,5 +1,9 @@
 """CBM, steps 1-7 of the paper's section III, from two box lists and a wrong relative pose, and the
-guided re-association beyond it (step 7b, ``cbm.reassociate``)."""
+hypotheses verified beyond it (steps 7b-7c, ``cbm.hypotheses``).
+
+Steps 1-3 (``cbm.context.prepare``), then eq. 7-13 by the engine (``cbm.engine``: the same answer as
+``cbm.reference``, fast), the pose estimate (eq. 14-15, ``cbm.estimate``) and the verification.
+"""
 from __future__ import annotations
 
 import math
@@ -9,18 +13,23 @@ from typing import Any
 
 import numpy as np
 
-from .consensus import PairSets, voted_by_member
-from .context import Context
+from .context import Prepared, prepare
+from .engine import (
+    CandidateSets,
+    PairSets,
+    Reuse,
+    Selection,
+    Visit,
+    candidate_sets,
+    local_matching,
+    runner_up_beside,
+    select,
+)
 from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
-from .local_matching import CandidateSets
-from .local_matching.counting import candidate_sets, counts_and_votes
 from .params import CBMParams
 from .result import MatchResult
-from .reuse import Prepared, Reuse, prepare, recall, remember
-from .selection import select
-from .visit import Visit
 
 
 @dataclass(frozen=True)
@@ -31,7 +40,7 @@ class Sets:
     ego_boxes: np.ndarray
     """(Ne, 7) ego boxes."""
     prepared: Prepared
-    """Steps 1-2 and the context vectors (eq. 5-6) of this input (``cbm.reuse.prepare``)."""
+    """Steps 1-3 of this input (``cbm.context.prepare``)."""
     candidates: CandidateSets
     """L_ij of every anchor (eq. 8) by pair id ``i * Nc + j``: sizes, and members on demand."""
     voted_by: PairSets
@@ -58,14 +67,6 @@ class Sets:
         return self.prepared.signs
 
     @property
-    def ego_context(self) -> Context:
-        return self.prepared.ego_context
-
-    @property
-    def cav_context(self) -> Context:
-        return self.prepared.cav_context
-
-    @property
     def ego_xy(self) -> np.ndarray:
         """(Ne, 2) ego centres."""
         return self.ego_boxes[:, :2]
@@ -82,35 +83,25 @@ class Sets:
 
 def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
                timings: dict[str, float] | None = None, reuse: Reuse | None = None) -> Sets:
-    """Steps 1-4 and the candidate and voting sets, for checked inputs; with ``reuse``, what an
-    earlier call on the same input built and no threshold changes is taken from it, and so are the
-    counts of eq. 8 when sigma1 and sigma2 are unchanged and the voting sets of eq. 9 when sigma1 and
-    sigma3 are (``cbm.reuse.recall``). The join's votes are grouped, and freed, before the sorted
-    blocks of the candidate sets are built, so the two are never held at once."""
+    """Steps 1-3, then card(L_ij) of every anchor (eq. 7-8) and the voting sets (eq. 9) grouped by
+    member, for checked inputs (timed together as ``local_matching``). With ``reuse``, what an
+    earlier call on the same input built and no threshold changes is taken from its
+    ``cbm.engine.EditCache``, which runs only what the edit changed."""
     timings = {} if timings is None else timings
     started = time.perf_counter()
-    ready = prepare(ego, cav, init, params.heading) if reuse is None else reuse.prepared(ego, cav, init, params.heading)
+    cache = None if reuse is None else reuse.cache(ego, cav, init, params.heading)
+    ready = prepare(ego, cav, init, params.heading) if cache is None else cache.prepared
     t = time.perf_counter()
     timings["context"] = t - started
 
-    kept, sigma3 = None if reuse is None else ready.kept, params.sigma3 if params.consensus else None
-    voting_key = (params.sigma1_rad, sigma3)
-    voted_by = None if sigma3 is None else recall(kept, "voted_by", voting_key)
-    count2, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
-                                     params.sigma1_rad, params.sigma2, sigma3, kept, list_votes=voted_by is None)
-    joined = time.perf_counter()
-
-    n_pairs = len(ego) * len(cav)
-    if sigma3 is None:
-        voted_by = PairSets.empty(n_pairs)
-    elif voted_by is None:
-        voted_by = voted_by_member(votes, n_pairs)
-        remember(kept, "voted_by", voting_key, voted_by)
-    grouped = time.perf_counter()
-    candidates = candidate_sets(ready.ego_context, ready.cav_context, ready.signs, params.sigma1_rad, params.sigma2,
-                                count2, kept)
-    timings["local_matching"] = joined - t + time.perf_counter() - grouped
-    timings["voting_sets"] = grouped - joined
+    sigma1, sigma3 = params.sigma1_rad, params.sigma3 if params.consensus else None
+    if cache is None:
+        count2, voted_by = local_matching(ready, sigma1, params.sigma2, sigma3)
+        candidates = candidate_sets(ready, sigma1, params.sigma2, count2)
+    else:
+        count2, voted_by = cache.local_matching(sigma1, params.sigma2, sigma3)
+        candidates = cache.candidate_sets(sigma1, params.sigma2, count2)
+    timings["local_matching"] = time.perf_counter() - t
     return Sets(params, ego, ready, candidates, voted_by)
 
 
@@ -147,10 +138,10 @@ def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = 
 
 def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
                        started: float | None = None) -> tuple[MatchResult, Visit | None]:
-    """``match_sets``, and what the selection's visit filtered (``cbm.visit.Visit``; None when every
-    set is empty): the filtered sizes it computed, for ``cbm.inspect`` to reuse. The selection may
-    leave its runner-up search running while the winner is verified; the time waited for it after
-    that counts as the selection's."""
+    """``match_sets``, and what the selection's visit filtered (``cbm.engine.Visit``; None when every
+    set is empty): the filtered sizes it computed, for ``cbm.inspect`` to reuse. The runner-up search
+    may run beside the verification of the winner (``cbm.engine.runner_up_beside``): their time is
+    then the verification's."""
     started = time.perf_counter() if started is None else started
     timings = {} if timings is None else timings
     params, n_cav = sets.params, len(sets.cav_xy)
@@ -159,23 +150,20 @@ def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] |
     timings["consensus_selection"] = time.perf_counter() - t
 
     t = time.perf_counter()
-    context_pairs = pairs = chosen.pairs.astype(np.intp)
-    estimated = len(pairs) >= 2
-    fit = estimate(sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]], params) if estimated else None
-    correction = fit.transform if estimated else np.eye(3)
+    context_pairs = chosen.pairs.astype(np.intp)
+    estimated = len(context_pairs) >= 2
+    fit = estimate(sets.cav_xy[context_pairs[:, 1]], sets.ego_xy[context_pairs[:, 0]], params) if estimated else None
     timings["estimate"] = time.perf_counter() - t
 
-    verdict = None
-    if estimated and params.refine:
-        t = time.perf_counter()
-        verdict = verify(sets, chosen.anchor, fit, lambda src, dst: estimate(src, dst, params),
-                         params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate, chosen.visit)
-        best = verdict.best
-        pairs, correction = best.pairs, best.correction
-        timings["reassociate"] = time.perf_counter() - t
     t = time.perf_counter()
-    runner_up_count = chosen.runner_up_count
-    timings["consensus_selection"] += time.perf_counter() - t
+    runner_up_count, verdict = runner_up_beside(chosen.rival, lambda: verified(sets, chosen, fit))
+    spent = time.perf_counter() - t
+    if verdict is None:
+        timings["consensus_selection"] += spent
+    else:
+        timings["reassociate"] = spent
+    pairs, correction = (verdict.best.pairs, verdict.best.correction) if verdict is not None else (
+        context_pairs, fit.transform if estimated else np.eye(3))
     timings["total"] = time.perf_counter() - started
 
     return MatchResult(
@@ -192,6 +180,16 @@ def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] |
         context_pairs=context_pairs,
         **verdict_fields(verdict, len(pairs), n_cav, init),
     ), chosen.visit
+
+
+def verified(sets: Sets, chosen: Selection, fit: Fit | None) -> Verdict | None:
+    """Steps 7b-7c on the eq. 13 winner and its robust ``fit`` (``cbm.hypotheses.verify``); None
+    without a fit or with the re-association off (the paper's method)."""
+    if fit is None or not sets.params.refine:
+        return None
+    params = sets.params
+    return verify(sets, chosen.anchor, fit, lambda src, dst: estimate(src, dst, params),
+                  params.welsch_floor / WELSCH_EFFICIENT_SCALE, params.refine_gate, chosen.visit)
 
 
 def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int, init: np.ndarray) -> dict[str, Any]:

@@ -1,4 +1,4 @@
-"""Guided re-association after CBM (beyond the paper; DESIGN.md step 7b).
+"""Guided re-association after CBM (beyond the paper, step 7b).
 
 CBM's answer is one anchor's set (eq. 13): under hard noise its local tests (eq. 7) miss many true
 pairs, although once the pose is known most true pairs lie within a metre or two of each other.

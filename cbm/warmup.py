@@ -25,19 +25,20 @@ from pathlib import Path
 import numpy as np
 
 from . import se2
-from .consensus import PairSets, voted_by_member
-from .context import build_context, fold_heading, pair_signs
+from .context import prepare
+from .engine import PairSets, Reuse, candidate_sets, filtered_sizes, select, tuning
+from .engine.counting import counts_and_votes
+from .engine.filtered import filtering
+from .engine.interpreted import kernels
+from .engine.listing import closed_up, new_listing, writers
+from .engine.rival import RivalSearch, runner_up
+from .engine.selection import by_count_descending
+from .engine.voting import voted_by_member
 from .estimate import robust_fit
 from .hypotheses import evidence, same_pose
-from .interpreted import kernels
-from .local_matching import CandidateSets, member_lookup
-from .local_matching.counting import counts_and_votes
-from .local_matching.listing import closed_up, listing_for, two_writers
 from .params import CBMParams
 from .pipeline import build_sets, checked_inputs, match
 from .reassociate import gated_assignment
-from .reuse import Reuse, prepare
-from .selection import by_count_descending, filtered_sizes, kernel_arguments, select, strongest_rival
 
 VARIANTS: tuple[CBMParams, ...] = (
     CBMParams(),
@@ -91,48 +92,48 @@ def warm_up(variants: Sequence[CBMParams] = VARIANTS,
 
 
 def sigma2_edit() -> None:
-    """A first call and a sigma2 edit on the same input through ``Reuse``: the edit counts from
-    the quadruples' distances it keeps (``cbm.local_matching.distances``)."""
+    """A first call and a sigma2 edit on the same input through ``Reuse``: the edit counts again
+    and reads the members listed at the first sigma2 (``cbm.engine.listing``)."""
     reuse = Reuse()
     for params in (CBMParams(), CBMParams(sigma2=2.5)):
         build_sets(*checked_inputs(*scene(), params), reuse=reuse)
 
 
 def compile_matching() -> None:
-    """Compile steps 1-4 and the voting sets (context, the join, the grouping in one pass and in
-    two halves, the counts of a sigma2 edit) with first calls."""
+    """Compile steps 1-4 and the voting sets (context, the join, the grouping in one run and in
+    several, the counts of a sigma2 edit) with first calls."""
     sigma2_edit()
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
     ready = prepare(ego, cav, init, params.heading)
-    _, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
-                                params.sigma1_rad, params.sigma2, params.sigma3)
-    voted_by_member(votes, ready.signs.size, halves=True)
+    _, votes = counts_and_votes(ready, params.sigma1_rad, params.sigma2, params.sigma3)
+    threshold, tuning.VOTES_APART_FROM = tuning.VOTES_APART_FROM, 0
+    try:
+        voted_by_member(votes, ready.signs.size)
+    finally:
+        tuning.VOTES_APART_FROM = threshold
 
 
 def compile_selection() -> None:
-    """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up on one thread and on
-    two, the listing's two writers closed up, the robust fit, the grouping of a large assignment,
-    the evidence, the comparison of poses) with a first call on candidate sets whose sizes are
-    upper bounds, without running the join that counts them."""
+    """Compile steps 5-7 (the visit, consensus, one-to-one rule, runner-up, the listing's writers
+    closed up, the robust fit, the grouping of a large assignment, the evidence, the comparison of
+    poses) with a first call on candidate sets whose sizes are upper bounds, without running the
+    join that counts them."""
     ego, cav, init, params = checked_inputs(*scene(), CBMParams())
-    cav = se2.apply_boxes(init, cav)
-    ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav[:, 6])
-    n_ego, n_cav = len(ego), len(cav)
-    lookup = member_lookup(build_context(ego[:, :2], ego_heading), build_context(cav[:, :2], cav_heading), n_ego,
-                           n_cav, params.sigma1_rad, params.sigma2)
+    ready = prepare(ego, cav, init, params.heading)
+    n_ego, n_cav = ready.signs.shape
     bound = np.full(n_ego * n_cav, (n_ego - 1) * (n_cav - 1) + 1, np.int64)
-    candidates = CandidateSets(bound, lookup, pair_signs(ego_heading, cav_heading, params.heading))
-    sets = (candidates, PairSets.empty(n_ego * n_cav), params.consensus_rule, ego[:, :2], cav[:, :2],
-            params.distance_limit)
+    candidates = candidate_sets(ready, params.sigma1_rad, params.sigma2, bound)
+    ego_xy, cav_xy = ego[:, :2], ready.cav_boxes[:, :2]
+    sets = (candidates, PairSets.empty(n_ego * n_cav), params.consensus_rule, ego_xy, cav_xy, params.distance_limit)
     select(*sets)
     order = by_count_descending(bound)
-    strongest_rival(order, 0, candidates, 0, np.zeros(len(bound), bool), kernel_arguments(*sets))
+    runner_up(RivalSearch(order, 0, 0, np.zeros(len(bound), bool), candidates, filtering(*sets)))
     filtered_sizes(order[:2], *sets)
-    kept = listing_for({}, params.sigma1_rad, params.sigma2, bound)
-    closed_up(kept, *two_writers(kept)[1:])
-    robust_fit(cav[:, :2], ego[:, :2], params.welsch_floor)
-    found = gated_assignment(ego, cav, 3.0, 1.0)
-    evidence(ego, cav, found, 1.0, 1.0, found)
+    kept = new_listing(params.sigma2, bound)
+    closed_up(kept, writers(kept, 2))
+    robust_fit(cav_xy, ego_xy, params.welsch_floor)
+    found = gated_assignment(ego, ready.cav_boxes, 3.0, 1.0)
+    evidence(ego, ready.cav_boxes, found, 1.0, 1.0, found)
     same_pose(init, init)
 
 

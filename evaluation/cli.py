@@ -54,7 +54,7 @@ from cbm.methods import METHODS
 from evaluation.agents import TARGET_DISTANCE
 from evaluation.executors import ExecutorError, TaskError, check_reachable
 from evaluation.fusion import FUSIONS
-from evaluation.presets import PresetFileError, PresetParams, default_preset, find_preset, shipped_names
+from evaluation.presets import PresetError, PresetParams, default_preset, find_preset, shipped_names
 from evaluation.sweep import grid_defaults
 
 from . import calibration_check
@@ -221,7 +221,7 @@ def read_preset(name_or_file: str | None) -> PresetParams:
     """The preset ``--preset`` names (None: the default one)."""
     try:
         return default_preset() if name_or_file is None else find_preset(name_or_file)
-    except PresetFileError as error:
+    except PresetError as error:
         raise CliError(f"--preset: {error}") from None
 
 

@@ -1,4 +1,4 @@
-"""Per-trial metrics of a matching result and their micro-averaged aggregates (DESIGN.md, "Metrics").
+"""Per-trial metrics of a matching result and their micro-averaged aggregates.
 
 Pairs are ``(K, 2)`` int arrays of (ego index, CAV index), one row per distinct pair. A metric that
 has nothing to measure is NaN, never 0, so that it cannot pass for a real score.

@@ -15,12 +15,15 @@ from __future__ import annotations
 import dataclasses
 import functools
 import os
+import re
 import stat
 import sys
 from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from cbm.methods import METHODS
 from loaders.errors import special_kind, unreadable
@@ -37,12 +40,16 @@ DEFAULT = "default"
 """The shipped preset whose values are everyone's defaults."""
 MAX_BYTES = 256 * 1024
 """Largest preset file read (a saved preset is about 1 kB)."""
+MAX_DEPTH = 16
+"""Deepest nesting of arrays and inline tables read (a saved preset has 2)."""
 ABOUT_KEYS = ("description", "name")
 """Keys that describe a preset rather than set anything."""
+_STRINGS_AND_COMMENTS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
 
 
-class PresetFileError(ValueError):
-    """A preset that cannot be read; the message names the file and, where one is at fault, the key."""
+class PresetError(ValueError):
+    """A preset that cannot be read or saved; the message names the file and, where one is at
+    fault, the key."""
 
 
 class NotRegularFile(OSError):
@@ -119,35 +126,53 @@ def preset_params(tables: Mapping[str, Any], base: PresetParams | None = None,
     return PresetParams(method, replaced("scenario", base.scenario, tables.get("scenario", {})), params)
 
 
-def preset_tables(path: Path) -> dict[str, Any]:
-    """The tables of the preset file ``path`` (``description`` and ``name`` left out);
-    ``PresetFileError`` naming the file for one that is not a regular file, too large, not UTF-8
-    or not TOML."""
+def nesting_depth(text: str) -> int:
+    """How deep arrays and tables nest in TOML ``text`` (brackets outside strings and comments)."""
+    code = np.frombuffer(_STRINGS_AND_COMMENTS.sub("", text).encode("utf-8"), dtype=np.uint8)
+    steps = np.isin(code, (ord("["), ord("{"))).astype(np.int64) - np.isin(code, (ord("]"), ord("}")))
+    return int(np.cumsum(steps).max(initial=0))
+
+
+def read_toml(path: Path, shown: str | None = None) -> dict[str, Any]:
+    """The whole preset document at ``path``, read the one way the app and the command line read a
+    preset: a regular file only (never blocking on a FIFO), of at most ``MAX_BYTES``, UTF-8, nested
+    at most ``MAX_DEPTH`` deep, TOML; else ``PresetError`` naming the file as ``shown`` (its path)."""
+    shown = str(path) if shown is None else shown
     try:
         data = read_regular(path, MAX_BYTES)
+    except NotRegularFile as error:
+        raise PresetError(f"{shown}: {error}; not read") from None
     except OSError as error:
-        raise PresetFileError(f"{path}: cannot be read ({error.strerror or error})") from None
+        raise PresetError(f"{shown}: cannot be read ({error.strerror or error})") from None
     if len(data) > MAX_BYTES:
-        raise PresetFileError(f"{path}: larger than {MAX_BYTES // 1024} KB; not a preset")
+        raise PresetError(f"{shown}: larger than {MAX_BYTES // 1024} KB; not read")
     try:
-        tables = tomllib.loads(data.decode("utf-8"))
+        text = data.decode("utf-8")
     except UnicodeDecodeError as error:
-        raise PresetFileError(f"{path}: not UTF-8 text (byte {error.start})") from None
+        raise PresetError(f"{shown}: not UTF-8 text (UnicodeDecodeError at byte {error.start})") from None
+    if nesting_depth(text) > MAX_DEPTH:
+        raise PresetError(f"{shown}: nested deeper than {MAX_DEPTH} levels; not read")
+    try:
+        return tomllib.loads(text)
     except (tomllib.TOMLDecodeError, RecursionError) as error:
-        raise PresetFileError(f"{path}: not a TOML preset ({error})") from None
-    return {key: value for key, value in tables.items() if key not in ABOUT_KEYS}
+        raise PresetError(f"{shown}: not a TOML preset ({type(error).__name__}: {error})") from None
+
+
+def preset_tables(path: Path) -> dict[str, Any]:
+    """The tables of the preset file ``path`` (``description`` and ``name`` left out), ``read_toml``'s."""
+    return {key: value for key, value in read_toml(path).items() if key not in ABOUT_KEYS}
 
 
 def read_preset_file(path: Path | str, base: PresetParams | None = None) -> PresetParams:
     """The preset file ``path`` over ``base`` (default: the shipped default preset);
-    ``PresetFileError`` with one line naming the file and the key at fault."""
+    ``PresetError`` with one line naming the file and the key at fault."""
     path = Path(path)
     try:
         return preset_params(preset_tables(path), default_preset() if base is None else base)
     except (KeyError, TypeError, ValueError) as error:
-        if isinstance(error, PresetFileError):
+        if isinstance(error, PresetError):
             raise
-        raise PresetFileError(f"{path}: {error.args[0] if error.args else error}") from None
+        raise PresetError(f"{path}: {error.args[0] if error.args else error}") from None
 
 
 def shipped_path(name: str) -> Path | None:
@@ -162,16 +187,16 @@ def shipped_names() -> list[str]:
 
 def find_preset(name_or_file: str) -> PresetParams:
     """The preset file at ``name_or_file``, else the shipped preset of that name, over the default
-    preset; ``PresetFileError`` when it is neither, or cannot be read."""
+    preset; ``PresetError`` when it is neither, or cannot be read."""
     path = Path(name_or_file)
     try:
         found = path.exists()
     except OSError as error:
-        raise PresetFileError(str(unreadable(error, path))) from None
+        raise PresetError(str(unreadable(error, path))) from None
     if not found:
         shipped = shipped_path(name_or_file)
         if shipped is None:
-            raise PresetFileError(f"{name_or_file!r} is neither a preset file nor a shipped preset "
+            raise PresetError(f"{name_or_file!r} is neither a preset file nor a shipped preset "
                                   f"({', '.join(shipped_names())})")
         path = shipped
     return read_preset_file(path)

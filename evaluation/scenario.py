@@ -1,4 +1,4 @@
-"""Scenarios: turn a world-frame object set into one ego/CAV trial (DESIGN.md, "Scenarios").
+"""Scenarios: turn a world-frame object set into one ego/CAV trial.
 
 Protocols: ``sind`` (paper sec. IV-A), ``opv2v`` (sec. V-A) and ``range`` (ours, for data recorded
 from one car). Every trial makes all of its random draws, whatever the protocol and parameters, in

@@ -1,6 +1,6 @@
 """The scene model every loader produces: a sequence of frames of world-frame boxes.
 
-Boxes follow ``../shared/DESIGN.md`` ("Conventions"): right-handed world frame, metres, radians,
+Boxes follow the project's conventions: right-handed world frame, metres, radians,
 box centre, full sizes. A frame's objects are a polars DataFrame with the canonical columns
 :data:`OBJECT_COLUMNS`; ``Frame.boxes()`` gives the ``(N, 7)`` array ``cbm`` takes.
 

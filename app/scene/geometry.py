@@ -96,12 +96,6 @@ def dashed(starts: np.ndarray, ends: np.ndarray, z: float, dash: float = 0.8) ->
     return np.concatenate(pieces) if pieces else np.zeros((0, 2, 3), np.float32)
 
 
-def polyline_segments(polylines: list[np.ndarray], z: float = 0.0) -> np.ndarray:
-    """(N, 2, 3) segments joining consecutive points of each (M, 2) polyline."""
-    parts = [segments(p[:-1, :2], p[1:, :2], z) for p in polylines if len(p) > 1]
-    return np.concatenate(parts) if parts else np.zeros((0, 2, 3), np.float32)
-
-
 def cross_segments(boxes: np.ndarray, z: float = 0.05) -> np.ndarray:
     """(2N, 2, 3) the two diagonals of each box's footprint: a cross over it."""
     if len(boxes) == 0:

@@ -15,10 +15,10 @@ import numpy as np
 
 from cbm import se2
 from cbm.baselines import match_oracle
+from cbm.engine import Reuse
 from cbm.inspect import Inspection
 from cbm.methods import METHODS
 from cbm.result import MatchResult
-from cbm.reuse import Reuse
 from evaluation.agents import agent_pose, choose_ego
 from evaluation.diagnosis import Finding, diagnose
 from evaluation.fusion import fused_against_truth
@@ -145,7 +145,7 @@ class Explorer:
         self.sequence = sequence
         self.map_segments = _map_segments(sequence)
         self.reuse = Reuse()
-        """What CBM built for the last few inputs that a threshold edit does not change (``cbm.reuse``)."""
+        """What CBM built for the last few inputs that a threshold edit does not change (``cbm.engine.EditCache``)."""
         self._trials: OrderedDict[tuple, tuple[FrameInputs, Trial, TrialMetrics]] = OrderedDict()
         self._trials_lock = threading.Lock()
 

@@ -5,7 +5,7 @@ them in its on-disk cache. At server start ``prepare`` compiles them in two subp
 (``cbm.warmup.compile_side_by_side``; the compiler is mostly Python: in a thread it would hold
 this process's interpreter lock and stall the server) while the dataset loads, then loads the
 cached kernels into this process with one small match. Until then a recompute of a small frame
-runs CBM interpreted (``running``: ``cbm.interpreted``, the same results without the compiler) and a
+runs CBM interpreted (``running``: ``cbm.engine.interpreted``, the same results without the compiler) and a
 large one waits for ``ready``; the time spent compiling is reported on its own, never as CBM's time.
 """
 from __future__ import annotations
@@ -17,7 +17,7 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-from cbm.interpreted import LOCK, guard_compiles, interpreted
+from cbm.engine.interpreted import LOCK, guard_compiles, interpreted
 from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, in_cache, warm_up
 
 COMPILED_AFTER = 1.0

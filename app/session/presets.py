@@ -5,16 +5,15 @@ and the tables of ``settings.to_preset`` (``method``, ``[scenario]``, ``[cbm]``,
 with angles in degrees); it is named by its file stem. Keys it leaves out take the app's defaults.
 The user folder is ``$CBM_EXPLORER_PRESETS`` or ``~/.config/cbm-explorer/presets``.
 
-Reading cannot hurt the app: a file over ``MAX_BYTES`` or nested deeper than ``MAX_DEPTH``, or one
-whose reading raises anything at all, is skipped with the reason. Files are read once and kept
-while their modification time and size stay the same.
+Reading cannot hurt the app: a file ``evaluation.presets.read_toml`` refuses (too large, nested too
+deep, not UTF-8, not TOML, not a regular file), or one whose reading raises anything at all, is
+skipped with the reason. Files are read once and kept while their modification time and size stay
+the same.
 """
 from __future__ import annotations
 
 import hashlib
 import os
-import re
-import sys
 import tempfile
 import threading
 import unicodedata
@@ -22,31 +21,16 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import tomli_w
 
-from evaluation.presets import NotRegularFile, read_regular
+from evaluation.presets import PresetError, read_toml
 from presets import SHIPPED_DIR
 
 from .settings import Settings, from_preset, to_preset
 
-if sys.version_info >= (3, 11):
-    import tomllib
-else:
-    import tomli as tomllib
-
 ENV_VAR = "CBM_EXPLORER_PRESETS"
-MAX_BYTES = 256 * 1024
-"""Largest preset file read (a saved preset is about 1 kB)."""
-MAX_DEPTH = 16
-"""Deepest nesting of arrays and inline tables read (a saved preset has 2)."""
 MAX_NAME = 80
 """Longest preset name, in characters."""
-_STRINGS_AND_COMMENTS = re.compile(r'"""[\s\S]*?"""|\'\'\'[\s\S]*?\'\'\'|"(?:[^"\\\n]|\\.)*"|\'[^\'\n]*\'|#[^\n]*')
-
-
-class PresetError(ValueError):
-    """A preset that cannot be read or saved; the message names the file and the field."""
 
 
 @dataclass(frozen=True)
@@ -71,36 +55,11 @@ def user_dir() -> Path:
     return Path(os.environ.get(ENV_VAR) or Path.home() / ".config" / "cbm-explorer" / "presets")
 
 
-def nesting_depth(text: str) -> int:
-    """How deep arrays and tables nest in TOML ``text`` (brackets outside strings and comments)."""
-    code = np.frombuffer(_STRINGS_AND_COMMENTS.sub("", text).encode("utf-8"), dtype=np.uint8)
-    steps = np.isin(code, (ord("["), ord("{"))).astype(np.int64) - np.isin(code, (ord("]"), ord("}")))
-    return int(np.cumsum(steps).max(initial=0))
-
-
-def _text(path: Path) -> str:
-    """The text of the preset file ``path``: a regular file only (never blocking on a FIFO), of at most
-    ``MAX_BYTES``, UTF-8, nested at most ``MAX_DEPTH`` deep; ``PresetError`` naming the file otherwise."""
-    try:
-        data = read_regular(path, MAX_BYTES)
-    except NotRegularFile as error:
-        raise PresetError(f"{path.name}: {error}; not read") from None
-    if len(data) > MAX_BYTES:
-        raise PresetError(f"{path.name}: larger than {MAX_BYTES // 1024} KB; not read")
-    try:
-        text = data.decode("utf-8")
-    except UnicodeDecodeError as error:
-        raise PresetError(f"{path.name}: not UTF-8 text (UnicodeDecodeError at byte {error.start})") from None
-    if nesting_depth(text) > MAX_DEPTH:
-        raise PresetError(f"{path.name}: nested deeper than {MAX_DEPTH} levels; not read")
-    return text
-
-
 def read(path: Path, shipped: bool) -> Preset:
     """Read and check one preset file; ``PresetError`` names the file and what is wrong, whatever
     went wrong (size, depth, encoding, syntax, unknown keys, wrong types, recursion, I/O)."""
     try:
-        data = tomllib.loads(_text(path))
+        data = read_toml(path, path.name)
         description, saved_as = data.pop("description", ""), data.pop("name", path.stem)
         if not isinstance(description, str) or not isinstance(saved_as, str):
             raise PresetError(f"{path.name}: description and name must be text")

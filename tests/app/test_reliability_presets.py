@@ -9,8 +9,10 @@ from pathlib import Path
 import pytest
 
 from app.session import presets as module
-from app.session.presets import MAX_NAME, PresetError, discover, nesting_depth, read, save_preset, skipped_markdown
+from app.session.presets import MAX_NAME, PresetError, discover, read, save_preset, skipped_markdown
 from app.session.settings import Settings
+from evaluation import presets as reader
+from evaluation.presets import nesting_depth
 
 BAD_FILES = {
     "deep.toml": b"x = " + b"[" * 5000 + b"]" * 5000,
@@ -20,7 +22,7 @@ BAD_FILES = {
     "wrongtype.toml": b"description = 3\n",
     "tablewrong.toml": b"cbm = 5\n",
     "nametype.toml": b"name = [1]\n",
-    "huge.toml": b"# " + b"a" * (module.MAX_BYTES + 10) + b"\n",
+    "huge.toml": b"# " + b"a" * (reader.MAX_BYTES + 10) + b"\n",
 }
 
 
@@ -42,7 +44,7 @@ def test_every_kind_of_bad_file_is_skipped_with_its_reason(tmp_path: Path) -> No
 
 
 def test_recursion_inside_the_parser_is_caught_too(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
-    monkeypatch.setattr(module, "MAX_DEPTH", 10**6)
+    monkeypatch.setattr(reader, "MAX_DEPTH", 10**6)
     path = tmp_path / "deep.toml"
     path.write_bytes(BAD_FILES["deep.toml"])
     with pytest.raises(PresetError, match="RecursionError"):

@@ -6,6 +6,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
+from cbm.engine.interpreted import interpreted
 from cbm.estimate import (
     WELSCH_EFFICIENT_SCALE,
     by_centroid_distance,
@@ -14,7 +15,6 @@ from cbm.estimate import (
     robust_fit,
     weighted_procrustes,
 )
-from cbm.interpreted import interpreted
 
 pytestmark = pytest.mark.filterwarnings("error")
 NU_FLOOR = 0.3

@@ -5,8 +5,10 @@ import math
 import numpy as np
 import pytest
 
-from cbm.context import build_context, pair_signs
-from cbm.local_matching import build_grid, sorted_blocks
+from cbm.context import aligned_signs, build_context
+from cbm.engine.candidates import sorted_blocks
+from cbm.engine.grid import build_grid
+from cbm.reference import context_vectors, pair_signs
 
 
 def _scene(kind: str, n: int, seed: int) -> tuple[np.ndarray, np.ndarray]:
@@ -71,24 +73,22 @@ def test_grid_equals_a_stable_sort_of_the_turned_rows(kind, seed):
     context = build_context(xy, heading)
     cav_sign = np.random.default_rng(seed).choice([-1.0, 0.0, 1.0], len(xy))
     grid = build_grid(context, cav_sign, 3.0)
-    want = _reference_grid(context.vectors, context.anchor, context.member, cav_sign, grid.u0, grid.v0, grid.cell,
-                           grid.nx, grid.ny)
+    want = _reference_grid(context.vectors, context.anchor, context.member, cav_sign, *grid.cells)
     got = [grid.start, grid.x, grid.y, grid.anchor, grid.member, grid.check]
     for name, g, w in zip(["start", "x", "y", "anchor", "member", "check"], got, want):
         assert np.array_equal(g, w), name
-    assert grid.u0 == min(want[1] + want[2]) and grid.v0 == min(want[1] - want[2])
+    assert grid.cells.u0 == min(want[1] + want[2]) and grid.cells.v0 == min(want[1] - want[2])
 
 
 @pytest.mark.parametrize("kind", ["random", "lattice"])
-def test_context_rows_are_every_ordered_pair_in_the_anchors_frame(kind):
+def test_context_rows_are_the_reference_context_vectors_of_every_ordered_pair(kind):
     xy, heading = _scene(kind, 30, seed=3)
     context = build_context(xy, heading)
     anchor, member = np.divmod(np.arange(30 * 30), 30)
     anchor, member = anchor[anchor != member], member[anchor != member]
-    c, s = np.cos(heading[anchor]), np.sin(heading[anchor])
-    d = xy[member] - xy[anchor]
     assert np.array_equal(context.anchor, anchor) and np.array_equal(context.member, member)
-    assert np.array_equal(context.vectors, np.stack([c * d[:, 0] + s * d[:, 1], -s * d[:, 0] + c * d[:, 1]], axis=1))
+    want = np.concatenate([np.delete(context_vectors(xy, heading, i), i, axis=0) for i in range(30)])
+    assert np.array_equal(context.vectors, want)
 
 
 def test_pair_signs_turn_the_cav_frame_past_a_quarter_turn_exactly_at_the_boundary():
@@ -96,6 +96,6 @@ def test_pair_signs_turn_the_cav_frame_past_a_quarter_turn_exactly_at_the_bounda
     cav = np.array([0.0, math.pi / 2, -math.pi / 2, 0.3 - math.pi / 2, 1.0, -0.9])
     want = np.where(np.abs(cav[None, :] - ego[:, None]) <= np.pi / 2, 1.0, -1.0)
     got = pair_signs(ego, cav, "align")
-    assert got.shape == (5, 6) and np.array_equal(got, want)
+    assert got.shape == (5, 6) and np.array_equal(got, want) and np.array_equal(aligned_signs(ego, cav), want)
     assert got[0, 0] == 1.0 and got[0, 2] == -1.0 and got[1, 1] == -1.0
     assert np.array_equal(pair_signs(ego, cav, "fold"), np.ones((5, 6)))

@@ -1,4 +1,4 @@
-"""The interpreted path (``cbm.interpreted``: every kernel's plain Python function, nothing
+"""The interpreted path (``cbm.engine.interpreted``: every kernel's plain Python function, nothing
 compiled) gives the compiled path's pairs, counts and transform on the stored reference cases of
 ``test_match_reference`` that a first frame may have (up to 60 objects per agent)."""
 import threading
@@ -6,7 +6,7 @@ import threading
 import numpy as np
 import pytest
 
-from cbm.interpreted import LOCK, interpreted
+from cbm.engine.interpreted import LOCK, interpreted
 
 from .match_reference import cases, outcome
 

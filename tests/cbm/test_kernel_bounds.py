@@ -1,6 +1,6 @@
 """CBM's numba kernels never index out of bounds: they run here with numba's bounds checking on
 (``NUMBA_BOUNDSCHECK=1``, compiled afresh in a subprocess), on scenes made to reach the edges of
-the grids and the candidate sets."""
+the grids and the candidate sets, on one thread and then on four with every hand-over taken."""
 import os
 import subprocess
 import sys
@@ -26,10 +26,16 @@ scenes = [
     (rng.uniform(-60, 60, (1, 2)), rng.uniform(-60, 60, (5, 2))),
     (rng.uniform(-60, 60, (160, 2)), rng.uniform(-60, 60, (150, 2))),
 ]
-for ego_xy, cav_xy in scenes:
-    for params in (CBMParams(), CBMParams(consensus_rule="paper", sigma3=3.0), CBMParams(consensus=False),
-                   CBMParams(heading="fold")):
-        match(boxes(ego_xy, rng), boxes(cav_xy, rng), se2.make(3.0, 3.0, 0.1), params)
+from cbm.engine import tuning
+
+for threads, threshold in ((1, float("inf")), (4, 0)):
+    tuning.THREADS = threads
+    for name in tuning.THRESHOLDS:
+        setattr(tuning, name, threshold)
+    for ego_xy, cav_xy in scenes:
+        for params in (CBMParams(), CBMParams(consensus_rule="paper", sigma3=3.0), CBMParams(consensus=False),
+                       CBMParams(heading="fold")):
+            match(boxes(ego_xy, rng), boxes(cav_xy, rng), se2.make(3.0, 3.0, 0.1), params)
 print("ok")
 """
 

@@ -7,8 +7,8 @@ import pytest
 
 from cbm import CBMParams, match, se2
 from cbm import reassociate as module
+from cbm.engine.interpreted import interpreted
 from cbm.estimate import robust_fit
-from cbm.interpreted import interpreted
 from cbm.reassociate import MAX_ROUNDS, gated_assignment, reassociate
 from evaluation.metrics import aggregate, evaluate, is_success
 from evaluation.scenario import ScenarioParams, make_trial

@@ -4,9 +4,11 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams
+from cbm.engine import select
+from cbm.engine.filtered import filtering
+from cbm.engine.rival import runner_up
+from cbm.engine.visit import filtered_members
 from cbm.pipeline import build_sets, checked_inputs
-from cbm.selection import kernel_arguments, select
-from cbm.visit import filtered_members
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
@@ -19,10 +21,10 @@ RULES = [dict(consensus=True, consensus_rule="paper", sigma3=3.0),
 def runner_up_over_every_anchor(sets, winner: np.ndarray) -> int:
     """The largest filtered set among all anchors whose set holds none of ``winner``'s pair ids."""
     L = sets.candidates
-    common = kernel_arguments(L, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, sets.params.distance_limit)
+    f = filtering(L, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, sets.params.distance_limit)
     largest = 0
     for anchor in np.flatnonzero(L.count):
-        members = filtered_members(int(anchor), L, common)
+        members = filtered_members(int(anchor), L, f)
         if not np.isin(members, winner).any():
             largest = max(largest, len(members))
     return largest
@@ -41,7 +43,7 @@ def test_the_runner_up_is_the_largest_set_sharing_no_pair_with_the_winner(seed, 
     sets = build_sets(ego, cav, init, params)
     chosen = select(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
     winner = chosen.pairs[:, 0] * len(cav) + chosen.pairs[:, 1]
-    assert chosen.runner_up_count == runner_up_over_every_anchor(sets, winner)
+    assert runner_up(chosen.rival) == runner_up_over_every_anchor(sets, winner)
 
 
 EDITS = [dict(sigma2=4.0), dict(sigma2=3.0), dict(sigma2=3.0, consensus_rule="paper", sigma3=3.0),
@@ -52,8 +54,8 @@ kept with the listing from the calls before."""
 
 @pytest.mark.parametrize("seed", range(6))
 def test_edits_that_read_kept_bounds_find_the_runner_up_of_a_fresh_match(seed):
+    from cbm.engine import Reuse
     from cbm.pipeline import match_sets
-    from cbm.reuse import Reuse
 
     rng = np.random.default_rng(100 + seed)
     n = int(rng.integers(30, 60))
@@ -71,7 +73,7 @@ def test_edits_that_read_kept_bounds_find_the_runner_up_of_a_fresh_match(seed):
 def test_the_bound_kept_for_an_anchor_is_its_candidate_sets_own_whatever_the_winner(seed):
     """min(distinct ego objects, distinct CAV objects) of L_ij, never the 0 of a set the search
     skipped for holding the winner's pair: a later search with another winner reads it."""
-    from cbm.reuse import Reuse
+    from cbm.engine import Reuse
 
     rng = np.random.default_rng(200 + seed)
     n = int(rng.integers(30, 60))
@@ -80,10 +82,10 @@ def test_the_bound_kept_for_an_anchor_is_its_candidate_sets_own_whatever_the_win
     ego, cav, init, params = checked_inputs(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
     sets = build_sets(ego, cav, init, params, reuse=Reuse())
     L = sets.candidates
-    select(L, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
-    kept = np.flatnonzero(L.listing.bound >= 0)
+    runner_up(select(L, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit).rival)
+    kept = np.flatnonzero(L.listing.arrays.bound >= 0)
     assert len(kept) > 0
     for anchor in kept:
         members = L.members(int(anchor))
         own = min(len(np.unique(members // len(cav))), len(np.unique(members % len(cav))))
-        assert L.listing.bound[anchor] == own
+        assert L.listing.arrays.bound[anchor] == own

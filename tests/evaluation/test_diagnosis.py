@@ -191,14 +191,3 @@ def test_the_best_true_anchor_after_a_match_reuses_the_visit_and_stays_the_same(
     assert diagnose(result, trial, matched) == diagnose(result, trial, fresh)
     wrong = np.array([[i, (j + 1) % len(trial.cav_boxes)] for i, j in trial.gt_pairs])
     assert matched.best_anchor_among(wrong).anchor == fresh.best_anchor_among(wrong).anchor
-
-
-def test_one_to_one_mask_keeps_the_pairs_whose_objects_occur_once():
-    from cbm.inspect import one_to_one_mask
-
-    rng = np.random.default_rng(0)
-    for size in (1, 2, 7, 40):
-        pairs = rng.integers(0, 12, size=(size, 2))
-        once = [np.sum(pairs[:, 0] == i) == 1 and np.sum(pairs[:, 1] == j) == 1 for i, j in pairs]
-        assert one_to_one_mask(pairs).tolist() == once
-    assert one_to_one_mask(np.zeros((0, 2), int)).tolist() == []

@@ -15,7 +15,7 @@ from app.session.export import preset_toml
 from app.session.presets import save_preset
 from app.session.settings import Settings
 from evaluation.cli import main
-from evaluation.presets import PresetFileError, default_preset, find_preset, read_preset_file
+from evaluation.presets import PresetError, default_preset, find_preset, read_preset_file
 
 QUICK = ["--dataset", "synthetic:40", "--frames", "0:20:10", "--workers", "1", "--no-timing"]
 
@@ -112,5 +112,5 @@ def test_an_unknown_preset_name_lists_the_shipped_ones(tmp_path: Path, capsys: p
         main([*QUICK, "--preset", "no-such-preset", "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and "no-such-preset" in err and "paper-sind" in err
-    with pytest.raises(PresetFileError, match="not a regular file"):
+    with pytest.raises(PresetError, match="not a regular file"):
         read_preset_file(tmp_path)

@@ -1,15 +1,15 @@
-"""Step 4a of local matching: the grid the join searches (paper eq. 7).
+"""The grid local matching's join searches (``cbm.reference.similar``, eq. 7).
 
 The ego objects go in ``HEADING_GROUPS`` groups of neighbouring headings; for each group the CAV
 context vectors lie in a grid (``VectorGrid``), already turned by the sign they have against it,
-over u = x + y and v = x - y, where the L1 diamond of eq. 7 around an ego vector z is an
-axis-aligned square: z meets only the vectors of the cells that square covers, one run of cells
-per column. ``accepts`` is eq. 7's test of one quadruple.
+over u = x + y and v = x - y, where the L1 diamond around an ego vector z is an axis-aligned
+square: z meets only the vectors of the cells that square covers, one run of cells per column.
+``accepts`` and ``l1_and_angle`` test one quadruple as the reference does, without square roots.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from typing import NamedTuple
 
 import numba
 import numpy as np
@@ -31,21 +31,25 @@ HEADING_GROUPS = 4
 """Groups of ego objects by heading, each joined against the CAV vectors turned by their sign for it."""
 
 
-@dataclass(frozen=True)
-class VectorGrid:
-    """CAV context vectors, each turned by the sign it has against a group of ego objects, in
-    square cells of side ``cell`` over u = x + y, v = x - y (where the L1 diamond of eq. 7 is an
-    axis-aligned square), column by column: cell (ku, kv) holds rows
-    ``start[ku * ny + kv]:start[ku * ny + kv + 1]``, so the cells kv0..kv1 of one column are one
-    run of rows; (u0, v0) is the grid's corner. ``check[r]`` is 0 where the sign holds
-    for the whole group, else the sign that row carries (the row's vector is there twice, once per
-    sign, to be checked per ego object)."""
+class Cells(NamedTuple):
+    """Square cells of side ``cell`` over u = x + y, v = x - y from the corner (u0, v0), ``nx``
+    columns of ``ny`` cells, numbered column by column."""
 
     u0: float
     v0: float
     cell: float
     nx: int
     ny: int
+
+
+class VectorGrid(NamedTuple):
+    """CAV context vectors, each turned by the sign it has against a group of ego objects, in the
+    ``cells`` column by column: cell (ku, kv) holds rows ``start[ku * ny + kv]:start[ku * ny + kv + 1]``,
+    so the cells kv0..kv1 of one column are one run of rows. ``check[r]`` is 0 where the sign holds
+    for the whole group, else the sign that row carries (the row's vector is there twice, once per
+    sign, to be checked per ego object)."""
+
+    cells: Cells
     start: np.ndarray
     x: np.ndarray
     y: np.ndarray
@@ -65,13 +69,13 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     n, u0, v0, u1, v1 = _extent(cav.bounds, sign, len(cav.vectors) // max(len(cav.bounds), 1))
     if n == 0:
         empty, ids = np.zeros(0), np.zeros(0, np.int32)
-        return VectorGrid(0.0, 0.0, 1.0, 1, 1, np.zeros(2, np.int32), empty, empty.copy(), ids, ids.copy(),
+        return VectorGrid(Cells(0.0, 0.0, 1.0, 1, 1), np.zeros(2, np.int32), empty, empty.copy(), ids, ids.copy(),
                           np.zeros(0, np.int8))
     width, height = u1 - u0, v1 - v0
     most_cells = min(MAX_CELLS, CELLS_PER_ROW * n + 1)
     cell = max(radius / CELLS_PER_RADIUS, math.sqrt((width + 1.0) * (height + 1.0) / most_cells), 1e-9)
-    nx, ny = int(width // cell) + 1, int(height // cell) + 1
-    return VectorGrid(u0, v0, cell, nx, ny, *_place(cav.vectors, cav.anchor, cav.member, sign, n, u0, v0, cell, nx, ny))
+    cells = Cells(float(u0), float(v0), float(cell), int(width // cell) + 1, int(height // cell) + 1)
+    return VectorGrid(cells, *_place(cav, sign, n, cells))
 
 
 @numba.njit(cache=True, nogil=True)
@@ -92,7 +96,7 @@ def _extent(bounds, cav_sign, per_anchor):
 
 
 @numba.njit(cache=True, nogil=True)
-def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
+def _place(cav, cav_sign, n, cells):
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
     row's sign. The vectors come anchor by anchor, ``len(vectors) // len(cav_sign)`` each (as
@@ -102,9 +106,9 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
     one, so that it ends unshifted); then ``_written`` writes the rows in order from their sources,
     one random write a row instead of five. Returns (start, x, y, anchor, member, check). Offsets and
     sources fit int32 (``MOST_ROWS``)."""
-    per_anchor = len(vectors) // len(cav_sign)
-    key = _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny)
-    start = np.zeros(nx * ny + 2, np.int32)
+    per_anchor = len(cav.vectors) // len(cav_sign)
+    key = _cell_of_rows(cav.vectors, cav_sign, per_anchor, n, cells)
+    start = np.zeros(cells.nx * cells.ny + 2, np.int32)
     for r in range(n):
         start[key[r] + 2] += 1
     total = 0
@@ -119,16 +123,17 @@ def _place(vectors, anchor, member, cav_sign, n, u0, v0, cell, nx, ny):
                 source[start[key[r] + 1]] = 2 * v + turn
                 start[key[r] + 1] += 1
                 r += 1
-    return (start[:-1],) + _written(source, vectors, anchor, member, cav_sign)
+    return (start[:-1],) + _written(source, cav, cav_sign)
 
 
 @numba.njit(cache=True, nogil=True)
-def _written(source, vectors, anchor, member, cav_sign):
+def _written(source, cav, cav_sign):
     """The grid's rows (x, y, anchor, member, check) in the order of their sources (``_place``): the
     vector turned by its anchor's sign, or where the sign varies by +1 (even source) or -1 (odd),
     ``check`` then that sign. ``anchor`` and ``member`` are CAV objects, fewer than 2^31
     (``local_matching.MOST_PAIRS`` bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1
     (int8): 25 bytes a row instead of 40."""
+    vectors, anchor, member = cav.vectors, cav.anchor, cav.member
     n = len(source)
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
@@ -143,9 +148,10 @@ def _written(source, vectors, anchor, member, cav_sign):
 
 
 @numba.njit(cache=True, nogil=True)
-def _cells(vectors, cav_sign, per_anchor, n, u0, v0, cell, nx, ny):
+def _cell_of_rows(vectors, cav_sign, per_anchor, n, cells):
     """The cell of each of the ``n`` turned rows, in their order: a fixed sign's rows in one loop per
     anchor (which the compiler vectorises), a varying sign's as +1 then -1."""
+    u0, v0, cell, nx, ny = cells
     key = np.empty(n, np.int32)
     r = 0
     for a in range(len(cav_sign)):
@@ -171,11 +177,8 @@ def _cell(x, y, u0, v0, cell, nx, ny):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def accepts(zx, zy, wx, wy, cos2_sigma1, radius):
-    """L1 distance of z and w when eq. 7 accepts them, else -1.
-
-    The angle test arccos(|z.w| / (|z| |w|)) <= sigma1 is evaluated as
-    (z.w)^2 >= cos^2(sigma1) |z|^2 |w|^2 (sigma1 <= 90 degrees), without square roots.
-    """
+    """L1 distance of z and w when eq. 7 accepts them, else -1; the angle test is evaluated as
+    (z.w)^2 >= cos^2(sigma1) |z|^2 |w|^2 (sigma1 <= 90 degrees), without square roots or arccos."""
     l1 = abs(zx - wx) + abs(zy - wy)
     if l1 > radius:
         return -1.0
@@ -196,10 +199,11 @@ def l1_and_angle(zx, zy, z2, wx, wy, cos2_sigma1):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def cells(zu, zv, radius, u0, v0, cell, nx, ny):
+def window(zu, zv, radius, cells):
     """Columns k0..k1 and, in each, cells c0..c1 of the square max(|du|, |dv|) <= radius around z:
     the L1 diamond |dx| + |dy| <= radius in the grid's coordinates u = x + y, v = x - y. No column
     (k1 < k0) when the square misses the grid."""
+    u0, v0, cell, nx, ny = cells
     k0 = max(int(math.floor((zu - radius - MARGIN - u0) / cell)), 0)
     k1 = min(int(math.floor((zu + radius + MARGIN - u0) / cell)), nx - 1)
     c0 = max(int(math.floor((zv - radius - MARGIN - v0) / cell)), 0)
@@ -211,8 +215,9 @@ def cells(zu, zv, radius, u0, v0, cell, nx, ny):
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
-def column(zu, u0, cell, nx):
+def column(zu, cells):
     """The grid column of u = ``zu``, clamped to the grid."""
+    u0, cell, nx = cells.u0, cells.cell, cells.nx
     return min(max(int(math.floor((zu - u0) / cell)), 0), nx - 1)
 
 

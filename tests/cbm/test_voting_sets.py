@@ -1,19 +1,19 @@
 """The join's packed votes (``VoteRows``) give the same voting sets in either packing, and grouped
-in one pass or in two halves at once."""
+in one run or in several at once."""
 import numpy as np
+import pytest
 
 from cbm import CBMParams
-from cbm.consensus import voted_by_member
-from cbm.local_matching import join
-from cbm.local_matching.counting import counts_and_votes
-from cbm.reuse import prepare
+from cbm.context import prepare
+from cbm.engine import join
+from cbm.engine.counting import counts_and_votes
+from cbm.engine.voting import voted_by_member
 from cbm.warmup import scene
 
 
 def voting_sets(ego, cav, init, params):
     ready = prepare(ego, cav, init, params.heading)
-    _, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
-                                params.sigma1_rad, params.sigma2, params.sigma3)
+    _, votes = counts_and_votes(ready, params.sigma1_rad, params.sigma2, params.sigma3)
     return voted_by_member(votes, ready.signs.size)
 
 
@@ -33,19 +33,19 @@ def test_the_narrow_packing_holds_objects_up_to_15_bits():
     assert join.packing(2**15, 3) == (np.int64, 32)
 
 
-
-
-def test_the_voting_sets_grouped_in_two_halves_at_once_are_the_same_as_in_one_pass(monkeypatch):
+@pytest.mark.parametrize("threads", [2, 3, 8])
+def test_the_voting_sets_grouped_in_runs_at_once_are_the_same_as_in_one_run(threads, tuned):
     ego, cav, init = scene(60)
     params = CBMParams(sigma3=2.0)
     ready = prepare(ego, cav, init, params.heading)
     grouped = {}
-    for halves in (False, True):
-        _, votes = counts_and_votes(ready.ego_context, ready.cav_context, ready.ego_heading, ready.signs,
-                                    params.sigma1_rad, params.sigma2, params.sigma3)
-        assert len(votes) > 2
-        grouped[halves] = voted_by_member(votes, ready.signs.size, halves=halves)
+    for runs, threshold in ((1, float("inf")), (threads, 0)):
+        tuned(GROUP_PARTS_FROM=0, threads=4)
+        _, votes = counts_and_votes(ready, params.sigma1_rad, params.sigma2, params.sigma3)
+        assert len(votes) > threads
+        tuned(threads=runs, VOTES_APART_FROM=threshold)
+        grouped[runs] = voted_by_member(votes, ready.signs.size)
         assert votes == []
-    assert grouped[False].member.size > len(ego)
-    np.testing.assert_array_equal(grouped[True].start, grouped[False].start)
-    np.testing.assert_array_equal(grouped[True].member, grouped[False].member)
+    assert grouped[1].member.size > len(ego)
+    np.testing.assert_array_equal(grouped[threads].start, grouped[1].start)
+    np.testing.assert_array_equal(grouped[threads].member, grouped[1].member)

@@ -1,6 +1,7 @@
-"""The two reference methods that bound every table: ``none``, the floor (no calibration), and
-``oracle``, the ceiling of any method that calibrates from matched boxes (least squares on the
-true pairs, which only a simulation knows)."""
+"""Two methods that take what they are given instead of matching: ``none`` reports the prior pose
+as it is (no calibration), ``oracle`` fits the true pairs, which only a simulation knows, by least
+squares. They frame every table: ``none`` is what calibration starts from, ``oracle`` what a plain
+fit of perfect matches gives (a robust fit or the pose graph can do better on the same pairs)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -15,15 +16,15 @@ from ._common import check_params, make_result, sort_pairs
 
 
 @dataclass(frozen=True)
-class ReferenceParams:
-    """The reference methods have no parameters."""
+class NoParams:
+    """``none`` and ``oracle`` have no parameters."""
 
 
 def match_none(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
-               params: ReferenceParams | None = None) -> MatchResult:
+               params: NoParams | None = None) -> MatchResult:
     """No calibration: the initial, wrong pose is the answer and nothing is matched. Its RRE and
     RTE are those of the localization (``estimated`` is True: the pose it reports is ``init``)."""
-    check_params(params, ReferenceParams)
+    check_params(params, NoParams)
     checked_boxes("ego_boxes", ego_boxes)
     checked_boxes("cav_boxes", cav_boxes)
     init = checked_transform("init", init)
@@ -33,10 +34,10 @@ def match_none(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
 
 
 def match_oracle(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
-                 params: ReferenceParams | None = None, *, true_pairs: np.ndarray) -> MatchResult:
+                 params: NoParams | None = None, *, true_pairs: np.ndarray) -> MatchResult:
     """The true pairs, fitted by least squares (eq. 14 with psi(r) = r^2): the pose error left is
     the detection noise's alone. Fewer than 2 true pairs: no estimate (``init`` stays)."""
-    check_params(params, ReferenceParams)
+    check_params(params, NoParams)
     ego_boxes = checked_boxes("ego_boxes", ego_boxes)
     cav_boxes = checked_boxes("cav_boxes", cav_boxes)
     init = checked_transform("init", init)

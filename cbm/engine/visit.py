@@ -1,9 +1,9 @@
-"""Eq. 13's visit (paper eq. 12-13): anchors by decreasing card(L_ij), each one's filtered set
-L^(2)_ij, until no remaining candidate set can reach the largest filtered set found.
+"""Eq. 13's visit (``cbm.reference.select_anchor``): anchors by decreasing card(L_ij), each one's
+filtered set L^(2)_ij, until no remaining candidate set can reach the largest filtered set found.
 
 Filtering never grows a set, so card(L_ij) bounds card(L^(2)_ij): the visit stops at the first
 anchor whose candidate set is smaller than the best size found (branch and bound). On a large
-scene the anchors after the first ``VISIT_FIRST`` are visited by two threads in interleaved parts
+scene the anchors after the first ``VISIT_FIRST`` are visited by the threads in interleaved parts
 that share the best size found; the merge keeps exactly the anchors one pass visits, in its order,
 so the answer, and every size and member the hypotheses and the diagnosis read, is the same.
 """
@@ -15,35 +15,29 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from .filtered import LISTING, N_CAV, N_EGO, final_size, list_set, listing_held, work_arrays
-from .local_matching import CandidateSets
-from .local_matching.listing import in_two_parts
-
-VISIT_FIRST = 32
-"""Anchors eq. 13's visit takes on the calling thread before it shares the rest out (``eq13_visit``)."""
-VISIT_APART_FROM = (5_000, 10_000)
-"""Ego x CAV pairs, and candidate pairs ahead (``_work_ahead``), from which the rest of eq. 13's
-visit is shared out between two threads; below, the hand-over costs more than it saves (and the
-warm-up's small scene never waits for ``POOL``)."""
+from . import tuning
+from .filtered import Filtering, final_size, list_set, listing_held, work_room
+from .listing import CandidateSets, in_parts
+from .threads import parts
 
 
 @dataclass(frozen=True)
 class Visit:
     """What eq. 13's visit computed, for the hypotheses to reuse (``anchor_sets``): the anchors in
     ``by_count_descending`` order, the filtered sizes and members (flat, with offsets) of the first
-    ``len(sizes)`` of them, and the kernel arguments they were filtered with (``kernel_arguments``)."""
+    ``len(sizes)`` of them, and what they were filtered with."""
 
     order: np.ndarray
     sizes: np.ndarray
     offsets: np.ndarray
     members: np.ndarray
-    common: tuple
+    filtering: Filtering
 
     def members_of(self, anchor: int, L: CandidateSets) -> np.ndarray:
         """Pair ids of one anchor's filtered set, increasing: the visit's when it filtered the anchor
         (the same kernel, so the same members), else filtered now."""
         at = np.flatnonzero(self.order[:len(self.sizes)] == anchor)
-        return self.members_at(int(at[0])) if len(at) else filtered_members(anchor, L, self.common)
+        return self.members_at(int(at[0])) if len(at) else filtered_members(anchor, L, self.filtering)
 
     def members_at(self, position: int) -> np.ndarray:
         """Pair ids of the filtered set of the anchor at ``position`` of the visit, increasing."""
@@ -51,18 +45,19 @@ class Visit:
 
 
 @numba.njit(cache=True, nogil=True)
-def _visited_part(order, begin, end, part, parts, candidate_count, best, shared, width, signs, lookup, listing,
-                  voted_start, voted_by, rule, n_ego, n_cav, centres, limit):
+def _visited_part(order, span, count, best, shared, width, f, listing):
     """Eq. 13's visit of ``order``'s positions ``begin + part``, ``begin + part + parts``, ... below
-    ``end``, while an anchor's card(L_ij) is not 0 and at least the largest size found: ``best``,
-    this part's and ``shared[0]``, the other parts' (read before each anchor, raised on a larger one).
+    ``end`` (``span``), while an anchor's card(L_ij) (``count``) is not 0 and at least the largest
+    size found: ``best``, this part's, and ``shared[0]``, the other parts' (read before each anchor,
+    raised on a larger one). Lists with ``listing`` (this thread's part of it).
 
     Returns the visited positions' filtered sizes and members (flat, with offsets), in order. Every
     position the visit of all of ``order`` in one pass reaches is visited: a size read is one some
     anchor reaches, no larger than its card(L_ij), so an anchor is passed over only when an earlier
     anchor's set is larger than its candidate set (``_interleaved``)."""
-    work = work_arrays(width, n_ego, n_cav, len(candidate_count))
-    out = work[4]
+    begin, end, part, parts = span
+    lister, _, judge, n_ego = f
+    work = work_room(width, n_ego, lister.lookup.n_cav, len(count))
     steps = max((end - begin - part + parts - 1) // parts, 0)
     sizes = np.empty(steps, np.int64)
     offsets = np.zeros(steps + 1, np.int64)
@@ -71,15 +66,14 @@ def _visited_part(order, begin, end, part, parts, candidate_count, best, shared,
     for position in range(begin + part, end, parts):
         anchor = order[position]
         best = max(best, shared[0])
-        if candidate_count[anchor] == 0 or candidate_count[anchor] < best:
+        if count[anchor] == 0 or count[anchor] < best:
             break
-        size = final_size(list_set(anchor, signs, lookup, listing, n_cav, work), voted_start, voted_by, rule,
-                          centres, limit, work)
+        size = final_size(list_set(anchor, lister, listing, work.listed), judge, work)
         if offsets[n] + size > len(members):
             grown = np.empty(2 * len(members) + size, np.int64)
             grown[:offsets[n]] = members[:offsets[n]]
             members = grown
-        members[offsets[n]:offsets[n] + size] = out[:size]
+        members[offsets[n]:offsets[n] + size] = work.out[:size]
         sizes[n] = size
         offsets[n + 1] = offsets[n] + size
         if size > best:
@@ -89,53 +83,36 @@ def _visited_part(order, begin, end, part, parts, candidate_count, best, shared,
     return sizes[:n], offsets[: n + 1], members[: offsets[n]]
 
 
-def eq13_visit(order: np.ndarray, L: CandidateSets, common: tuple) -> tuple[np.ndarray, ...]:
-    """Eq. 13's visit of ``order`` (``by_count_descending``) with the kernel arguments ``common``:
-    (visited anchors, their filtered sizes, their members flat with offsets, where it stopped). The
-    first ``VISIT_FIRST`` anchors are visited on the calling thread; on a scene and a visit large
-    enough (``VISIT_APART_FROM``) the rest are shared out between it and ``POOL``, in interleaved
-    parts that list into the listing's two halves (``in_two_parts``), else it visits them too."""
-    shared, first = np.zeros(1, np.int64), min(VISIT_FIRST, len(order))
-    pieces = [_visited_part(order, 0, first, 0, 1, L.count, 0, shared, L.width, *common)]
+def eq13_visit(order: np.ndarray, L: CandidateSets, f: Filtering) -> tuple[np.ndarray, ...]:
+    """Eq. 13's visit of ``order`` (``by_count_descending``): (visited anchors, their filtered sizes,
+    their members flat with offsets, where it stopped). The first ``VISIT_FIRST`` anchors are
+    visited on the calling thread; on a scene and a visit large enough (``VISIT_APART_FROM``,
+    ``VISIT_AHEAD_FROM``) the rest are shared out between the threads, in interleaved parts that
+    list into parts of the listing of their own (``in_parts``), else it visits them too."""
+    shared, first = np.zeros(1, np.int64), min(tuning.VISIT_FIRST, len(order))
+    pieces = [_visited_part(order, (0, first, 0, 1), L.count, 0, shared, L.width, f, f.listing)]
     if len(pieces[0][0]) == first < len(order):
         best = int(pieces[0][0].max(initial=0))
-        pairs, ahead = VISIT_APART_FROM
-        if common[N_EGO] * common[N_CAV] < pairs or _work_ahead(order, first, best, L.count, ahead) < ahead:
-            pieces.append(_visited_part(order, first, len(order), 0, 1, L.count, best, shared, L.width, *common))
+        n_parts = parts(f.n_ego * f.lister.lookup.n_cav, tuning.VISIT_APART_FROM)
+        if (n_parts == 1
+                or _work_ahead(order, first, best, L.count, tuning.VISIT_AHEAD_FROM) < tuning.VISIT_AHEAD_FROM):
+            pieces.append(_visited_part(order, (first, len(order), 0, 1), L.count, best, shared, L.width, f,
+                                        f.listing))
         else:
-            pieces.append(_visited_apart(order, first, best, shared, L, common))
+            visited = in_parts(L.listing, lambda k, n, listing: _visited_part(
+                order, (first, len(order), k, n), L.count, best, shared, L.width, f, listing), n_parts)
+            pieces.append(_interleaved(order[first:], L.count, best, visited))
     sizes = np.concatenate([piece[0] for piece in pieces])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     return order[:len(sizes)], sizes, offsets, np.concatenate([piece[-1] for piece in pieces]), len(sizes)
 
 
-def _work_ahead(order: np.ndarray, first: int, best: int, count: np.ndarray, enough: int) -> int:
+def _work_ahead(order: np.ndarray, first: int, best: int, count: np.ndarray, enough: float) -> int:
     """The candidate pairs of the anchors from ``order[first]`` on whose card(L_ij) is at least
     ``best``: the most the rest of the visit can filter (``order`` is by decreasing count); summed
     over ``enough`` anchors at most (each holds one pair or more, so more reach ``enough`` anyway)."""
     reach = bisect.bisect_right(order, -best, first, len(order), key=lambda anchor: -count[anchor])
-    return int(count[order[first:min(reach, first + enough)]].sum())
-
-
-def _visited_apart(order: np.ndarray, begin: int, best: int, shared: np.ndarray, L: CandidateSets,
-                   common: tuple) -> tuple[np.ndarray, np.ndarray]:
-    """``_visited_part`` of ``order`` from ``begin`` in two interleaved parts at once (the second on
-    ``POOL``), merged into the positions the visit in one pass reaches (``_interleaved``)."""
-    own, other = in_two_parts(L.listing, _visit_part, order, begin, best, shared, L, common)
-    return _interleaved(order[begin:], L.count, best, [own, other])
-
-
-def _visit_part(part: int, listing: tuple, order: np.ndarray, begin: int, best: int, shared: np.ndarray,
-                L: CandidateSets, common: tuple) -> tuple[np.ndarray, ...]:
-    """``_visited_part`` of one of two interleaved parts of ``order`` from ``begin``, listing with
-    ``listing``."""
-    return _visited_part(order, begin, len(order), part, 2, L.count, best, shared, L.width,
-                         *with_listing(common, listing))
-
-
-def with_listing(common: tuple, listing: tuple) -> tuple:
-    """The kernel arguments ``common`` with another ``listing`` argument (``in_two_parts``)."""
-    return common[:LISTING] + (listing,) + common[LISTING + 1:]
+    return int(count[order[first:min(reach, first + int(min(enough, len(order))))]].sum())
 
 
 def _interleaved(anchors: np.ndarray, count: np.ndarray, best: int,
@@ -161,10 +138,10 @@ def _interleaved(anchors: np.ndarray, count: np.ndarray, best: int,
     return sizes, np.concatenate([part[2] for part in parts])[gather]
 
 
-def filtered_members(anchor: int, L: CandidateSets, common: tuple) -> np.ndarray:
-    """Pair ids of one anchor's filtered set L^(2) (eq. 12), increasing (a one-to-one set: in
-    increasing ego index too)."""
+def filtered_members(anchor: int, L: CandidateSets, f: Filtering) -> np.ndarray:
+    """Pair ids of one anchor's filtered set L^(2) (``cbm.reference.filtered_set``), increasing (a
+    one-to-one set: in increasing ego index too)."""
     with listing_held(L):
-        members = _visited_part(np.array([anchor], np.int64), 0, 1, 0, 1, L.count, 0, np.zeros(1, np.int64), L.width,
-                                *common)[2]
+        members = _visited_part(np.array([anchor], np.int64), (0, 1, 0, 1), L.count, 0, np.zeros(1, np.int64),
+                                L.width, f, f.listing)[2]
     return np.sort(members)

@@ -1,0 +1,107 @@
+"""The one way the engine runs work on several threads: ``shared_out``.
+
+The engine's kernels are numba functions compiled ``nogil``, so Python threads run them truly at
+once. A site that splits its work makes one task per part, hands the list to ``shared_out`` and
+merges the results, which come back in the tasks' order whatever thread ran each: so nothing the
+engine returns depends on the threads. How many threads, and from what size a site splits at all,
+is ``cbm.engine.tuning``'s.
+"""
+from __future__ import annotations
+
+import ctypes
+import threading
+from collections.abc import Callable, Sequence
+from concurrent.futures import ThreadPoolExecutor
+from typing import TypeVar
+
+from . import tuning
+from .interpreted import LOCK
+
+T = TypeVar("T")
+
+_pool: ThreadPoolExecutor | None = None
+_pool_lock = threading.Lock()
+_inside = threading.local()
+
+
+def parts(size: int, threshold: float) -> int:
+    """Parts to split a work of ``size`` into: ``tuning.THREADS`` from ``threshold`` on, else 1 (and
+    1 inside a task of ``shared_out``, whose parts would run one after the other)."""
+    return tuning.THREADS if size >= threshold and not getattr(_inside, "task", False) else 1
+
+
+def shared_out(tasks: Sequence[Callable[[], T]]) -> list[T]:
+    """Every task's result, in the tasks' order. Up to ``tuning.THREADS`` threads (the calling one
+    and the pool's) each take the next task not yet taken until none is left, so a long task never
+    holds up the ones behind it. One task, one thread, a call from inside a task, or a caller that
+    holds the compile lock (``interpreted.LOCK``: a pool thread would wait on it to compile a
+    kernel) runs them all on the calling thread. An exception of a task is raised here once every
+    thread has stopped."""
+    workers = min(tuning.THREADS, len(tasks))
+    if workers <= 1 or getattr(_inside, "task", False) or LOCK._is_owned():
+        return [task() for task in tasks]
+    results: list = [None] * len(tasks)
+    indices = iter(range(len(tasks)))
+    taking = threading.Lock()
+
+    def work() -> None:
+        _inside.task = True
+        try:
+            while True:
+                with taking:
+                    k = next(indices, None)
+                if k is None:
+                    return
+                results[k] = tasks[k]()
+        finally:
+            _inside.task = False
+
+    helpers = [_the_pool().submit(work) for _ in range(workers - 1)]
+    failure = None
+    try:
+        work()
+    except BaseException as error:  # the helpers must stop before it is raised
+        failure = error
+        with taking:
+            for _ in indices:
+                pass
+    for helper in helpers:
+        try:
+            helper.result()
+        except BaseException as error:
+            failure = failure or error
+    if failure is not None:
+        raise failure
+    return results
+
+
+def _the_pool() -> ThreadPoolExecutor:
+    """The pool of ``tuning.THREADS - 1`` threads (made anew when that changed)."""
+    global _pool
+    with _pool_lock:
+        wanted = max(tuning.THREADS - 1, 1)
+        if _pool is None or _pool._max_workers != wanted:
+            _pool = ThreadPoolExecutor(max_workers=wanted, thread_name_prefix="cbm")
+        return _pool
+
+
+TRIM_FROM = 32 * 2**20
+"""Bytes freed from which a kernel's caller hands the memory back to the system (``trim_freed``)."""
+
+
+def _find_trim():
+    """glibc's ``malloc_trim``, or None where the C library has none (or cannot be opened by name)."""
+    try:
+        return ctypes.CDLL(None).malloc_trim
+    except (AttributeError, OSError, TypeError):
+        return None
+
+
+_MALLOC_TRIM = _find_trim()
+
+
+def trim_freed() -> None:
+    """Hands the memory the threads freed back to the system: glibc keeps it resident in the
+    threads' arenas, where what comes next never reuses it."""
+    if _MALLOC_TRIM is not None:
+        _MALLOC_TRIM(0)
