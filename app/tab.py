@@ -10,6 +10,7 @@ import numpy as np
 import viser
 
 from cbm.engine.interpreted import SMALL
+from cbm.methods import METHODS
 
 from . import panels
 from .panels.actions import Edit
@@ -23,9 +24,10 @@ from .scene.view import SceneView
 from .session.baseline import Baseline
 from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
-from .session.history import FrameHistory, settings_key, sweep_rows
+from .session.history import FrameHistory, row_over_time, settings_key, sweep_rows
 from .session.kernels import COMPILING, Kernels
 from .session.offers import offers_of
+from .session.over_time import Stopped
 from .session.presets import PresetError, discover, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
@@ -81,6 +83,7 @@ class ClientSession:
             self.notify("Dataset loaded with gaps", warning, "yellow")
         self._playing = threading.Event()
         self._closed = threading.Event()
+        self._stop_catching_up = threading.Event()
         self.worker: Coalescer[Settings, tuple[Outcome, Drawing]] = Coalescer(
             self._compute, self._deliver, self._failed, name=f"recompute-{client.client_id}")
         self._player = threading.Thread(target=self._play, name=f"play-{client.client_id}", daemon=True)
@@ -170,16 +173,27 @@ class ClientSession:
             return
         self.history.merge(settings, sweep_rows(rows))
         self.controls.metrics.show_timeline(self._timeline(current.frame), self.history.failures(),
-                                            self.baseline.pinned, current.frame)
+                                            self.baseline.pinned, current.frame, self._over_time())
 
     def _show_timeline_soon(self, frame: int) -> None:
         """The timeline at ``frame``, drawn ``TIMELINE_DELAY`` after the latest result."""
         data, failures, pinned = self._timeline(frame), self.history.failures(), self.baseline.pinned
-        self._timeline_later.call(lambda: self.controls.metrics.show_timeline(data, failures, pinned, frame))
+        over_time = self._over_time()
+        self._timeline_later.call(lambda: self.controls.metrics.show_timeline(data, failures, pinned, frame, over_time))
 
     def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
         rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
-        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer), self.baseline.pinned)
+        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer), self.baseline.pinned,
+                             self._over_time())
+
+    def _over_time(self) -> bool:
+        """Whether the timeline draws a method over time beside per-frame CBM."""
+        return METHODS[self._settings.method].over_time
+
+    def stop_catching_up(self) -> None:
+        """Stop a method over time computing the frames before the one asked for: the frames done
+        stay, and the last of them is shown."""
+        self._stop_catching_up.set()
 
     def notify(self, title: str, body: str, color: str) -> None:
         self.client.add_notification(title, body, color=color, auto_close_seconds=8)
@@ -202,12 +216,41 @@ class ClientSession:
             with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):
                 self.kernels.wait()
-        with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting:
-            outcome = self.explorer.compute(settings)
-            pinned = self.baseline.outcome(self.explorer, settings)
+        self._stop_catching_up.clear()
+        try:
+            with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting:
+                outcome = self.explorer.compute(settings, self._catching_up(), self._stopping)
+                pinned = self.baseline.outcome(self.explorer, settings)
+        except Stopped as stopped:
+            if self.worker.superseded:
+                raise
+            last = stopped.frame
+            self.apply(lambda s: dataclasses.replace(s, frame=last), move_controls=True)
+            self.notify("Stopped", f"the frames up to {last} are computed and kept; step on or jump ahead "
+                        "to continue from there", "blue")
+            raise
+        finally:
+            self.controls.metrics.stop.visible = False
         self._note_kernels(interpreting)
         return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
                                            self.explorer.sequence[outcome.frame_index]), outcome, pinned)
+
+    def _catching_up(self):
+        """A method over time's report while it computes the frames before the one asked for: the
+        status line and the stop button, at most four times a second."""
+        shown = [0.0]
+
+        def report(done: int, of: int) -> None:
+            now = time.monotonic()
+            if done < of and now - shown[0] >= 0.25:
+                shown[0] = now
+                self.controls.metrics.stop.visible = True
+                self.controls.metrics.say(f"CBM over time computes the frames in order: frame {done} of {of}…")
+        return report
+
+    def _stopping(self) -> bool:
+        """Whether a method over time's catch-up should stop: asked to, or a newer setting waits."""
+        return self._stop_catching_up.is_set() or self.worker.superseded
 
     def _objects(self, settings: Settings) -> int:
         """Objects in the frame ``settings`` shows (a bound on what each agent sees)."""
@@ -247,6 +290,10 @@ class ClientSession:
             self.walkthrough.refresh(outcome)
         self.client.flush()
         self.history.add(outcome)
+        if outcome.alone is not None:
+            done = self.explorer.over_time.done(outcome.settings)
+            self.history.merge(outcome.settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
+                                                  for frame, d in done.items()})
         self.recording.add(outcome)
         self._show_timeline_soon(outcome.frame_index)
         self._note = ""
@@ -258,6 +305,8 @@ class ClientSession:
     def _failed(self, error: BaseException) -> None:
         """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
         (or above the last frame's, marked as such), and in the key numbers."""
+        if isinstance(error, Stopped):
+            return
         message = unusable_markdown(self.explorer, self._settings, error)
         if self.last is None:
             self.controls.metrics.say("")

@@ -1,11 +1,14 @@
 """Calibration accuracy under the named test conditions (``evaluation.conditions``), on our own data.
 
 Conditions: mild, hard and range-50 (the earlier accuracy issue's), heavy-noise, prior-error and
-clutter (missed detections and false boxes); see ``evaluation.conditions``.
+clutter (missed detections and false boxes), and drift-heavy, drift-clutter and drift-bigloc (a
+localization error that drifts like GNSS); see ``evaluation.conditions``.
 
 Methods: the released code's CBM (headings folded, least-squares fit, no re-association), CBM as
-published (eq. 14 fit, no re-association), CBM with this project's defaults, and the oracle (least
-squares on the true pairs, the limit of any association); ``--others`` adds ICP, RICP, VIPS and none.
+published (eq. 14 fit, no re-association), CBM with this project's defaults, CBM over time (the
+frames of each sequence in time order, ``cbm.SequenceCalibrator``), and the oracle (least squares
+on the true pairs, per frame); ``--others`` adds ICP, RICP, VIPS and none. Every success rate is per
+frame, over every frame of every sequence.
 One set of CBM parameters serves every condition. Trials come from ``evaluation`` (the trial builder
 the app uses too), seeds 0..S-1, so the same arguments give the same numbers.
 Prints, per condition and dataset, micro-averaged precision and recall, the success rates at
@@ -45,7 +48,8 @@ CBM_VARIANTS = {
     "CBM as published (eq. 14, no refinement)": {"heading": "align", "estimator": "welsch", "refine": False},
     "CBM, our defaults": {"heading": "align", "estimator": "welsch", "refine": True},
 }
-REFERENCES = {"oracle": "oracle (true pairs)"}
+OVER_TIME = {"cbm-time": "CBM over time (our defaults)"}
+REFERENCES = {"oracle": "oracle (least squares on the true pairs)"}
 OTHERS = {"icp": "ICP", "ricp": "RICP", "vips": "VIPS", "none": "none (GNSS pose)"}
 GRID = {name: tuple(dict.fromkeys(v[name] for v in CBM_VARIANTS.values()))
         for name in ("heading", "estimator", "refine")}
@@ -72,7 +76,7 @@ def frames_of(name: str, frames: str, protocol: str) -> list:
 def label_of(row: dict[str, Any], others: dict[str, str]) -> str | None:
     """The table label of a sweep row, or None for CBM grid points that are no named variant."""
     if row["method"] != "cbm":
-        return others[row["method"]]
+        return {**OVER_TIME, **others}[row["method"]]
     return next((label for label, values in CBM_VARIANTS.items()
                  if all(row[name] == value for name, value in values.items())), None)
 
@@ -86,13 +90,14 @@ def measure(condition: ScenarioParams, group: str, seeds: int, frames: str, work
         for seed in range(seeds):
             sweep = Sweep(methods=("cbm", *others), grid=GRID, seed=seed, scenario=condition)
             rows.extend(run(sweep, inputs, workers=workers))
+            rows.extend(run(Sweep(methods=tuple(OVER_TIME), seed=seed, scenario=condition), inputs, workers=workers))
     named = [{**row, "label": label} for row in rows if (label := label_of(row, others)) is not None]
     runtimes: dict[str, list[float]] = {}
     for row in named:
         runtimes.setdefault(row["label"], []).append(row["runtime_s"])
     stats = dict(summarise(named, ["label"]))
     return [Row(label, stats[(label,)], 1000 * float(np.median(runtimes[label])), int(stats[(label,)]["n_trials"]))
-            for label in [*CBM_VARIANTS, *others.values()]]
+            for label in [*CBM_VARIANTS, *OVER_TIME.values(), *others.values()]]
 
 
 def cell(value: float) -> str:

@@ -29,6 +29,7 @@ from .params import CBMParams
 from .pipeline import match
 from .posegraph import match_graph
 from .result import MatchResult
+from .sequence import SequenceCalibrator, match_first_step
 
 
 @dataclass(frozen=True)
@@ -57,6 +58,9 @@ class Method:
     """Parameters that matter only while another has a value: ``{"sigma3": ("consensus", True)}``."""
     takes_peers: bool = False
     """Uses the frame's other CAV trials (``peers=``, more than two agents): the joint pose graph."""
+    over_time: bool = False
+    """Calibrates a sequence frame after frame (``calibrator``): its frames run in time order, per
+    CAV; called on one frame alone it is that frame's first step."""
 
     @property
     def params_key(self) -> str:
@@ -85,6 +89,12 @@ class Method:
             raise TypeError(f"params of {self.name} must be {self.params.__name__}, got {type(params).__name__}")
         return dataclasses.replace(params, **self.forced) if self.forced else params
 
+    def calibrator(self, params: Any = None) -> SequenceCalibrator:
+        """A fresh calibrator over time with ``params`` (``over_time`` methods only)."""
+        if not self.over_time:
+            raise ValueError(f"{self.name} calibrates every frame alone; it has no calibrator over time")
+        return SequenceCalibrator(self.resolved(params))
+
     def __call__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None, *,
                  labels: tuple[np.ndarray, np.ndarray] | None = None,
                  true_pairs: np.ndarray | None = None, peers: Sequence[Any] = ()) -> MatchResult:
@@ -111,6 +121,8 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            shares="cbm", explains=True, requires=CBM_REQUIRES),
     Method("cbm-graph", "CBM + pose graph (3+ agents)", CBMParams, match_graph, shares="cbm",
            requires=CBM_REQUIRES, takes_peers=True),
+    Method("cbm-time", "CBM over time", CBMParams, match_first_step, shares="cbm", requires=CBM_REQUIRES,
+           over_time=True),
     Method("icp", "ICP", ICPParams, match_icp),
     Method("ricp", "RICP", RICPParams, match_ricp),
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),

@@ -10,6 +10,29 @@ from . import se2
 
 
 @dataclass(frozen=True)
+class TrackNote:
+    """How CBM over time (``cbm.SequenceCalibrator``) reached a frame's answer."""
+
+    event: str
+    """``per frame`` (the error does not persist: per-frame CBM's answer), ``started``,
+    ``accepted`` (the frame's measurement joined the track), ``rejected`` (it disagreed: the
+    prediction stands), ``no measurement``, ``re-acquired`` (after a real jump), ``lost`` (per-frame
+    CBM's answer, abstained), or ``reset: ...`` (time went backwards, a gap, another CAV)."""
+    persists: bool
+    """The error was seen to persist from frame to frame (else every frame stands alone)."""
+    since_s: float
+    """Seconds: when the track the answer comes from started (NaN without a track)."""
+    pooled: int
+    """Frames whose measurements the track has pooled since then."""
+    predicted: np.ndarray | None
+    """(3, 3) the CAV->ego transform the track predicted for this frame (None without a track)."""
+    measured: np.ndarray | None
+    """(3, 3) the frame's own measurement (CBM's answer), None when CBM found too few pairs."""
+    answer: np.ndarray
+    """(3, 3) the transform answered."""
+
+
+@dataclass(frozen=True)
 class MatchResult:
     """The matched pairs, the refined pose, and what the app needs to explain them."""
 
@@ -53,6 +76,8 @@ class MatchResult:
     answer_anchor: tuple[int, int] | None = None
     """The anchor whose refined answer explained the scene best (``cbm.hypotheses``): ``anchor``
     unless another anchor's hypothesis won the verification."""
+    track: TrackNote | None = None
+    """How CBM over time reached this answer (``cbm.SequenceCalibrator``); None for a single frame."""
 
     @property
     def margin(self) -> int:

@@ -23,8 +23,9 @@ from evaluation.scenario import FrameInputs, ScenarioParams
 from evaluation.sweep import TIMING_COLUMNS, TRIAL_COLUMNS, Sweep
 from evaluation.sweep import run as run_sweep
 
-DEFAULT_METHODS = tuple(name for name, record in METHODS.items() if not record.takes_peers)
-"""Every method, between the references ``none`` and ``oracle``, but ``cbm-graph`` (``--agents`` 3 or more)."""
+DEFAULT_METHODS = tuple(name for name, record in METHODS.items() if not (record.takes_peers or record.over_time))
+"""Every method, between the references ``none`` and ``oracle``, but ``cbm-graph`` (``--agents`` 3 or
+more) and ``cbm-time`` (over a sequence's frames: ``--methods cbm-time``)."""
 
 
 @dataclass(frozen=True)

@@ -6,7 +6,8 @@ this order from one ``numpy.random.Generator``:
 
 1. ``rng.permutation(N)`` -- the order in which the sind protocol deals the objects out;
 2. ``rng.standard_normal(3)`` -- the localization error (x, y, yaw), scaled by ``loc_*`` when
-   ``localization="gaussian"`` (unused when ``"fixed"``);
+   ``localization="gaussian"`` (unused otherwise: ``"drifting"`` draws from a generator of its own,
+   for the whole sequence, ``evaluation.drift``);
 3. ``rng.standard_normal((N, 3))`` then ``rng.random(N)`` -- the ego's detection noise (x, y, yaw)
    and heading-flip draw, row ``n`` for input object ``n``;
 4. the same for the CAV;
@@ -31,9 +32,10 @@ from cbm import se2
 
 from .clutter import missed, with_false_boxes
 from .detected import with_detections
+from .drift import drift_error
 
 Protocol = Literal["sind", "opv2v", "range"]
-Localization = Literal["fixed", "gaussian", "dataset"]
+Localization = Literal["fixed", "gaussian", "drifting", "dataset"]
 
 
 @dataclass(frozen=True)
@@ -51,14 +53,21 @@ class ScenarioParams:
     """Probability that a detection's heading is turned by pi (sec. IV-A uses 0.5)."""
     localization: Localization = "fixed"
     """``fixed``: the CAV pose is off by exactly (loc_x, loc_y, loc_yaw) (sec. IV-A).
-    ``gaussian``: off by zero-mean Gaussians with those std-devs (sec. V-A, OpenCOOD's pose noise).
-    ``dataset``: the CAV pose the dataset itself reports (OPV2V ``predicted_ego_pos``; ``loc_*`` unused)."""
+    ``gaussian``: off by zero-mean Gaussians with those std-devs, drawn anew every frame (sec. V-A,
+    OpenCOOD's pose noise). ``drifting``: a bias with those std-devs that drifts over time like
+    GNSS (a Gauss-Markov process of time constant ``loc_tau``, plus ``loc_white`` white noise,
+    ``evaluation.drift``). ``dataset``: the CAV pose the dataset itself reports (OPV2V
+    ``predicted_ego_pos``; ``loc_*`` unused)."""
     loc_x: float = 3.0
     """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world x."""
     loc_y: float = 3.0
     """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world y."""
     loc_yaw: float = 5.0
-    """Degrees. Offset (fixed) or std-dev (gaussian) of the CAV's world yaw."""
+    """Degrees. Offset (fixed) or std-dev (gaussian, drifting) of the CAV's world yaw."""
+    loc_tau: float = 60.0
+    """Seconds (drifting). Time constant of the bias: frames this far apart share 1/e of it."""
+    loc_white: float = 0.1
+    """Drifting: white noise added every frame, as a share of each axis's std-dev (GNSS jitter)."""
     sensor_range: float = 50.0
     """Metres (range protocol): an agent sees the objects whose centre is at most this far from it."""
     miss_rate: float = 0.0
@@ -73,8 +82,8 @@ class ScenarioParams:
     def __post_init__(self) -> None:
         if self.protocol not in ("sind", "opv2v", "range"):
             raise ValueError(f"ScenarioParams.protocol must be 'sind', 'opv2v' or 'range', got {self.protocol!r}")
-        if self.localization not in ("fixed", "gaussian", "dataset"):
-            raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian' or 'dataset', "
+        if self.localization not in ("fixed", "gaussian", "drifting", "dataset"):
+            raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian', 'drifting' or 'dataset', "
                              f"got {self.localization!r}")
         for name in ("eta", "flip_prob", "miss_rate"):
             _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
@@ -82,7 +91,9 @@ class ScenarioParams:
             _require(name, _finite(self, name) >= 0.0, "a finite number >= 0")
         for name in ("loc_x", "loc_y", "loc_yaw"):
             is_valid = _finite(self, name) >= 0.0 or self.localization == "fixed"
-            _require(name, is_valid, "a finite number >= 0 (a std-dev, as localization='gaussian')")
+            _require(name, is_valid, f"a finite number >= 0 (a std-dev, as localization={self.localization!r})")
+        _require("loc_tau", _finite(self, "loc_tau") > 0.0, "a finite number of seconds > 0")
+        _require("loc_white", _finite(self, "loc_white") >= 0.0, "a finite number >= 0")
         _require("sensor_range", _finite(self, "sensor_range") > 0.0, "a finite number > 0")
         is_seed = isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool) and self.seed >= 0
         _require("seed", is_seed, "an integer >= 0")
@@ -166,6 +177,11 @@ class FrameInputs:
     cohort: tuple[FrameInputs, ...] = ()
     """The inputs of every CAV of the frame, this one among them (more than two agents): one tuple
     shared by the frame's inputs, so a frame of K CAVs holds K references, not K squared."""
+    times: np.ndarray | None = None
+    """Seconds: the timestamps of every frame of the sequence (one array shared by its frames), for
+    a localization error that drifts over time (``evaluation.drift``)."""
+    cav: str = ""
+    """The CAV's id (empty for abstract agents): its drift is its own."""
 
     @property
     def peers(self) -> tuple[FrameInputs, ...]:
@@ -175,11 +191,22 @@ class FrameInputs:
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
         evaluation, sweeps and search is made here."""
-        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index, self.stream))
+        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index, self.stream),
+                           loc_error=self.drift(params, seed))
         if not self.detections:
             return trial
         agents = {"ego": self.trial.get("ego_id"), "cav": self.trial.get("cav_id")}
         return with_detections(trial, self.detections, self.trial["boxes"], self.trial["ids"], agents)
+
+    def drift(self, params: ScenarioParams, seed: int) -> np.ndarray | None:
+        """This frame's drifting localization error (None unless ``localization="drifting"``)."""
+        if params.localization != "drifting":
+            return None
+        if self.times is None:
+            raise ValueError("localization 'drifting' needs the frames' timestamps (a sequence of frames)")
+        sigma = np.array([params.loc_x, params.loc_y, params.loc_yaw_rad])
+        return drift_error(sigma, params.loc_tau, params.loc_white, seed, self.cav or str(self.stream), self.times,
+                           self.index)
 
     def peer_trials(self, params: ScenarioParams, seed: int) -> list[Trial]:
         """The trials of the frame's other CAVs, as their own rows build them."""
@@ -198,6 +225,7 @@ def make_trial(
     visibility: Mapping[str, np.ndarray] | None = None,
     cav_reported_pose: np.ndarray | None = None,
     rng: np.random.Generator | None = None,
+    loc_error: np.ndarray | None = None,
 ) -> Trial:
     """Make one trial from ``(N, 7)`` world-frame ``boxes`` with unique ``ids``.
 
@@ -207,6 +235,8 @@ def make_trial(
     ``localization="dataset"`` only, which needs it. In every protocol an agent whose id is given never
     detects itself (removed after the deal, so sind counts hold for objects other than the agents).
     ``rng`` defaults to ``np.random.default_rng(params.seed)``; the draw order is in the module docstring.
+    ``loc_error`` is the drifting localization error of this frame (``FrameInputs.drift``), which
+    ``localization="drifting"`` needs.
     """
     boxes, ids = _checked_objects(boxes, ids)
     rng = np.random.default_rng(params.seed) if rng is None else rng
@@ -224,7 +254,7 @@ def make_trial(
     cav_sees &= ~cav_missed if cav_id is None else ~cav_missed & (ids != cav_id)
 
     T_true = se2.inverse(ego_pose) @ cav_pose
-    init = se2.inverse(ego_pose) @ _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose)
+    init = se2.inverse(ego_pose) @ _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose, loc_error)
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
     cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
     trial = Trial(
@@ -327,9 +357,14 @@ def localization_error(params: ScenarioParams, draw: np.ndarray) -> np.ndarray:
 
 
 def _reported_cav_pose(params: ScenarioParams, cav_pose: np.ndarray, draw: np.ndarray,
-                       dataset_pose: np.ndarray | None) -> np.ndarray:
-    """The CAV's world pose as it reports it: the true pose plus ``localization_error``, or the
-    dataset's own (``localization="dataset"``; a ``ValueError`` when the frame has none)."""
+                       dataset_pose: np.ndarray | None, drifted: np.ndarray | None) -> np.ndarray:
+    """The CAV's world pose as it reports it: the true pose plus ``localization_error`` or the
+    drifting error ``drifted``, or the dataset's own (``localization="dataset"``; a ``ValueError``
+    when the frame has none)."""
+    if params.localization == "drifting":
+        if drifted is None:
+            raise ValueError("localization 'drifting' needs the frame's drifting error (FrameInputs.build makes it)")
+        return perturbed_pose(cav_pose, drifted)
     if params.localization != "dataset":
         return perturbed_pose(cav_pose, localization_error(params, draw))
     if dataset_pose is None:

@@ -10,8 +10,9 @@ A grid name is a field of :class:`~evaluation.scenario.ScenarioParams` (it chang
 parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
 Every trial is built by ``FrameInputs.build`` (frame ``k`` draws from ``trial_rng(seed, k)``), as
 the app builds its trials, so any row can be reproduced there from its frame, parameters and seed.
-Rows come in task order -- frame, scenario grid point, method, method grid point, each in the order
-given -- whatever the number of workers.
+A method that calibrates over time (``cbm-time``: ``Method.over_time``) runs the frames of each CAV
+in time order, one task per sequence and CAV. Rows come in order -- frame, scenario grid point,
+method, method grid point, each in the order given -- whatever the number of workers.
 """
 from __future__ import annotations
 
@@ -128,41 +129,81 @@ def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
 
 def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
         progress: Callable[[int], None] | None = None, ray: str | None = None) -> list[dict[str, Any]]:
-    """Every row of ``sweep`` over ``frames``, in task order. ``workers > 1`` runs the
-    (frame, scenario point) tasks in a process pool, ``ray`` (``local``, ``auto`` or an address) on
-    Ray (``evaluation.executors``); ``progress(n)`` is called as ``n`` rows finish. A task that raises
-    stops the run with a ``evaluation.executors.TaskError`` naming its frame and scenario point.
-    The frames' other CAVs travel with each task only when a method takes them (``cbm-graph``)."""
+    """Every row of ``sweep`` over ``frames``, in order. ``workers > 1`` runs the tasks -- one per
+    (frame, scenario point) for the methods that take frames alone, one per (CAV, scenario point)
+    over all of its frames for those over time -- in a process pool, ``ray`` (``local``, ``auto`` or an
+    address) on Ray (``evaluation.executors``); ``progress(n)`` is called as ``n`` rows finish. A task
+    that raises stops the run with a ``evaluation.executors.TaskError`` naming its frames and scenario
+    point. The frames' other CAVs travel with each task only when a method takes them (``cbm-graph``)."""
     if not any(METHODS[m].takes_peers for m in sweep.methods):
         frames = [dataclasses.replace(frame, cohort=()) for frame in frames]
-    tasks = [(sweep, frame, scenario) for frame in frames for scenario in sweep.scenario_points()]
+    points = list(enumerate(sweep.scenario_points()))
+    tasks = []
+    if any(not METHODS[m].over_time for m in sweep.methods):
+        tasks += [(sweep, (position,), (frame,), point, False) for position, frame in enumerate(frames)
+                  for point in points]
+    if any(METHODS[m].over_time for m in sweep.methods):
+        tasks += [(sweep, positions, chain, point, True) for positions, chain in _by_cav(frames) for point in points]
     done = progress or (lambda n: None)
     results = run_tasks(run_task, tasks, workers=workers, ray=ray, done=lambda rows: done(len(rows)),
                         name=lambda task: task_name(*task))
-    return [row for rows in results for row in rows]
+    return [row for _, row in sorted((item for rows in results for item in rows), key=lambda item: item[0])]
 
 
-def task_name(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> str:
-    """A task as the user knows it: its frame and the scenario grid's values."""
-    point = ", ".join(f"{n}={getattr(scenario, n)}" for n in sweep.grid if n in SCENARIO_FIELDS)
-    return f"frame {frame.index}" + (f" ({point})" if point else "")
+def _by_cav(frames: Sequence[FrameInputs]) -> list[tuple[tuple[int, ...], tuple[FrameInputs, ...]]]:
+    """The frames of each CAV (by its rank among a frame's CAVs), in frame order, with their
+    positions in ``frames``: the chains a calibrator over time steps through."""
+    chains: dict[int, list[int]] = {}
+    for position, frame in enumerate(frames):
+        chains.setdefault(frame.stream, []).append(position)
+    ordered = [sorted(positions, key=lambda p: frames[p].index) for positions in chains.values()]
+    return [(tuple(positions), tuple(frames[p] for p in positions)) for positions in ordered]
 
 
-def run_task(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams) -> list[dict[str, Any]]:
-    """The rows of one frame at one scenario point: one trial, every method at each of its grid points."""
-    trial = frame.build(scenario, sweep.seed)
-    base = {"frame": frame.index, **dataclasses.asdict(scenario),
-            "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
-    init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
-    peers = frame.peer_trials(scenario, sweep.seed) if any(METHODS[m].takes_peers for m in sweep.methods) else []
+def task_name(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs, ...],
+              point: tuple[int, ScenarioParams], over_time: bool) -> str:
+    """A task as the user knows it: its frames and the scenario grid's values."""
+    scenario = point[1]
+    values = ", ".join(f"{n}={getattr(scenario, n)}" for n in sweep.grid if n in SCENARIO_FIELDS)
+    where = (f"frames {frames[0].index}-{frames[-1].index} in time order" if over_time
+             else f"frame {frames[0].index}")
+    return where + (f" ({values})" if values else "")
+
+
+def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs, ...],
+             point: tuple[int, ScenarioParams], over_time: bool) -> list[tuple[tuple, dict[str, Any]]]:
+    """The rows of one task, each with the key that puts it in the sweep's order: the frame's
+    position, the scenario point, the method and its grid point. A frame alone runs every method that
+    takes frames alone; a chain of frames runs the methods over time, each grid point with a
+    calibrator of its own stepping through the frames in time order."""
+    number, scenario = point
+    methods = [(k, m) for k, m in enumerate(sweep.methods) if METHODS[m].over_time == over_time]
+    calibrators = {(k, j): METHODS[m].calibrator(params) for k, m in methods if over_time
+                   for j, params in enumerate(sweep.method_points(m))}
     rows = []
-    for method in sweep.methods:
-        for params in sweep.method_points(method):
-            result = run_method(method, trial, params, frame, peers)
-            rows.append(_row(sweep, base, method, params, evaluate(result, trial), init_error))
-            if sweep.fusion:
-                rows[-1].update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
+    for position, frame in zip(positions, frames):
+        trial = frame.build(scenario, sweep.seed)
+        base = {"frame": frame.index, **dataclasses.asdict(scenario),
+                "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
+        init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
+        peers = frame.peer_trials(scenario, sweep.seed) if any(METHODS[m].takes_peers for _, m in methods) else []
+        for k, method in methods:
+            for j, params in enumerate(sweep.method_points(method)):
+                if over_time:
+                    result = calibrators[k, j].step(trial.ego_boxes, trial.cav_boxes, trial.init, frame_time(frame),
+                                                    agent=frame.trial.get("cav_id"))
+                else:
+                    result = run_method(method, trial, params, frame, peers)
+                row = _row(sweep, base, method, params, evaluate(result, trial), init_error)
+                if sweep.fusion:
+                    row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
+                rows.append(((position, number, k, j), row))
     return rows
+
+
+def frame_time(frame: FrameInputs) -> float:
+    """Seconds: the frame's timestamp, or its index at 10 Hz when its sequence gives none."""
+    return float(frame.times[frame.index]) if frame.times is not None else 0.1 * frame.index
 
 
 def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs, peers: Sequence[Trial] = ()) -> Any:

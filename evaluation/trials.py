@@ -157,7 +157,8 @@ def _abstract_inputs(frame: Frame, protocol: Protocol) -> FrameInputs:
     if protocol != "sind":
         raise NoTrial(f"frame {frame.index} has no ego and CAV for the {protocol} protocol")
     inputs = {"boxes": frame.boxes(), "ids": frame.track_ids}
-    return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents")
+    return FrameInputs(frame.index, inputs, labels=frame.categories, note="no two vehicles: abstract agents",
+                       times=frame.sequence.timestamps)
 
 
 def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: str, sensor_range: float,
@@ -172,7 +173,7 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     if detected:
         note += f"; real detections of {' and '.join(detected)}"
     return FrameInputs(frame.index, inputs, labels=frame.categories[in_trials(frame)], note=note,
-                       detections=detected or None, stream=stream)
+                       detections=detected or None, stream=stream, times=frame.sequence.timestamps, cav=str(chosen))
 
 
 def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:

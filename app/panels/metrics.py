@@ -17,7 +17,7 @@ from viser._messages import GuiSliderMark
 from ..session.baseline import Baseline
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
 from .actions import TabActions, on_user
-from .plot import TIMELINE, add_timeline, send, timeline_series
+from .plot import add_timeline, send, timeline_series
 
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
@@ -35,10 +35,15 @@ class TimelineTab(TabActions, Protocol):
     def refresh(self) -> None:
         """Recompute the frame on screen (the pinned comparison changed)."""
 
+    def stop_catching_up(self) -> None:
+        """Stop a method over time computing the frames before the one asked for."""
+
 
 @dataclass
 class MetricsControls:
     status: viser.GuiMarkdownHandle
+    stop: viser.GuiButtonHandle
+    """Stops a method over time computing the frames before the one asked for (shown meanwhile)."""
     text: viser.GuiMarkdownHandle
     plot: viser.GuiUplotHandle
     scrubber: viser.GuiSliderHandle
@@ -57,10 +62,11 @@ class MetricsControls:
         self.say(status)
         self.text.content = metrics_markdown
 
-    def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int) -> None:
+    def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int,
+                      over_time: bool = False) -> None:
         """The timeline, its slider at ``frame`` with the failed frames marked, the list of failed
         frames and the pin button's label."""
-        send(self.plot, timeline, timeline_series(len(timeline) > len(TIMELINE)))
+        send(self.plot, timeline, timeline_series(pinned, over_time))
         self.scrubber.value = frame
         ends = tuple(GuiSliderMark(value=float(v), label=str(int(v))) for v in (self.scrubber.min, self.scrubber.max))
         marks = ends + tuple(GuiSliderMark(value=float(f), label=None) for f in failures)
@@ -77,7 +83,10 @@ class MetricsControls:
 
 def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle) -> MetricsControls:
     """The metrics and the timeline's controls; ``frame_slider`` (built above them) carries the marks."""
-    status, text = gui.add_markdown("", visible=False), gui.add_markdown("Computing the first frame…")
+    status = gui.add_markdown("", visible=False)
+    stop = gui.add_button("stop computing the frames before", visible=False, color="red",
+                          hint="keep the frames computed so far and show the last of them")
+    text = gui.add_markdown("Computing the first frame…")
     plot = add_timeline(gui)
     scrubber = frame_slider
     failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
@@ -85,10 +94,11 @@ def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle) -> MetricsCont
                               hint="a failed frame known so far ")
     pin = gui.add_button(PIN, hint="keep these settings and their per-frame results to compare against")
     gui.add_markdown(HINT)
-    return MetricsControls(status, text, plot, scrubber, failures, failed, pin)
+    return MetricsControls(status, stop, text, plot, scrubber, failures, failed, pin)
 
 
 def bind(c: MetricsControls, tab: TimelineTab) -> None:
+    c.stop.on_click(lambda e: tab.stop_catching_up())
     c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
     on_user(c.failed, lambda: jump(tab, c.failed.value))
     c.pin.on_click(lambda e: toggle_pin(tab))

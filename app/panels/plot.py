@@ -27,7 +27,7 @@ import numpy as np
 import viser
 from viser import uplot
 
-from ..session.history import Row
+from ..session.history import MARKED_EVENTS, Row
 
 DOTS = uplot.Series_Points(show=True, size=4)
 """Every frame computed is a dot, so a frame computed alone shows too (a line needs two)."""
@@ -42,6 +42,12 @@ NOW = uplot.Series(label="this frame", stroke="#222222", width=2, scale="y", poi
 PINNED = (uplot.Series(label="pinned precision", stroke="#8fd19e", width=1.5, dash=(6.0, 4.0), scale="y"),
           uplot.Series(label="pinned recall", stroke="#9cbcf9", width=1.5, dash=(6.0, 4.0), scale="y"),
           uplot.Series(label="pinned RTE", stroke="#f5c28a", width=1.5, dash=(6.0, 4.0), scale="m"))
+ALONE = uplot.Series(label="per-frame CBM RTE", stroke="#5a5a5a", width=1.5, dash=(3.0, 3.0), scale="m", points=DOTS)
+TRACKED = uplot.Series(label="rejected / re-acquired / lost", stroke="#6a3d9a", width=0, scale="y",
+                       points=uplot.Series_Points(show=True, size=8, width=1.5, fill="#ffffff", stroke="#6a3d9a"))
+OVER_TIME = (ALONE, TRACKED)
+"""A method over time: per-frame CBM's RTE on the same frames (grey, dashed), and the frames where
+the calibration over time rejected a frame's answer, re-acquired or was lost (purple rings at the top)."""
 TIMELINE = (FRAME, PRECISION, RECALL, RTE, FAILED, NOW)
 """frame; precision, recall, RTE; failed frames (large red dots ringed dark red on the x axis, apart
 from RTE's small orange ones); the current frame (a vertical bar). While a baseline is pinned,
@@ -90,9 +96,10 @@ def add_timeline(gui: viser.GuiApi) -> viser.GuiUplotHandle:
                          padding=PADDING)
 
 
-def timeline_series(pinned: bool) -> tuple[uplot.Series, ...]:
-    """The timeline's series: the pinned ones only while a baseline is pinned."""
-    return (*TIMELINE, *PINNED) if pinned else TIMELINE
+def timeline_series(pinned: bool, over_time: bool = False) -> tuple[uplot.Series, ...]:
+    """The timeline's series: the pinned ones only while a baseline is pinned, those of a method
+    over time only for one."""
+    return (*TIMELINE, *(PINNED if pinned else ()), *(OVER_TIME if over_time else ()))
 
 
 def frame_axis(frames: Iterable[int], n_frames: int, current: int | None = None) -> np.ndarray:
@@ -112,9 +119,9 @@ def column(x: np.ndarray, values: Mapping[int, float]) -> np.ndarray:
 
 
 def timeline_data(rows: Mapping[int, Row], pinned: Mapping[int, Row], current: int, n_frames: int,
-                  with_pinned: bool = False) -> tuple[np.ndarray, ...]:
-    """The timeline's arrays (``timeline_series(with_pinned)``): a row per frame computed (current
-    or pinned) and the rows ``frame_axis`` adds."""
+                  with_pinned: bool = False, over_time: bool = False) -> tuple[np.ndarray, ...]:
+    """The timeline's arrays (``timeline_series(with_pinned, over_time)``): a row per frame computed
+    (current or pinned) and the rows ``frame_axis`` adds."""
     x = frame_axis([*rows, *pinned], n_frames, current)
 
     def field(source: Mapping[int, Row], name: str) -> np.ndarray:
@@ -126,7 +133,9 @@ def timeline_data(rows: Mapping[int, Row], pinned: Mapping[int, Row], current: i
     now[first], now[first + 1] = 0.0, 1.0
     current_series = (field(rows, "precision"), field(rows, "recall"), field(rows, "rte"), failed, now)
     pinned_series = (field(pinned, "precision"), field(pinned, "recall"), field(pinned, "rte")) if with_pinned else ()
-    return (x, *current_series, *pinned_series)
+    tracked = column(x, {f: 1.0 for f, row in rows.items() if row.event in MARKED_EVENTS})
+    over_time_series = (field(rows, "alone_rte"), tracked) if over_time else ()
+    return (x, *current_series, *pinned_series, *over_time_series)
 
 
 def run_data(frames: np.ndarray, columns: Iterable[np.ndarray], n_frames: int) -> tuple[np.ndarray, ...]:

@@ -18,9 +18,14 @@ SLIDERS = {
     "sigma_p": (SCENARIO_WORDS["sigma_p"], 0.0, 2.0, 0.05, "detection position noise, std-dev on x and y"),
     "sigma_theta": (SCENARIO_WORDS["sigma_theta"], 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
     "flip_prob": (SCENARIO_WORDS["flip_prob"], 0.0, 1.0, 0.05, "probability a detection faces backwards"),
-    "loc_x": (SCENARIO_WORDS["loc_x"], 0.0, 15.0, 0.25, "CAV pose error in x: offset (fixed) or std-dev (gaussian)"),
+    "loc_x": (SCENARIO_WORDS["loc_x"], 0.0, 15.0, 0.25,
+              "CAV pose error in x: offset (fixed) or std-dev (gaussian, drifting)"),
     "loc_y": (SCENARIO_WORDS["loc_y"], 0.0, 15.0, 0.25, "CAV pose error in y"),
     "loc_yaw": (SCENARIO_WORDS["loc_yaw"], 0.0, 30.0, 0.5, "CAV pose error in yaw"),
+    "loc_tau": (SCENARIO_WORDS["loc_tau"], 1.0, 600.0, 1.0, "drifting: frames this many seconds apart share 1/e of "
+                "the bias (GNSS: tens of seconds to minutes)"),
+    "loc_white": (SCENARIO_WORDS["loc_white"], 0.0, 1.0, 0.05, "drifting: noise drawn anew every frame on top of the "
+                  "bias, as a share of each axis's std-dev"),
     "sensor_range": (SCENARIO_WORDS["sensor_range"], 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
     "miss_rate": (SCENARIO_WORDS["miss_rate"], 0.0, 1.0, 0.05, "probability that an agent misses a detection it "
                   "would make, 0 to 1 (each agent draws its own misses)"),
@@ -30,10 +35,13 @@ SLIDERS = {
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the
 sensor range in a dataset without per-agent visibility."""
-LOCALIZATIONS = ("fixed", "gaussian", "dataset")
-"""``dataset``: the CAV's own reported pose where the release has one (OPV2V's ``predicted_ego_pos``)."""
+LOCALIZATIONS = ("fixed", "gaussian", "drifting", "dataset")
+"""``drifting``: a bias that drifts over time like GNSS (``evaluation.drift``); ``dataset``: the
+CAV's own reported pose where the release has one (OPV2V's ``predicted_ego_pos``)."""
 SIMULATED_ERROR = ("loc_x", "loc_y", "loc_yaw")
 """The sliders of a simulated localization error (unread under ``dataset``)."""
+DRIFT = ("loc_tau", "loc_white")
+"""The sliders of a drifting localization error (read under ``drifting`` only)."""
 
 
 @dataclass
@@ -74,6 +82,8 @@ def unread_reason(settings: Settings, name: str) -> str | None:
         return f"no effect under the {scenario.protocol} protocol"
     if name in SIMULATED_ERROR and scenario.localization == "dataset":
         return "the dataset's own localization is used"
+    if name in DRIFT and scenario.localization != "drifting":
+        return "the localization error does not drift"
     return None
 
 
@@ -83,8 +93,8 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ScenarioCont
     return ScenarioControls(
         protocol=gui.add_dropdown("protocol", ("range", "sind", "opv2v"), initial_value=scenario.protocol),
         localization=gui.add_dropdown("localization error", localizations, initial_value=scenario.localization,
-                                      hint="fixed offset, gaussian draw, or the dataset's own (OPV2V's "
-                                           "predicted_ego_pos)"),
+                                      hint="fixed offset, gaussian draw anew each frame, drifting over time like "
+                                           "GNSS, or the dataset's own (OPV2V's predicted_ego_pos)"),
         sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
                  for name, (label, low, high, step, hint) in SLIDERS.items()},
         seed=gui.add_number("seed", scenario.seed, min=0, step=1),

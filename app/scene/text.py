@@ -9,7 +9,7 @@ from cbm import se2
 from cbm.methods import METHODS
 from cbm.result import MatchResult
 from evaluation.clutter import is_false
-from evaluation.metrics import is_success
+from evaluation.metrics import evaluate, is_success
 
 from ..session.explorer import Outcome
 from ..session.names import agent_name
@@ -87,7 +87,9 @@ def metrics_markdown(outcome: Outcome) -> str:
         margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
         lines.append(f"| consensus margin | {margin} |")
     lines.extend(evidence_rows(result))
-    lines.append(f"| {method} time | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
+    lines.extend(over_time_rows(outcome))
+    spent = "time of this frame" if method.endswith(" time") else "time"
+    lines.append(f"| {method} {spent} | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:
         lines.append("")
@@ -97,6 +99,35 @@ def metrics_markdown(outcome: Outcome) -> str:
         lines.append(findings_heading(outcome))
         lines.extend(f"- {f.message}" for f in outcome.findings)
     return "\n".join(lines)
+
+
+EVENT_WORDS = {
+    "per frame": "this frame alone: the error has not been seen to persist, so this is per-frame CBM's answer",
+    "started": "the error persists: a calibration over time started",
+    "accepted": "this frame's own answer agreed with the track and joined it",
+    "rejected": "this frame's own answer disagreed with the track and was set aside: the track's prediction stands",
+    "no measurement": "CBM paired too few objects in this frame: the track's prediction stands",
+    "re-acquired": "the error jumped: the track moved onto this frame's answer",
+    "lost": "lost: no frame agreed with the track for too long; per-frame CBM's answer, without confidence",
+}
+"""How a method over time reached a frame's answer, in words (``cbm.result.TrackNote.event``)."""
+
+
+def over_time_rows(outcome: Outcome) -> list[str]:
+    """A method over time: how the answer was reached, which frames it pools, and per-frame CBM's
+    errors on the same frame; nothing for other methods."""
+    note = outcome.result.track
+    if note is None or outcome.alone is None:
+        return []
+    event = note.event
+    words = EVENT_WORDS.get(event, f"started over ({event.removeprefix('reset: ')})")
+    rows = [f"| over time | {words} |"]
+    if outcome.pooled_from is not None:
+        first, last = outcome.pooled_from, outcome.frame_index
+        rows.append(f"| answer from | frames {first}–{last} ({plural(note.pooled, 'frame')} pooled) |")
+    alone = evaluate(outcome.alone, outcome.trial)
+    rows.append(f"| per-frame CBM (this frame) | {number(alone.rre, '°')} / {number(alone.rte, ' m')} |")
+    return rows
 
 
 def evidence_rows(result: object) -> list[str]:

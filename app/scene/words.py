@@ -89,6 +89,8 @@ SCENARIO_WORDS = {
     "loc_x": "localization x (m)",
     "loc_y": "localization y (m)",
     "loc_yaw": "localization yaw (°)",
+    "loc_tau": "drift time constant (s)",
+    "loc_white": "drift white noise (share)",
     "sensor_range": "sensor range (m)",
     "miss_rate": "missed detections (share)",
     "false_rate": "false boxes (per detection)",

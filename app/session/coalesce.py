@@ -40,6 +40,13 @@ class Coalescer(Generic[T, R]):
             self._condition.notify()
             return self._generation
 
+    @property
+    def superseded(self) -> bool:
+        """A newer value waits: the one computing now will be shown only briefly, if at all (a long
+        computation may stop early)."""
+        with self._condition:
+            return self._pending is not None or self._closed
+
     def wait_idle(self, timeout: float | None = None) -> bool:
         """Block until nothing is pending or computing; False on timeout."""
         with self._condition:

@@ -9,6 +9,7 @@ from __future__ import annotations
 import threading
 import time
 from collections import OrderedDict
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -28,6 +29,7 @@ from evaluation.sweep import run_method
 from evaluation.trials import frame_cav_inputs, frame_inputs
 from loaders import Sequence, is_vehicle
 
+from .over_time import Runs
 from .settings import MAX_CAVS, Settings
 
 TRIALS_KEPT = 8
@@ -91,6 +93,10 @@ class Outcome:
     """Server time of the whole recompute (trial, method, metrics, diagnosis)."""
     others: tuple[CavOutcome, ...] = ()
     """The CAVs beyond the first (``Settings.cavs`` > 1), each in its own colour."""
+    alone: MatchResult | None = None
+    """A method over time: per-frame CBM's answer on the same trial, to compare (None otherwise)."""
+    pooled_from: int | None = None
+    """A method over time: the first frame whose evidence the answer pools (None: this frame alone)."""
     _kept: dict[str, object] = field(default_factory=dict, repr=False, compare=False)
     """What the views computed from this outcome on their first ask (fusion, CBM's sets), kept."""
 
@@ -148,6 +154,8 @@ class Explorer:
         """What CBM built for the last few inputs that a threshold edit does not change (``cbm.engine.EditCache``)."""
         self._trials: OrderedDict[tuple, tuple[FrameInputs, Trial, TrialMetrics]] = OrderedDict()
         self._trials_lock = threading.Lock()
+        self.over_time = Runs()
+        """The frames a method over time computed so far, per settings (``app.session.over_time``)."""
 
     def __len__(self) -> int:
         return len(self.sequence)
@@ -191,21 +199,35 @@ class Explorer:
                 self._trials.popitem(last=False)
         return made
 
-    def compute(self, settings: Settings) -> Outcome:
-        """Trial, method result, metrics and diagnosis for ``settings``."""
+    def compute(self, settings: Settings, progress: Callable[[int, int], None] = lambda done, of: None,
+                stop: Callable[[], bool] = lambda: False) -> Outcome:
+        """Trial, method result, metrics and diagnosis for ``settings``. A method over time first
+        computes the frames before this one that it has not yet (``progress(frame, of)`` after
+        each, ``app.session.over_time.Stopped`` when ``stop()`` says so)."""
         started = time.perf_counter()
         index = min(max(settings.frame, 0), len(self.sequence) - 1)
         inputs, trial, limit = self.trial(settings, index)
         others = self.other_cavs(settings, index) if settings.cavs > 1 else ()
-        result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
+        alone = pooled_from = None
+        if METHODS[settings.method].over_time:
+            done = self.over_time.frame(settings, index, lambda j: self._timed_trial(settings, j), progress, stop)
+            result, findings, inspection, alone, pooled_from = done.result, [], None, done.alone, done.since
+        else:
+            result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
         world_to_ego = se2.inverse(trial.ego_pose)
         objects = inputs.trial
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
                        cav_note=inputs.note, trial=trial, world_boxes=se2.apply_boxes(world_to_ego, objects["boxes"]),
                        world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
-                       findings=findings, seconds=time.perf_counter() - started, others=others,
+                       findings=findings, seconds=time.perf_counter() - started, others=others, alone=alone,
+                       pooled_from=pooled_from,
                        _kept={} if inspection is None else {"inspection": inspection})
+
+    def _timed_trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, float]:
+        """Frame ``index``'s inputs and trial (``trial``) and its time in seconds, for a method over time."""
+        inputs, trial, _ = self.trial(settings, index)
+        return inputs, trial, float(self.sequence.timestamps[index])
 
     def other_cavs(self, settings: Settings, index: int) -> tuple[CavOutcome, ...]:
         """The CAVs of frame ``index`` beyond the first (``evaluation.trials.frame_cav_inputs``), at

@@ -12,7 +12,7 @@ import math
 from collections.abc import Iterable, Mapping
 from typing import Any, NamedTuple
 
-from evaluation.metrics import TrialMetrics, is_success
+from evaluation.metrics import TrialMetrics, evaluate, is_success
 
 from .explorer import Outcome
 from .settings import AUTO_CAV, Settings, ViewOptions
@@ -29,12 +29,32 @@ class Row(NamedTuple):
     rre: float
     n_matched: int
     failed: bool
+    alone_rte: float = math.nan
+    """A method over time: per-frame CBM's RTE on the same frame (NaN otherwise)."""
+    event: str = ""
+    """A method over time: how its answer was reached (``cbm.result.TrackNote.event``)."""
+
+
+MARKED_EVENTS = ("rejected", "re-acquired", "lost")
+"""The events of a calibration over time the timeline marks."""
 
 
 def row_of(metrics: TrialMetrics) -> Row:
     """The timeline row of one frame's metrics."""
     return Row(metrics.precision, metrics.recall, metrics.rte, metrics.rre, metrics.n_matched,
                not is_success(metrics))
+
+
+def row_over_time(metrics: TrialMetrics, alone: TrialMetrics, event: str) -> Row:
+    """The timeline row of a frame over time: its metrics, per-frame CBM's RTE and the track's event."""
+    return row_of(metrics)._replace(alone_rte=alone.rte, event=event)
+
+
+def row_of_outcome(outcome: Outcome) -> Row:
+    """The timeline row of a frame shown: with per-frame CBM's RTE and the event of a method over time."""
+    if outcome.alone is None or outcome.result.track is None:
+        return row_of(outcome.metrics)
+    return row_over_time(outcome.metrics, evaluate(outcome.alone, outcome.trial), outcome.result.track.event)
 
 
 def row_of_sweep(row: Mapping[str, Any]) -> Row:
@@ -72,13 +92,17 @@ class FrameHistory:
 
     def add(self, outcome: Outcome) -> None:
         """The row of a frame shown."""
-        self.merge(outcome.settings, {outcome.frame_index: row_of(outcome.metrics)})
+        self.merge(outcome.settings, {outcome.frame_index: row_of_outcome(outcome)})
 
     def merge(self, settings: Settings, rows: Mapping[int, Row]) -> None:
         """Rows computed under ``settings``; other settings than the rows' so far start afresh."""
         if not self.matches(settings):
             self.key, self.rows = settings_key(settings), {}
         self.rows.update(rows)
+
+    def over_time(self) -> bool:
+        """Whether the rows are a method's over time (they carry per-frame CBM's RTE)."""
+        return any(row.event for row in dict(self.rows).values())
 
     def failures(self) -> list[int]:
         """The failed frames among the rows (a sequence run may add rows meanwhile: read a copy)."""

@@ -75,7 +75,9 @@ class WalkthroughPanel:
             if not self.active:
                 camera = self.tab.client.camera
                 self._camera = (tuple(camera.position), tuple(camera.look_at))
-            self.index = min(max(index, 0), len(steps.BUILDERS) - 1)
+            if self._facts is None or self._facts.outcome is not outcome:
+                self._facts = gather(outcome)
+            self.index = min(max(index, 0), steps.count(self._facts) - 1)
             self.active = True
             self._draw(outcome)
             if self.step.focus is not None:
@@ -131,6 +133,7 @@ class WalkthroughPanel:
         if self._facts is None or self._facts.outcome is not outcome:
             self._facts = gather(outcome)
         self._generation += 1
+        self.index = min(self.index, steps.count(self._facts) - 1)
         self.step = steps.build(self._facts, self.index)
         self.nodes.show(self.step)
         self.title.content = f"**{self.step.title}**"
@@ -143,7 +146,8 @@ class WalkthroughPanel:
         self.play.visible = self.seconds.visible = moves
         self.look.visible = self.active and self.step is not None and self.step.focus is not None
         self.prev.disabled = self.active and self.index == 0
-        self.next.disabled = self.active and self.index == len(steps.BUILDERS) - 1
+        last = steps.count(self._facts) - 1 if self._facts is not None else len(steps.BUILDERS) - 1
+        self.next.disabled = self.active and self.index >= last
 
 
 def camera_over(focus: tuple[float, float], span: float,

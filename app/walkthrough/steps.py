@@ -61,13 +61,20 @@ NAMES = (("pose", "The wrong pose", "eq. 4"),
          ("anchor", "The anchor and its matches", "eq. 11-13"),
          ("estimate", "Robust estimate", "eq. 14-15"),
          ("reassociate", "Guided re-association", "step 7b"),
-         ("result", "Result", "metrics"))
+         ("result", "Result", "metrics"),
+         ("over_time", "Over time", "step 8"))
+"""Every step's key, name and equations; the last only for a method over time (``count``)."""
 
 
-def title(k: int) -> str:
-    """'Step k/9 · <name> (eq. …)' of step ``k`` (0-based)."""
+def count(facts: Facts) -> int:
+    """The steps of ``facts``' walkthrough: the nine of one frame, and step 8 for a method over time."""
+    return len(NAMES) if facts.outcome.result.track is not None else len(NAMES) - 1
+
+
+def title(k: int, total: int = len(NAMES) - 1) -> str:
+    """'Step k/total · <name> (eq. …)' of step ``k`` (0-based)."""
     _, name, eq = NAMES[k]
-    return f"Step {k + 1}/{len(NAMES)} · {name} ({eq})"
+    return f"Step {k + 1}/{total} · {name} ({eq})"
 
 
 def _step(facts: Facts, k: int, text: str, lines: dict[str, Lines], labels: dict[str, Label] | None = None,
@@ -78,7 +85,7 @@ def _step(facts: Facts, k: int, text: str, lines: dict[str, Lines], labels: dict
     focus = None if facts.pair is None or k not in FOCUSED else tuple(map(float, facts.ego_xy[facts.pair[0]]))
     if focus is not None and span is None:
         span = reach(focus, lines)
-    return Step(NAMES[k][0], title(k), text, lines, meshes, labels or {},
+    return Step(NAMES[k][0], title(k, count(facts)), text, lines, meshes, labels or {},
                 facts.result.init if pose is None else pose, motion, focus, _clipped(span or SPAN[0]))
 
 
@@ -343,17 +350,42 @@ def outcome_step(facts: Facts) -> Step:
     return _step(facts, 8, text, lines, pose=result.transform, motion=(result.init, result.transform))
 
 
+def over_time(facts: Facts) -> Step:
+    """Step 10 (a method over time): where the track predicted the CAV's boxes (grey), where this
+    frame's own CBM answer put them (purple), and the answer (the boxes), the truth outlined."""
+    trial, note = facts.trial, facts.outcome.result.track
+    lines = {"truth": Lines(shapes.outlines(se2.apply_boxes(trial.T_true, trial.cav_boxes)), GHOST, 1.5)}
+    said = []
+    for key, pose, colour, words in (("predicted", note.predicted, MISSED, "the track predicted (grey)"),
+                                     ("measured", note.measured, ADDED, "this frame's own CBM answer (purple)")):
+        if pose is not None:
+            lines[key] = Lines(shapes.outlines(se2.apply_boxes(pose, trial.cav_boxes), planes.MARKS), colour, 2.5)
+            said.append(f"{words} is off by {_errors(pose, trial.T_true)}")
+    if not said:
+        said.append("there is no prediction yet and CBM found no answer of its own")
+    text = (f"Beyond the paper (cbm/sequence.py): CBM over time follows the CAV's pose error from frame to frame. "
+            f"Here {'; '.join(said)}; the answer ({note.event}) is off by {_errors(note.answer, trial.T_true)}"
+            + (f", pooling {plural(note.pooled, 'frame')}." if note.pooled else "."))
+    return _step(facts, 9, text, lines, pose=note.answer,
+                 motion=None if note.predicted is None else (note.predicted, note.answer))
+
+
+def _errors(pose: np.ndarray, truth: np.ndarray) -> str:
+    metres, degrees = pose_error(pose, truth)
+    return f"{metres:.2f} m and {degrees:.2f}°"
+
+
 BUILDERS: tuple[Callable[[Facts], Step], ...] = (
     wrong_pose, context_vectors, local_matching, candidate_set, consensus, anchor, robust_estimate,
-    reassociation, outcome_step)
+    reassociation, outcome_step, over_time)
 
 
 def build(facts: Facts, k: int) -> Step:
-    """Step ``k`` (0-based) of the walkthrough of ``facts``."""
-    return BUILDERS[k](facts)
+    """Step ``k`` (0-based, below ``count(facts)``) of the walkthrough of ``facts``."""
+    return BUILDERS[min(k, count(facts) - 1)](facts)
 
 
 def walkthrough(outcome: Outcome) -> list[Step]:
     """Every step of ``outcome``'s walkthrough."""
     facts = gather(outcome)
-    return [build(facts, k) for k in range(len(BUILDERS))]
+    return [build(facts, k) for k in range(count(facts))]

@@ -63,8 +63,12 @@ def test_bad_clutter_rates_name_the_field(field, value):
         ScenarioParams(**{field: value})
 
 
-def test_the_six_named_conditions_are_the_issue_settings():
-    assert list(CONDITIONS) == ["mild", "hard", "range-50", "heavy-noise", "prior-error", "clutter"]
+def test_the_named_conditions_are_the_issue_settings():
+    assert list(CONDITIONS) == ["mild", "hard", "range-50", "heavy-noise", "prior-error", "clutter", "drift-heavy",
+                                "drift-clutter", "drift-bigloc"]
+    drift, bigloc = CONDITIONS["drift-heavy"], CONDITIONS["drift-bigloc"]
+    assert (drift.localization, drift.sigma_p, drift.sigma_theta, drift.miss_rate) == ("drifting", 0.8, 15.0, 0.2)
+    assert (bigloc.loc_x, bigloc.loc_yaw, bigloc.loc_tau) == (6.0, 15.0, 60.0)
     heavy, clutter, prior = CONDITIONS["heavy-noise"], CONDITIONS["clutter"], CONDITIONS["prior-error"]
     assert (heavy.eta, heavy.sigma_p, heavy.sigma_theta, heavy.flip_prob) == (0.2, 0.8, 15.0, 0.5)
     assert (clutter.sensor_range, clutter.miss_rate, clutter.false_rate, clutter.sigma_p) == (50.0, 0.2, 0.3, 0.4)

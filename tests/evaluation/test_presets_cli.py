@@ -16,6 +16,7 @@ from app.session.presets import save_preset
 from app.session.settings import Settings
 from evaluation.cli import main
 from evaluation.presets import PresetError, default_preset, find_preset, read_preset_file
+from evaluation.sweep import SCENARIO_FIELDS
 
 QUICK = ["--dataset", "synthetic:40", "--frames", "0:20:10", "--workers", "1", "--no-timing"]
 
@@ -27,8 +28,7 @@ def _run(tmp_path: Path, name: str, *args: str) -> pl.DataFrame:
 
 
 def _scenario_row(table: pl.DataFrame) -> dict:
-    return table.select("protocol", "eta", "sigma_p", "sigma_theta", "flip_prob", "localization", "loc_x",
-                        "loc_y", "loc_yaw", "sensor_range", "miss_rate", "false_rate", "seed").row(0, named=True)
+    return table.select(*SCENARIO_FIELDS).row(0, named=True)
 
 
 def test_the_defaults_are_the_apps_default_preset(tmp_path: Path) -> None:

@@ -49,7 +49,8 @@ def test_rows_cover_the_grid_and_method_parameters_vary_only_their_methods():
 def test_a_row_is_what_the_app_gets_from_its_frame_parameters_and_seed():
     frame = frames(1)[0]
     scenario = ScenarioParams(eta=0.7, sigma_p=0.3, seed=11)
-    row = next(r for r in run_task(SWEEP, frame, scenario) if r["method"] == "cbm" and r["sigma2"] == 2.0)
+    row = next(r for _, r in run_task(SWEEP, (0,), (frame,), (0, scenario), False)
+               if r["method"] == "cbm" and r["sigma2"] == 2.0)
     trial = make_trial(frame.trial["boxes"], frame.trial["ids"], scenario, rng=trial_rng(11, frame.index))
     expected = evaluate(match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams(sigma2=2.0)), trial)
     names = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad", "rre", "rte")
@@ -77,7 +78,7 @@ def test_the_range_protocol_records_its_agents():
 
 
 @pytest.mark.parametrize("grid, message", [
-    ({"sigma2": [2.0]}, "sigma2.*cbm, cbm-no-consensus, cbm-graph, none of which is selected"),
+    ({"sigma2": [2.0]}, "sigma2.*cbm, cbm-no-consensus, cbm-graph, cbm-time, none of which is selected"),
     ({"wobble": [1]}, "'wobble' is not a parameter"),
     ({"seed": [1]}, "seed is the sweep's own argument"),
     ({"eta": []}, "'eta' has no values"),

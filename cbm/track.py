@@ -1,0 +1,188 @@
+"""The track of CBM over time (``cbm.sequence``): a frame's measurement of the CAV's pose error, when
+two measurements are one persisting error, and the Kalman filter that pools them.
+
+The pose error is g = (x, y, yaw) of ``G = init^-1 T`` (``T`` the true CAV->ego transform): the
+error in the CAV's own frame. It is modelled as a bias b that wanders as a random walk of rate
+``q`` per second, plus white noise of variance ``W`` that every frame draws anew (GNSS jitter), and
+each frame measures g with CBM, with a covariance R from the fit of its pairs:
+
+    b_k = b_{k-1} + u_k, u_k ~ N(0, q dt);    g_k = b_k + w_k, w_k ~ N(0, W);    z_k = g_k + v_k, v_k ~ N(0, R_k)
+
+Predicted b^- with covariance P^- = P + q dt, innovation nu = z - b^-, S = P^- + W + R. The bias is
+updated with the gain P^- S^-1; the frame's own error g_k is answered with the gain (P^- + W) S^-1,
+so a precise measurement is answered nearly as it is (its white noise is real, and this frame's)
+while a noisy one is pooled with the track. W and q are read from the innovations the filter
+accepts: their excess over P^- + R is W + q dt; white noise makes consecutive innovations differ
+(by 2 W in variance), a drift the track lags behind makes them alike.
+"""
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import se2
+from .result import MatchResult
+
+LEARNING = 0.2
+"""Weight of each accepted innovation in the running estimates of the white noise W and the drift rate q."""
+
+
+def as_vector(T: np.ndarray) -> np.ndarray:
+    """(x, y, yaw) of an SE(2) matrix."""
+    return np.array([T[0, 2], T[1, 2], se2.yaw_of(T)])
+
+
+def as_matrix(g: np.ndarray) -> np.ndarray:
+    return se2.make(float(g[0]), float(g[1]), float(g[2]))
+
+
+def difference(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a - b with the yaw wrapped to [-pi, pi)."""
+    d = np.asarray(a, dtype=float) - np.asarray(b, dtype=float)
+    d[2] = float(se2.wrap_angle(d[2]))
+    return d
+
+
+def mahalanobis2(d: np.ndarray, S: np.ndarray) -> float:
+    return float(d @ np.linalg.solve(S, d))
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """One frame's g read from CBM's answer, and its covariance R."""
+
+    g: np.ndarray
+    R: np.ndarray
+    time_s: float
+    result: MatchResult
+
+
+def measurement(result: MatchResult, init: np.ndarray, cav_boxes: np.ndarray, floor: float,
+                time_s: float) -> Measurement | None:
+    """g of CBM's answer and its covariance from its pairs: with residual variance s^2 per axis
+    (3 degrees of freedom taken out, at least ``floor``^2) and the CAV points q_k of the pairs in
+    the CAV frame, ``R = s^2 (J^T J)^-1`` with J_k = [[1, 0, -(R q_k)_y], [0, 1, (R q_k)_x]] the
+    Jacobian of G q_k. None without an estimate of at least 3 pairs."""
+    if not result.estimated or len(result.pairs) < 3:
+        return None
+    g = as_vector(se2.inverse(init) @ result.transform)
+    k = len(result.pairs)
+    s2 = max(float(np.sum(result.residuals ** 2)) / max(2 * k - 3, 1), floor ** 2)
+    q = cav_boxes[result.pairs[:, 1], :2] @ as_matrix(g)[:2, :2].T
+    J = np.zeros((2 * k, 3))
+    J[0::2, 0], J[1::2, 1] = 1.0, 1.0
+    J[0::2, 2], J[1::2, 2] = -q[:, 1], q[:, 0]
+    return Measurement(g, s2 * np.linalg.inv(J.T @ J + 1e-12 * np.eye(3)), time_s, result)
+
+
+def agree(a: Measurement, b: Measurement, rate: np.ndarray, share: float, gate: float) -> bool:
+    """Whether two measurements can be one persisting error: their difference within ``gate``
+    standard deviations of what their noise, a drift at ``rate`` (per-axis variance per second) and
+    ``share`` of the error itself allow. An error drawn anew each frame differs by as much as the
+    error; one that persists by far less."""
+    size = np.array([max(math.hypot(*a.g[:2]), math.hypot(*b.g[:2]))] * 2 + [max(abs(a.g[2]), abs(b.g[2]))])
+    S = a.R + b.R + np.diag(rate * abs(a.time_s - b.time_s) + (share * size) ** 2)
+    return mahalanobis2(difference(a.g, b.g), S) <= gate ** 2
+
+
+@dataclass
+class Persistence:
+    """The last ``window`` measurements, each with the longest chain of measurements ending at it in
+    which each agrees with the one before (``agree``): whether the error persists."""
+
+    window: int
+    kept: deque = field(default_factory=deque)
+
+    def add(self, found: Measurement | None, rate: np.ndarray, share: float, gate: float) -> list[Measurement]:
+        """Keep ``found``; return the longest chain ending at it, oldest first (empty for None)."""
+        chain: list[Measurement] = []
+        if found is not None:
+            for earlier, earlier_chain in self.kept:
+                longer = earlier is not None and len(earlier_chain) >= len(chain)
+                if longer and agree(found, earlier, rate, share, gate):
+                    chain = earlier_chain
+            chain = [*chain, found]
+        self.kept.append((found, chain))
+        while len(self.kept) > self.window:
+            self.kept.popleft()
+        return chain
+
+
+@dataclass
+class Track:
+    """The Kalman filter of the bias b (mean, covariance), its drift rate q and the white noise W."""
+
+    g: np.ndarray
+    P: np.ndarray
+    q: np.ndarray
+    W: np.ndarray
+    time_s: float
+    since_s: float
+    pooled: int = 1
+    excess: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    """Running estimate of W + q dt per axis: the innovations' variance beyond P^- + R."""
+    last: tuple[np.ndarray, np.ndarray] | None = None
+    """The last accepted innovation and its measurement's variances (per axis)."""
+
+    @staticmethod
+    def started(chain: list[Measurement], rate: np.ndarray) -> Track:
+        """A track through the measurements of ``chain``: W first read from their consecutive
+        differences (half the excess of their squares over the measurements' own variances)."""
+        steps = [difference(b.g, a.g) ** 2 - np.diag(a.R) - np.diag(b.R) - rate * abs(b.time_s - a.time_s)
+                 for a, b in zip(chain, chain[1:])]
+        white = np.maximum(np.median(steps, axis=0) / 2.0, 0.0) if steps else np.zeros(3)
+        first = chain[0]
+        track = Track(first.g.copy(), first.R + np.diag(white), rate.copy(), white, first.time_s, first.time_s,
+                      excess=white.copy())
+        for found in chain[1:]:
+            track.update(found, rate)
+        return track
+
+    def restarted(self, found: Measurement) -> Track:
+        """This track moved onto ``found`` (a jump, or a drift it lagged behind), keeping what it
+        learnt of W and q."""
+        return Track(found.g.copy(), found.R + np.diag(self.W), self.q.copy(), self.W.copy(), found.time_s,
+                     found.time_s, 1, self.excess.copy())
+
+    def predicted(self, time_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """b^- and P^- at ``time_s``."""
+        return self.g, self.P + np.diag(self.q) * max(time_s - self.time_s, 0.0)
+
+    def innovation(self, found: Measurement) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """(nu, S, P^-) of ``found`` against the prediction at its time."""
+        g, P = self.predicted(found.time_s)
+        return difference(found.g, g), P + np.diag(self.W) + found.R, P
+
+    def accepts(self, found: Measurement, gate: float) -> bool:
+        nu, S, _ = self.innovation(found)
+        return mahalanobis2(nu, S) <= gate ** 2
+
+    def update(self, found: Measurement, floor: np.ndarray) -> np.ndarray:
+        """The Kalman update of b with ``found``; returns this frame's g (gain (P^- + W) S^-1). Then
+        the running excess W + q dt and white noise W are nudged toward this innovation's (W from
+        its difference to the last one), and q is what the excess leaves, at least ``floor``."""
+        nu, S, P = self.innovation(found)
+        dt = max(found.time_s - self.time_s, 1e-3)
+        answer = self.g + (P + np.diag(self.W)) @ np.linalg.solve(S, nu)
+        K = P @ np.linalg.inv(S)
+        self.g = self.g + K @ nu
+        self.g[2] = float(se2.wrap_angle(self.g[2]))
+        self.P = (np.eye(3) - K) @ P
+        self._learn(nu, np.diag(P), np.diag(found.R), dt, floor)
+        self.time_s, self.pooled = found.time_s, self.pooled + 1
+        answer[2] = float(se2.wrap_angle(answer[2]))
+        return answer
+
+    def _learn(self, nu: np.ndarray, P: np.ndarray, R: np.ndarray, dt: float, floor: np.ndarray) -> None:
+        """W and q from the innovation ``nu`` (``LEARNING`` of it into the running estimates)."""
+        self.excess = (1.0 - LEARNING) * self.excess + LEARNING * np.maximum(nu ** 2 - P - R, 0.0)
+        if self.last is not None:
+            last_nu, last_R = self.last
+            white = np.maximum(difference(nu, last_nu) ** 2 / 2.0 - (R + last_R) / 2.0, 0.0)
+            self.W = (1.0 - LEARNING) * self.W + LEARNING * white
+        self.W = np.minimum(self.W, self.excess)
+        self.q = np.maximum(floor, (self.excess - self.W) / dt)
+        self.last = (nu, R)
