@@ -2,9 +2,12 @@
 and the metrics and the timeline show how the answer was reached beside per-frame CBM."""
 from __future__ import annotations
 
+import threading
+
 import pytest
 
 from app.session.explorer import Explorer
+from app.session.over_time import Runs
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
@@ -27,4 +30,42 @@ def test_choosing_cbm_over_time_and_jumping_ahead_shows_the_frames_pooled(browse
     assert "over time" in ui.metrics(page) and "per-frame CBM (this frame)" in ui.metrics(page)
     ui.wait_until(lambda: set(range(26)) <= set(tab.history.rows), 60)
     ui.wait_until(lambda: page.locator(".uplot").filter(has_text="per-frame CBM RTE").count() == 1, 30)
+    page.close()
+
+
+def test_the_stop_button_stops_a_jump_ahead_and_keeps_the_frames_done(browser, server, monkeypatch) -> None:
+    """The catch-up is held at its third frame until the stop button was clicked, so the click
+    always lands while frames are still being computed, however busy the machine."""
+    clicked, steps = threading.Event(), []
+    step = Runs._step
+
+    def held(run, settings, j, trial_of) -> None:
+        steps.append(j)
+        if len(steps) == 3:
+            clicked.wait(60)
+        step(run, settings, j, trial_of)
+
+    monkeypatch.setattr(Runs, "_step", staticmethod(held))
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    ui.load_preset(page, "drift-heavy")
+    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    steps.clear()
+    ui.label(page, "frame").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]") \
+        .locator("input.mantine-NumberInput-input").fill("49")
+    page.keyboard.press("Enter")
+    stop = page.get_by_role("button", name="stop computing the frames before")
+    stop.wait_for(state="visible", timeout=60_000)
+    stop.click()
+    ui.wait_until(lambda: tab._stop_catching_up.is_set(), 30)
+    clicked.set()
+    ui.wait_until(lambda: page.get_by_text("Stopped", exact=True).count() > 0, 60)
+    last = steps[-1]
+    ui.wait_until(lambda: tab.last.frame_index == last and tab.settings.frame == last, 60)
+    assert last < 49
+    assert set(tab.explorer.over_time.done(tab.settings)) >= set(range(last + 1))
+    steps.clear()
+    ui.go_to_frame(page, tab, last + 2)
+    assert steps == [last + 1, last + 2]
     page.close()
