@@ -8,6 +8,8 @@ import pytest
 
 from app.session.explorer import Explorer
 from app.session.over_time import Runs
+from app.walkthrough import steps
+from app.walkthrough.nodes import ROOT
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
@@ -68,4 +70,32 @@ def test_the_stop_button_stops_a_jump_ahead_and_keeps_the_frames_done(browser, s
     steps.clear()
     ui.go_to_frame(page, tab, last + 2)
     assert steps == [last + 1, last + 2]
+    page.close()
+
+
+def test_the_scenario_tab_offers_the_drifting_error_and_the_steps_end_over_time(browser, server) -> None:
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    page.get_by_role("tab", name="Scenario").click()
+
+    def live(text: str) -> bool:
+        control = page.locator(f'[id="{ui.label(page, text).get_attribute("for")}"]')
+        return control.locator('[role="slider"]').first.get_attribute("data-disabled") != "true"
+
+    assert not live("drift time constant (s)")
+    ui.pick_option(page, "localization error", "drifting")
+    ui.wait_until(lambda: tab.settings.scenario.localization == "drifting" and live("drift time constant (s)"), 60)
+    assert live("drift white noise (share)")
+
+    page.get_by_role("tab", name="Method").click()
+    ui.pick_option(page, "method", "CBM over time")
+    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    ui.go_to_frame(page, tab, 20)
+    page.get_by_role("tab", name="Steps").click()
+    page.get_by_role("button", name="start walkthrough").click()
+    for _ in range(9):
+        page.get_by_role("button", name="next step ▶").click()
+    page.get_by_text(steps.title(9, 10), exact=True).wait_for(timeout=30_000)
+    ui.wait_until(lambda: {f"{ROOT}/predicted", f"{ROOT}/measured"} <= tab.walkthrough.nodes.visible_names, 30)
     page.close()
