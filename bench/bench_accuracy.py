@@ -7,8 +7,11 @@ localization error that drifts like GNSS); see ``evaluation.conditions``.
 Methods: the released code's CBM (headings folded, least-squares fit, no re-association), CBM as
 published (eq. 14 fit, no re-association), CBM with this project's defaults, CBM over time (the
 frames of each sequence in time order, ``cbm.SequenceCalibrator``), and the oracle (least squares
-on the true pairs, per frame); ``--others`` adds ICP, RICP, VIPS and none. Every success rate is per
-frame, over every frame of every sequence.
+on the true pairs, per frame); ``--others`` adds ICP, RICP, VIPS and none, and the prior-free methods:
+CBM without a prior (``cbm.prior_free``), V2X-Reg++ and FreeAlign, which use no ``init``; condition
+``no-prior`` is theirs (no GNSS: ``init`` is the identity). Every method runs on the same trials
+(same frames, same seed, same noise draw). Every success rate is per frame, over every frame of
+every sequence.
 One set of CBM parameters serves every condition. Trials come from ``evaluation`` (the trial builder
 the app uses too), seeds 0..S-1, so the same arguments give the same numbers.
 Prints, per condition and dataset, micro-averaged precision and recall, the success rates at
@@ -50,7 +53,8 @@ CBM_VARIANTS = {
 }
 OVER_TIME = {"cbm-time": "CBM over time (our defaults)"}
 REFERENCES = {"oracle": "oracle (least squares on the true pairs)"}
-OTHERS = {"icp": "ICP", "ricp": "RICP", "vips": "VIPS", "none": "none (GNSS pose)"}
+OTHERS = {"cbm-no-prior": "CBM without a prior (ours)", "v2xregpp": "V2X-Reg++", "freealign": "FreeAlign",
+          "icp": "ICP", "ricp": "RICP", "vips": "VIPS", "none": "none (no calibration)"}
 GRID = {name: tuple(dict.fromkeys(v[name] for v in CBM_VARIANTS.values()))
         for name in ("heading", "estimator", "refine")}
 COLUMNS = (("precision", "precision"), ("recall", "recall"), ("S@1", "success_rate"), ("S@2", "success_rate_2"),
@@ -88,8 +92,8 @@ def measure(condition: ScenarioParams, group: str, seeds: int, frames: str, work
     for name, group_frames in DATASETS[group]:
         inputs = frames_of(name, group_frames or frames, condition.protocol)
         for seed in range(seeds):
-            sweep = Sweep(methods=("cbm", *others), grid=GRID, seed=seed, scenario=condition)
-            rows.extend(run(sweep, inputs, workers=workers))
+            rows.extend(run(Sweep(methods=("cbm",), grid=GRID, seed=seed, scenario=condition), inputs, workers=workers))
+            rows.extend(run(Sweep(methods=tuple(others), seed=seed, scenario=condition), inputs, workers=workers))
             rows.extend(run(Sweep(methods=tuple(OVER_TIME), seed=seed, scenario=condition), inputs, workers=workers))
     named = [{**row, "label": label} for row in rows if (label := label_of(row, others)) is not None]
     runtimes: dict[str, list[float]] = {}
@@ -120,7 +124,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--frames", default="all", help="argoverse2 frames: all or A:B[:STEP] (default: all)")
     parser.add_argument("--datasets", nargs="+", choices=tuple(DATASETS), default=list(DATASETS))
     parser.add_argument("--conditions", nargs="+", choices=tuple(CONDITIONS), default=list(CONDITIONS))
-    parser.add_argument("--others", action="store_true", help="also ICP, RICP, VIPS and none")
+    parser.add_argument("--others", action="store_true",
+                        help="also CBM without a prior, V2X-Reg++, FreeAlign, ICP, RICP, VIPS and none")
     parser.add_argument("--workers", type=int, default=2)
     args = parser.parse_args(argv)
     others = {**REFERENCES, **(OTHERS if args.others else {})}

@@ -15,19 +15,24 @@ from typing import Any
 import numpy as np
 
 from .baselines import (
+    FreeAlignParams,
     ICPParams,
     NoParams,
     RICPParams,
+    V2XRegParams,
     VIPSParams,
+    match_freealign,
     match_icp,
     match_none,
     match_oracle,
     match_ricp,
+    match_v2xregpp,
     match_vips,
 )
 from .params import CBMParams
 from .pipeline import match
 from .posegraph import match_graph
+from .prior_free import PRIOR_FREE, match_without_prior
 from .result import MatchResult
 from .sequence import SequenceCalibrator, match_first_step
 
@@ -123,9 +128,13 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            requires=CBM_REQUIRES, takes_peers=True),
     Method("cbm-time", "CBM over time", CBMParams, match_first_step, shares="cbm", requires=CBM_REQUIRES,
            over_time=True),
+    Method("cbm-no-prior", "CBM without a prior", CBMParams, match_without_prior, forced=PRIOR_FREE, shares="cbm",
+           requires=CBM_REQUIRES),
     Method("icp", "ICP", ICPParams, match_icp),
     Method("ricp", "RICP", RICPParams, match_ricp),
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),
+    Method("v2xregpp", "V2X-Reg++", V2XRegParams, match_v2xregpp, takes_labels=True),
+    Method("freealign", "FreeAlign", FreeAlignParams, match_freealign),
     Method("oracle", "oracle (true pairs)", NoParams, match_oracle, takes_truth=True),
 )}
 """The methods in the order tables and lists show them: the references bound the others."""

@@ -33,7 +33,8 @@ class CBMParams:
     """Metres. L1 distance for the voting sets of the global consensus (with the paper's rule,
     sigma3 = sigma2 makes eq. 10 exact)."""
     distance_limit: float = 20.0
-    """Metres. An anchor whose pairs are on average farther apart than this after ``init`` is rejected."""
+    """Metres. An anchor whose pairs are on average farther apart than this after ``init`` is rejected;
+    ``math.inf``: no limit (CBM without a prior, ``cbm.prior_free``)."""
     consensus: bool = True
     """Global consensus (eq. 9-10) on or off (off is the paper's ablation)."""
     consensus_rule: ConsensusRule = "released"
@@ -58,7 +59,9 @@ class CBMParams:
     gate finds more true pairs and more coincidences in crowds (docs/results.md)."""
 
     def __post_init__(self) -> None:
-        check_positive(self, "sigma1", "sigma2", "sigma3", "distance_limit", "welsch_floor", "refine_gate")
+        check_positive(self, "sigma1", "sigma2", "sigma3", "welsch_floor", "refine_gate")
+        if self.distance_limit != math.inf:
+            check_positive(self, "distance_limit")
         if self.sigma1 > 90:
             raise ValueError(f"CBMParams.sigma1 is in degrees and must be at most 90, got {self.sigma1!r}")
         if self.consensus_rule not in ("paper", "released"):

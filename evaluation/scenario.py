@@ -6,8 +6,9 @@ this order from one ``numpy.random.Generator``:
 
 1. ``rng.permutation(N)`` -- the order in which the sind protocol deals the objects out;
 2. ``rng.standard_normal(3)`` -- the localization error (x, y, yaw), scaled by ``loc_*`` when
-   ``localization="gaussian"`` (unused otherwise: ``"drifting"`` draws from a generator of its own,
-   for the whole sequence, ``evaluation.drift``);
+   ``localization="gaussian"``, or turned into uniform draws (a point in a disc, a heading) for
+   ``"none"`` (unused otherwise: ``"drifting"`` draws from a generator of its own, for the whole
+   sequence, ``evaluation.drift``);
 3. ``rng.standard_normal((N, 3))`` then ``rng.random(N)`` -- the ego's detection noise (x, y, yaw)
    and heading-flip draw, row ``n`` for input object ``n``;
 4. the same for the CAV;
@@ -27,6 +28,7 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
+from scipy.special import ndtr
 
 from cbm import se2
 
@@ -35,7 +37,7 @@ from .detected import with_detections
 from .drift import drift_error
 
 Protocol = Literal["sind", "opv2v", "range"]
-Localization = Literal["fixed", "gaussian", "drifting", "dataset"]
+Localization = Literal["fixed", "gaussian", "drifting", "dataset", "none"]
 
 
 @dataclass(frozen=True)
@@ -57,9 +59,11 @@ class ScenarioParams:
     OpenCOOD's pose noise). ``drifting``: a bias with those std-devs that drifts over time like
     GNSS (a Gauss-Markov process of time constant ``loc_tau``, plus ``loc_white`` white noise,
     ``evaluation.drift``). ``dataset``: the CAV pose the dataset itself reports (OPV2V
-    ``predicted_ego_pos``; ``loc_*`` unused)."""
+    ``predicted_ego_pos``; ``loc_*`` unused). ``none``: no GNSS at all, so no prior: the CAV's frame
+    is taken for the ego's (``init`` is the identity) when ``loc_x`` is 0, else the CAV's pose is a
+    guess uniform within ``loc_x`` metres of the truth, with any heading (``loc_y``, ``loc_yaw`` unused)."""
     loc_x: float = 3.0
-    """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world x."""
+    """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world x; the radius of the guess (none)."""
     loc_y: float = 3.0
     """Metres. Offset (fixed) or std-dev (gaussian) of the CAV's world y."""
     loc_yaw: float = 5.0
@@ -82,9 +86,9 @@ class ScenarioParams:
     def __post_init__(self) -> None:
         if self.protocol not in ("sind", "opv2v", "range"):
             raise ValueError(f"ScenarioParams.protocol must be 'sind', 'opv2v' or 'range', got {self.protocol!r}")
-        if self.localization not in ("fixed", "gaussian", "drifting", "dataset"):
-            raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian', 'drifting' or 'dataset', "
-                             f"got {self.localization!r}")
+        if self.localization not in ("fixed", "gaussian", "drifting", "dataset", "none"):
+            raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian', 'drifting', 'dataset' or "
+                             f"'none', got {self.localization!r}")
         for name in ("eta", "flip_prob", "miss_rate"):
             _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
         for name in ("sigma_p", "sigma_theta", "false_rate"):
@@ -254,7 +258,9 @@ def make_trial(
     cav_sees &= ~cav_missed if cav_id is None else ~cav_missed & (ids != cav_id)
 
     T_true = se2.inverse(ego_pose) @ cav_pose
-    init = se2.inverse(ego_pose) @ _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose, loc_error)
+    reported = ego_pose if _unguessed(params) else _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose,
+                                                                        loc_error)
+    init = se2.inverse(ego_pose) @ reported
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
     cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
     trial = Trial(
@@ -350,8 +356,18 @@ def in_range(boxes: np.ndarray, pose: np.ndarray, sensor_range: float) -> np.nda
     return np.linalg.norm(boxes[:, :2] - se2.translation_of(pose), axis=1) <= sensor_range
 
 
+def _unguessed(params: ScenarioParams) -> bool:
+    """No GNSS and no guess: the CAV reports the ego's own pose, so ``init`` is the identity."""
+    return params.localization == "none" and params.loc_x == 0.0
+
+
 def localization_error(params: ScenarioParams, draw: np.ndarray) -> np.ndarray:
-    """(dx, dy, dyaw[rad]) added to the CAV's world pose: fixed (sec. IV-A) or ``draw`` scaled (sec. V-A)."""
+    """(dx, dy, dyaw[rad]) added to the CAV's world pose: fixed (sec. IV-A), ``draw`` scaled (sec. V-A),
+    or (none) ``draw`` made uniform: a point of the disc of radius ``loc_x`` and any heading."""
+    if params.localization == "none":
+        u = ndtr(draw)
+        radius, direction = params.loc_x * np.sqrt(u[0]), 2.0 * np.pi * u[1]
+        return np.array([radius * np.cos(direction), radius * np.sin(direction), 2.0 * np.pi * u[2] - np.pi])
     size = np.array([params.loc_x, params.loc_y, params.loc_yaw_rad])
     return size if params.localization == "fixed" else size * draw
 

@@ -19,7 +19,8 @@ SLIDERS = {
     "sigma_theta": (SCENARIO_WORDS["sigma_theta"], 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
     "flip_prob": (SCENARIO_WORDS["flip_prob"], 0.0, 1.0, 0.05, "probability a detection faces backwards"),
     "loc_x": (SCENARIO_WORDS["loc_x"], 0.0, 15.0, 0.25,
-              "CAV pose error in x: offset (fixed) or std-dev (gaussian, drifting)"),
+              "CAV pose error in x: offset (fixed) or std-dev (gaussian, drifting); none: how far off a guess of "
+              "the pose may be (0: the CAV's frame is taken for the ego's)"),
     "loc_y": (SCENARIO_WORDS["loc_y"], 0.0, 15.0, 0.25, "CAV pose error in y"),
     "loc_yaw": (SCENARIO_WORDS["loc_yaw"], 0.0, 30.0, 0.5, "CAV pose error in yaw"),
     "loc_tau": (SCENARIO_WORDS["loc_tau"], 1.0, 600.0, 1.0, "drifting: frames this many seconds apart share 1/e of "
@@ -35,9 +36,10 @@ SLIDERS = {
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the
 sensor range in a dataset without per-agent visibility."""
-LOCALIZATIONS = ("fixed", "gaussian", "drifting", "dataset")
+LOCALIZATIONS = ("fixed", "gaussian", "drifting", "dataset", "none")
 """``drifting``: a bias that drifts over time like GNSS (``evaluation.drift``); ``dataset``: the
-CAV's own reported pose where the release has one (OPV2V's ``predicted_ego_pos``)."""
+CAV's own reported pose where the release has one (OPV2V's ``predicted_ego_pos``); ``none``: no GNSS,
+no prior (the identity, or a guess within ``loc_x`` metres with any heading)."""
 SIMULATED_ERROR = ("loc_x", "loc_y", "loc_yaw")
 """The sliders of a simulated localization error (unread under ``dataset``)."""
 DRIFT = ("loc_tau", "loc_white")
@@ -82,6 +84,8 @@ def unread_reason(settings: Settings, name: str) -> str | None:
         return f"no effect under the {scenario.protocol} protocol"
     if name in SIMULATED_ERROR and scenario.localization == "dataset":
         return "the dataset's own localization is used"
+    if name in ("loc_y", "loc_yaw") and scenario.localization == "none":
+        return "no GNSS: the pose is unknown (localization x sets how far off a guess may be, 0: none)"
     if name in DRIFT and scenario.localization != "drifting":
         return "the localization error does not drift"
     return None
@@ -94,7 +98,8 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ScenarioCont
         protocol=gui.add_dropdown("protocol", ("range", "sind", "opv2v"), initial_value=scenario.protocol),
         localization=gui.add_dropdown("localization error", localizations, initial_value=scenario.localization,
                                       hint="fixed offset, gaussian draw anew each frame, drifting over time like "
-                                           "GNSS, or the dataset's own (OPV2V's predicted_ego_pos)"),
+                                           "GNSS, the dataset's own (the pose the CAV reported), or none: no GNSS at "
+                                           "all, the CAV's pose unknown"),
         sliders={name: gui.add_slider(label, low, high, step, getattr(scenario, name), hint=hint)
                  for name, (label, low, high, step, hint) in SLIDERS.items()},
         seed=gui.add_number("seed", scenario.seed, min=0, step=1),

@@ -60,6 +60,22 @@ WORDS = {
                             "not support each other."),
     ("vips", "score_threshold"): ("score threshold", "A pair is kept when its score is at least this share of the "
                                   "best pair's."),
+    ("v2xregpp", "top_k"): ("boxes kept per agent", "Each agent keeps this many boxes: buses, trucks and cars "
+                            "first, larger first."),
+    ("v2xregpp", "max_range"): ("range (m)", "Boxes farther than this from their own agent are left out."),
+    ("v2xregpp", "affinity"): ("affinity", "distance: a pose guessed from one pair of boxes scores the other boxes "
+                               "it brings together, by centres and corners. oiou: the boxes it makes overlap."),
+    ("v2xregpp", "distance_scale"): ("match distance (×)", "Scales how close two boxes must come to count as "
+                                     "brought together: 1.5 m for buses and trucks, 1 m for cars, 0.5 m for people "
+                                     "and bikes."),
+    ("v2xregpp", "filter_threshold"): ("score to keep", "Pairs scoring at least this are kept when the best scores "
+                                       "above 5; otherwise only the best-scoring pairs."),
+    ("freealign", "anchor_error"): ("anchor tolerance (m)", "Two boxes become anchors when their distances to the "
+                                    "other anchors agree within this (twice this between anchors)."),
+    ("freealign", "box_error"): ("growth tolerance (m)", "After the anchors, a pair joins when its distances to "
+                                 "every anchor agree within this."),
+    ("freealign", "min_anchors"): ("fewest anchors", "A match needs at least this many anchors, and more pairs "
+                                   "than this in all."),
 }
 """Every method parameter's label (words and unit) and hint: no control shows a field's raw name."""
 

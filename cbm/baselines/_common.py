@@ -58,14 +58,15 @@ def sort_pairs(pairs: np.ndarray) -> np.ndarray:
 
 
 def make_result(ego_boxes: np.ndarray, cav_boxes: np.ndarray, pairs: np.ndarray, transform: np.ndarray,
-                init: np.ndarray, timings: dict[str, float]) -> MatchResult:
-    """The MatchResult of a baseline: ``transform`` falls back to ``init`` below two pairs.
+                init: np.ndarray, timings: dict[str, float], minimum_pairs: int = 2) -> MatchResult:
+    """The MatchResult of a baseline: ``transform`` falls back to ``init`` below ``minimum_pairs``
+    (two centres fix a pose; one box's corners do too, for the methods that fit corners).
 
     Baselines have no anchor and no consensus stage: ``anchor`` is None, both counts are the
     number of pairs and ``runner_up_count`` is 0.
     """
     pairs = sort_pairs(pairs)
-    estimated = len(pairs) >= 2
+    estimated = len(pairs) >= minimum_pairs
     final = np.array(transform if estimated else init, dtype=float)
     moved = se2.apply_points(final, cav_boxes[pairs[:, 1], :2])
     residuals = np.linalg.norm(ego_boxes[pairs[:, 0], :2] - moved, axis=1)

@@ -127,7 +127,8 @@ def test_reference_methods_bound_the_default_table(tmp_path):
     assert evaluate_cli.main(["--dataset", "synthetic:40", "--frames", "0:2", "--no-timing",
                               "--out", str(tmp_path)]) == 0
     summary = (tmp_path / "summary.md").read_text()
-    assert "| metric | none | cbm | cbm-no-consensus | icp | ricp | vips | oracle |" in summary
+    assert ("| metric | none | cbm | cbm-no-consensus | cbm-no-prior | icp | ricp | vips | v2xregpp | freealign | "
+            "oracle |") in summary
     assert "GNSS (init) |" not in summary
     table = pl.read_csv(tmp_path / "trials.csv")
     oracle, none = table.filter(pl.col("method") == "oracle"), table.filter(pl.col("method") == "none")

@@ -65,7 +65,7 @@ def test_bad_clutter_rates_name_the_field(field, value):
 
 def test_the_named_conditions_are_the_issue_settings():
     assert list(CONDITIONS) == ["mild", "hard", "range-50", "heavy-noise", "prior-error", "clutter", "drift-heavy",
-                                "drift-clutter", "drift-bigloc"]
+                                "drift-clutter", "drift-bigloc", "no-prior"]
     drift, bigloc = CONDITIONS["drift-heavy"], CONDITIONS["drift-bigloc"]
     assert (drift.localization, drift.sigma_p, drift.sigma_theta, drift.miss_rate) == ("drifting", 0.8, 15.0, 0.2)
     assert (bigloc.loc_x, bigloc.loc_yaw, bigloc.loc_tau) == (6.0, 15.0, 60.0)
@@ -73,6 +73,7 @@ def test_the_named_conditions_are_the_issue_settings():
     assert (heavy.eta, heavy.sigma_p, heavy.sigma_theta, heavy.flip_prob) == (0.2, 0.8, 15.0, 0.5)
     assert (clutter.sensor_range, clutter.miss_rate, clutter.false_rate, clutter.sigma_p) == (50.0, 0.2, 0.3, 0.4)
     assert (prior.sensor_range, prior.loc_x, prior.loc_yaw, prior.localization) == (80.0, 6.0, 15.0, "gaussian")
+    assert (CONDITIONS["no-prior"].localization, CONDITIONS["no-prior"].loc_x) == ("none", 0.0)
     with pytest.raises(ValueError, match="unknown condition 'foggy'; choose from mild"):
         condition("foggy")
 
@@ -115,3 +116,30 @@ def test_an_unknown_condition_is_one_line_and_exit_status_2(tmp_path, capsys):
         load_evaluate().main(["--condition", "foggy", "--out", str(tmp_path / "out")])
     err = capsys.readouterr().err
     assert stop.value.code == 2 and err.count("\n") == 1 and "--condition" in err
+
+
+def ranged_trial(params: ScenarioParams, seed: int = 0):
+    boxes, ids = scene()
+    cav_pose = np.array([[np.cos(2.0), -np.sin(2.0), 25.0], [np.sin(2.0), np.cos(2.0), -10.0], [0.0, 0.0, 1.0]])
+    return make_trial(boxes, ids, params, ego_pose=np.eye(3), cav_pose=cav_pose, rng=np.random.default_rng(seed))
+
+
+def test_no_prior_takes_the_cav_frame_for_the_ego_frame_and_leaves_the_detections_alone():
+    trial = ranged_trial(CONDITIONS["no-prior"])
+    np.testing.assert_array_equal(trial.init, np.eye(3))
+    gaussian = ranged_trial(ScenarioParams(**{**CONDITIONS["no-prior"].__dict__, "localization": "gaussian"}))
+    np.testing.assert_array_equal(trial.cav_boxes, gaussian.cav_boxes)
+    np.testing.assert_array_equal(trial.T_true, gaussian.T_true)
+
+
+def test_no_prior_with_a_radius_guesses_within_it_with_any_heading():
+    params = ScenarioParams(protocol="range", localization="none", loc_x=10.0)
+    errors = []
+    for seed in range(200):
+        trial = ranged_trial(params, seed)
+        error = np.linalg.inv(trial.T_true) @ trial.init
+        cav_error = trial.cav_pose[:2, :2] @ error[:2, 2]
+        errors.append((np.hypot(*cav_error), np.arctan2(error[1, 0], error[0, 0])))
+    distance, yaw = np.array(errors).T
+    assert distance.max() <= 10.0 and np.median(distance) > 5.0
+    assert np.histogram(yaw, bins=4, range=(-np.pi, np.pi))[0].min() > 30

@@ -169,7 +169,7 @@ def test_empty_scene_gives_empty_arrays_of_the_right_shapes(protocol):
 
 @pytest.mark.parametrize("field, value", [
     ("eta", 1.5), ("eta", -0.1), ("eta", math.nan), ("sigma_p", -1.0), ("sigma_theta", -0.5), ("flip_prob", 2.0),
-    ("sensor_range", 0.0), ("protocol", "carla"), ("localization", "none"), ("seed", -1), ("seed", 1.5),
+    ("sensor_range", 0.0), ("protocol", "carla"), ("localization", "no-gnss"), ("seed", -1), ("seed", 1.5),
 ])
 def test_bad_params_raise_a_value_error_naming_the_field(field, value):
     with pytest.raises(ValueError, match=field):
