@@ -4,8 +4,10 @@ frame; then what each release gets right that hand-made fixtures missed."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -28,6 +30,8 @@ WRITERS = {
     "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
     "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                             world_calib=False),
+    "dair_v2x_c_no_offset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
+                                                               offset=""),
     "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
@@ -37,7 +41,9 @@ WRITERS = {
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
     "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
-    "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
+    "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]),
+    "dair_v2x_c_no_offset": (3, ["vehicle", "infrastructure"]),
+    "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
     "table": (2, ["700", "702"]),
 }
@@ -154,6 +160,23 @@ def test_dair_subset_uses_lidar_i2v_without_adding_the_offset_twice(corpus):
         np.testing.assert_allclose(subset[k].agent_pose("vehicle"), np.eye(3), atol=1e-12)
         truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
         np.testing.assert_allclose(relative, truth, atol=1e-9)
+
+
+def test_dair_string_label_states_and_empty_offset_load_silently(corpus):
+    infra_label = corpus["dair_v2x_c_no_offset"] / "infrastructure-side" / "label" / "virtuallidar" / "000020.json"
+    first = json.loads(infra_label.read_text())[0]
+    assert all(isinstance(first[k], str) for k in ("truncated_state", "occluded_state", "alpha"))
+    info = json.loads((corpus["dair_v2x_c_no_offset"] / "cooperative" / "data_info.json").read_text())
+    assert {pair["system_error_offset"] for pair in info} == {""}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sequence = loaders.open(corpus["dair_v2x_c_no_offset"])
+    assert sequence.warnings == []
+    truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
+    for frame in sequence:
+        relative = se2.inverse(frame.agent_pose("vehicle")) @ frame.agent_pose("infrastructure")
+        np.testing.assert_allclose(relative, truth, atol=1e-9)
+    assert len(sequence[0].visibility["infrastructure"]) == len(json.loads(infra_label.read_text()))
 
 
 def test_dair_pair_missing_a_file_is_skipped_and_counted(corpus, tmp_path):

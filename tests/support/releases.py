@@ -188,37 +188,47 @@ def _rigid(T: np.ndarray, z: float = 0.0) -> dict:
     return {"rotation": rotation.tolist(), "translation": [[float(T[0, 2])], [float(T[1, 2])], [z]]}
 
 
-def _dair_labels(pose: np.ndarray, objects: list[tuple]) -> list[dict]:
+def _dair_labels(pose: np.ndarray, objects: list[tuple], infrastructure: bool = False) -> list[dict]:
+    """A DAIR-V2X label list; the infrastructure side's as DAIR-V2X-C ships it, with ``truncated_state``,
+    ``occluded_state`` and ``alpha`` as strings (``"0"``, ``"1"``, ``"-1.5707963267948966"``)."""
     to_sensor = se2.inverse(pose)
     labels = []
-    for _, category, x, y, yaw, length, width, height in objects:
+    for k, (_, category, x, y, yaw, length, width, height) in enumerate(objects):
         (lx, ly), = se2.apply_points(to_sensor, [[x, y]])
-        labels.append({"type": DAIR_TYPES[category], "occluded_state": 0, "truncated_state": 0, "alpha": 0.0,
-                       "2d_box": {"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},
+        rotation = float(se2.wrap_angle(yaw + se2.yaw_of(to_sensor)))
+        if infrastructure:
+            states = {"type": DAIR_TYPES[category], "truncated_state": "0", "occluded_state": str(k % 2),
+                      "alpha": str(rotation - math.pi / 2)}
+        else:
+            states = {"type": DAIR_TYPES[category], "occluded_state": 0, "truncated_state": 0, "alpha": 0.0}
+        labels.append({**states, "2d_box": {"xmin": 0, "ymin": 0, "xmax": 1, "ymax": 1},
                        "3d_dimensions": {"h": height, "w": width, "l": length},
                        "3d_location": {"x": float(lx), "y": float(ly), "z": height / 2 - 1.7},
-                       "rotation": float(se2.wrap_angle(yaw + se2.yaw_of(to_sensor)))})
+                       "rotation": rotation})
     return labels
 
 
-def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_error: tuple = (0.0, 0.0)) -> Path:
+def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_error: tuple = (0.0, 0.0),
+                 offset: dict | str = DAIR_OFFSET) -> Path:
     """``cooperative-vehicle-infrastructure/`` as DAIR-V2X-C ships it (``world_calib=False``: a
     shared subset without the vehicle's world calibration, with ``cooperative/calib/lidar_i2v`` as
     DAIR-V2X's ``calib_i2v.py`` writes it). ``infra_error`` shifts the last pair's shipped
-    ``virtuallidar_to_world`` by (x, y) metres, as a wrong release calibration would."""
+    ``virtuallidar_to_world`` by (x, y) metres, as a wrong release calibration would. ``offset=""``:
+    every pair's ``system_error_offset`` an empty string, the shipped calibration then exact."""
     info = []
+    delta = (0.0, 0.0) if offset == "" else (offset["delta_x"], offset["delta_y"])
     for k in range(pairs):
         vehicle_id, infra_id = f"{10 + k:06d}", f"{20 + k:06d}"
         vehicle, infra = lidar_pose("641"), lidar_pose("-1")
         objects = moved(k)
         shipped = infra.copy()
-        shipped[:2, 2] -= [DAIR_OFFSET["delta_x"], DAIR_OFFSET["delta_y"]]
+        shipped[:2, 2] -= delta
         if k == pairs - 1:
             shipped[:2, 2] += infra_error
         write_json(root / "vehicle-side" / "label" / "lidar" / f"{vehicle_id}.json",
                    _dair_labels(vehicle, seen_by("641", objects)))
         write_json(root / "infrastructure-side" / "label" / "virtuallidar" / f"{infra_id}.json",
-                   _dair_labels(infra, seen_by("-1", objects)))
+                   _dair_labels(infra, seen_by("-1", objects), infrastructure=True))
         write_json(root / "infrastructure-side" / "calib" / "virtuallidar_to_world" / f"{infra_id}.json",
                    _rigid(shipped, 5.0))
         if world_calib:
@@ -227,7 +237,7 @@ def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_err
                        {"transform": _rigid(se2.make(0.9, 0.0, 0.0), 1.6)})
             write_json(calib / "novatel_to_world" / f"{vehicle_id}.json", _rigid(vehicle @ se2.make(-0.9, 0.0, 0.0)))
         with_offset = shipped.copy()
-        with_offset[:2, 2] += [DAIR_OFFSET["delta_x"], DAIR_OFFSET["delta_y"]]
+        with_offset[:2, 2] += delta
         write_json(root / "cooperative" / "calib" / "lidar_i2v" / f"{vehicle_id}.json",
                    _rigid(se2.inverse(vehicle) @ with_offset, 3.4))
         for side, agent, frame in (("vehicle-side", "641", vehicle_id), ("infrastructure-side", "-1", infra_id)):
@@ -241,7 +251,7 @@ def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_err
                      "vehicle_image_path": f"vehicle-side/image/{vehicle_id}.jpg",
                      "vehicle_pointcloud_path": f"vehicle-side/velodyne/{vehicle_id}.pcd",
                      "cooperative_label_path": f"cooperative/label_world/{vehicle_id}.json",
-                     "system_error_offset": DAIR_OFFSET})
+                     "system_error_offset": offset})
     write_json(root / "cooperative" / "data_info.json", info)
     return root
 
