@@ -32,6 +32,7 @@ WRITERS = {
                                                             world_calib=False),
     "dair_v2x_c_no_offset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                                offset=""),
+    "v2x_seq_spd": lambda root: releases.spd_release(root / "V2X-Seq-SPD"),
     "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
@@ -43,6 +44,7 @@ EXPECTED = {  # release -> (frames, agents of the first frame)
     "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_no_offset": (3, ["vehicle", "infrastructure"]),
+    "v2x_seq_spd": (3, ["vehicle", "infrastructure"]),
     "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
     "table": (2, ["700", "702"]),
@@ -177,6 +179,61 @@ def test_dair_string_label_states_and_empty_offset_load_silently(corpus):
         relative = se2.inverse(frame.agent_pose("vehicle")) @ frame.agent_pose("infrastructure")
         np.testing.assert_allclose(relative, truth, atol=1e-9)
     assert len(sequence[0].visibility["infrastructure"]) == len(json.loads(infra_label.read_text()))
+
+
+def _shift_infrastructure_label(root, object_id: int, metres: float) -> None:
+    """Move one infrastructure label of the first frame ``metres`` along its LiDAR's x, beyond any derived match."""
+    path = root / "infrastructure-side" / "label" / "virtuallidar" / "000000.json"
+    labels = json.loads(path.read_text())
+    label = next(label for label in labels if label["track_id"] == releases.spd_track("-1", object_id))
+    label["3d_location"]["x"] += metres
+    releases.write_json(path, labels)
+
+
+def test_spd_cooperative_label_gives_the_association_and_the_ids_persist(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    _shift_infrastructure_label(root, 707, 3.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sequence = loaders.open(root)
+    assert sequence.name.startswith("v2x-seq-spd") and sequence.scenarios == {"0000": 0}
+    np.testing.assert_allclose(sequence.timestamps, [0.0, 0.1, 0.2], atol=1e-9)
+    first, last = sequence[0], sequence[-1]
+    track = {i: releases.spd_track("cooperative", i) for i in (702, 703, 705, 706, 707)}
+    assert set(first.track_ids) == set(last.track_ids) and track[705] not in set(first.track_ids)
+    seen = first.visibility
+    assert track[702] not in seen["vehicle"] and track[702] in seen["infrastructure"]
+    assert track[703] in seen["vehicle"] and track[703] not in seen["infrastructure"]
+    assert track[707] in seen["vehicle"] and track[707] in seen["infrastructure"]   # 3 m apart, fused by the label
+    ids, boxes = first.agent_view("infrastructure")
+    fused = first.boxes()[list(first.track_ids).index(track[707])]
+    assert np.linalg.norm(boxes[list(ids).index(track[707])][:2] - fused[:2]) == pytest.approx(3.0, abs=1e-6)
+    truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
+    relative = se2.inverse(first.agent_pose("vehicle")) @ first.agent_pose("infrastructure")
+    np.testing.assert_allclose(relative, truth, atol=1e-9)                          # system_error_offset added
+
+
+def test_spd_pair_without_cooperative_label_is_associated_by_distance_and_said(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    _shift_infrastructure_label(root, 707, 3.0)
+    (root / "cooperative" / "label" / "000009.json").unlink()
+    with pytest.warns(UserWarning, match=r"1 of 3 pair\(s\) have no cooperative label.*vehicle frames 000009"):
+        sequence = loaders.open(root)
+    seen = sequence[0].visibility
+    vehicle_707, infra_707 = (f"v{releases.spd_track('641', 707)}", f"i{releases.spd_track('-1', 707)}")
+    assert vehicle_707 in seen["vehicle"] and infra_707 in seen["infrastructure"]      # beyond 2 m: not matched
+    assert f"v{releases.spd_track('641', 700)}" in seen["infrastructure"]               # within 2 m: matched
+    assert len(sequence.warnings) == 1 and releases.spd_track("cooperative", 700) in set(sequence[1].track_ids)
+
+
+def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    info = json.loads((root / "cooperative" / "data_info.json").read_text())
+    info[1]["infrastructure_frame"] = "000099"
+    releases.write_json(root / "cooperative" / "data_info.json", info)
+    with pytest.raises(loaders.LoaderError, match=r"data_info.json: \[1\].infrastructure_frame: '000099' is not a "
+                                                  r"frame_id of infrastructure-side/data_info.json"):
+        loaders.open(root)
 
 
 def test_dair_pair_missing_a_file_is_skipped_and_counted(corpus, tmp_path):
