@@ -33,6 +33,7 @@ WRITERS = {
     "dair_v2x_c_no_offset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                                offset=""),
     "v2x_seq_spd": lambda root: releases.spd_release(root / "V2X-Seq-SPD"),
+    "tumtraf_v2x": lambda root: releases.tumtraf_release(root / "tumtraf_v2x_cooperative_perception_dataset"),
     "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
@@ -45,6 +46,7 @@ EXPECTED = {  # release -> (frames, agents of the first frame)
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_no_offset": (3, ["vehicle", "infrastructure"]),
     "v2x_seq_spd": (3, ["vehicle", "infrastructure"]),
+    "tumtraf_v2x": (3, ["vehicle", "infrastructure"]),
     "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
     "table": (2, ["700", "702"]),
@@ -233,6 +235,52 @@ def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path
     releases.write_json(root / "cooperative" / "data_info.json", info)
     with pytest.raises(loaders.LoaderError, match=r"data_info.json: \[1\].infrastructure_frame: '000099' is not a "
                                                   r"frame_id of infrastructure-side/data_info.json"):
+        loaders.open(root)
+
+
+def test_tumtraf_vehicle_pose_boxes_and_sensor_id_visibility(corpus):
+    root = corpus["tumtraf_v2x"]
+    registered = root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED
+    for opened_at in (root, root / "train", registered):
+        sequence = loaders.open(opened_at)
+        assert len(sequence) == 3 and sequence.scenarios == {"train": 0} and sequence.warnings == []
+    np.testing.assert_allclose(sequence.timestamps, [0.0, 0.1, 0.2], atol=1e-6)
+    frame = sequence[0]
+    truth = se2.inverse(releases.lidar_pose("-1")) @ releases.lidar_pose("641")
+    np.testing.assert_allclose(frame.agent_pose("vehicle"), truth, atol=1e-9)
+    np.testing.assert_allclose(frame.agent_pose("infrastructure"), np.eye(3), atol=1e-12)
+    uuid = {i: releases.tumtraf_uuid(i) for i in (700, 702, 703, 704, 705)}
+    box = frame.boxes()[list(frame.track_ids).index(uuid[704])]
+    world = se2.apply_points(releases.lidar_pose("-1"), [box[:2]])[0]
+    np.testing.assert_allclose(world, [3.5, -20.0], atol=1e-9)
+    assert frame.categories[list(frame.track_ids).index(uuid[704])] == "truck"
+    assert set(frame.track_ids) == set(sequence[2].track_ids) and uuid[705] not in set(frame.track_ids)
+    seen = frame.visibility
+    assert uuid[702] in seen["infrastructure"] and uuid[702] not in seen["vehicle"]
+    assert uuid[703] in seen["vehicle"] and uuid[703] not in seen["infrastructure"]
+    assert uuid[700] in seen["vehicle"] and uuid[700] in seen["infrastructure"]
+
+
+def test_tumtraf_without_sensor_id_has_no_visibility_and_says_so(corpus, tmp_path):
+    root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
+    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[1]
+    record = json.loads(path.read_text())
+    item = next(iter(record["openlabel"]["frames"]["1"]["objects"].values()))
+    item["object_data"]["cuboid"]["attributes"]["text"] = []
+    path.write_text(json.dumps(record, indent=4))
+    with pytest.warns(UserWarning, match=r"1 of 27 object\(s\) have no sensor_id attribute"):
+        sequence = loaders.open(root)
+    assert sequence.visibility is None and sequence[0].agents is not None
+
+
+def test_tumtraf_frame_without_the_vehicle_transform_names_the_key(corpus, tmp_path):
+    root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
+    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[0]
+    record = json.loads(path.read_text())
+    record["openlabel"]["frames"]["0"]["frame_properties"]["transforms"] = {}
+    path.write_text(json.dumps(record))
+    with pytest.raises(loaders.LoaderError, match=r"missing key openlabel.frames.0.frame_properties.transforms."
+                                                  r"vehicle_lidar_robosense_to_s110_lidar_ouster_south"):
         loaders.open(root)
 
 

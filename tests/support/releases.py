@@ -409,3 +409,87 @@ def spd_release(root: Path, frames: int = 3) -> Path:
                  "infrastructure_sequence": "0000", "system_error_offset": SPD_OFFSET}
                 for v, i in zip(ids["vehicle"], ids["infrastructure"])])
     return root
+
+
+# --- TUMTraf-V2X -----------------------------------------------------------------------------------------------
+
+TUMTRAF_REGISTERED = "s110_lidar_ouster_south_and_vehicle_lidar_robosense_registered"
+TUMTRAF_SENSORS = {"641": "vehicle_lidar_robosense", "-1": "s110_lidar_ouster_south"}
+TUMTRAF_START = (1688626050, 947334296)
+"""The first frame's seconds and nanoseconds (its file name); frames follow every 100 ms."""
+
+
+def tumtraf_uuid(object_id: int) -> str:
+    return f"{object_id:08x}-5a1e-4c3b-9d2f-0000000{object_id:05d}"
+
+
+def _tumtraf_object(object_id: int, category: str, box: tuple, sensors: list[str]) -> dict:
+    """One OpenLABEL object as the dev kit's ``save_to_openlabel`` lays it out, the box in the south
+    Ouster LiDAR's frame and ``sensor_id`` naming the sensors that saw it (joined by ``_and_``)."""
+    x, y, yaw, length, width, height = box
+    return {"object_data": {
+        "name": f"{category.upper()}_{tumtraf_uuid(object_id).split('-')[0]}", "type": category.upper(),
+        "cuboid": {"name": "shape3D",
+                   "val": [x, y, height / 2 - 7.5, 0.0, 0.0, math.sin(yaw / 2), math.cos(yaw / 2),
+                           length, width, height],
+                   "attributes": {"text": [{"name": "occlusion_level", "val": "NOT_OCCLUDED"},
+                                           {"name": "sensor_id", "val": "_and_".join(sensors)}],
+                                  "num": [{"name": "num_points", "val": 120}], "boolean": [], "vec": []}}}}
+
+
+
+def _tumtraf_stamp(k: int) -> tuple[str, float]:
+    """Frame ``k``'s ``<sec>_<nsec>`` (file names) and its time in seconds."""
+    nanoseconds = TUMTRAF_START[0] * 10**9 + TUMTRAF_START[1] + 100_000_000 * k
+    return f"{nanoseconds // 10**9}_{nanoseconds % 10**9:09d}", nanoseconds / 1e9
+
+
+def tumtraf_vehicle_lidar() -> np.ndarray:
+    """The vehicle LiDAR -> south Ouster LiDAR transform (4x4; the Ouster sits 5.6 m above the car's LiDAR)."""
+    relative = se2.inverse(lidar_pose("-1")) @ lidar_pose("641")
+    out = np.eye(4)
+    out[:2, :2], out[:2, 3], out[2, 3] = relative[:2, :2], relative[:2, 2], -5.6
+    return out
+
+
+def _tumtraf_objects(k: int) -> dict:
+    """``uuid -> object`` of every object a sensor sees at frame ``k``, in the south Ouster LiDAR's frame."""
+    to_infra = se2.inverse(lidar_pose("-1"))
+    objects = {}
+    for i, category, x, y, yaw, length, width, height in moved(k):
+        sensors = [TUMTRAF_SENSORS[a] for a in ("-1", "641")
+                   if math.hypot(x - AGENTS[a][0], y - AGENTS[a][1]) <= SPD_REACH]
+        if sensors:
+            (lx, ly), = se2.apply_points(to_infra, [[x, y]])
+            box = (float(lx), float(ly), float(se2.wrap_angle(yaw + se2.yaw_of(to_infra))), length, width, height)
+            objects[tumtraf_uuid(i)] = _tumtraf_object(i, category, box, sensors)
+    return objects
+
+
+def _tumtraf_record(k: int) -> dict:
+    """The OpenLABEL file of frame ``k``."""
+    stamp, seconds = _tumtraf_stamp(k)
+    properties = {"timestamp": seconds,
+                  "image_file_names": [f"{stamp}_s110_camera_basler_south1_8mm.jpg",
+                                       f"{stamp}_vehicle_camera_basler_16mm.jpg"],
+                  "point_cloud_file_names": [f"{stamp}_vehicle_lidar_robosense.pcd",
+                                             f"{stamp}_s110_lidar_ouster_south.pcd",
+                                             f"{stamp}_{TUMTRAF_REGISTERED}.pcd"],
+                  "transforms": {"vehicle_lidar_robosense_to_s110_lidar_ouster_south": {
+                      "src": "vehicle_lidar_robosense", "dst": "s110_lidar_ouster_south",
+                      "transform_src_to_dst": {"matrix4x4": tumtraf_vehicle_lidar().tolist()}}}}
+    systems = {"s110_lidar_ouster_south": {"type": "sensor_cs", "parent": "", "children": ["vehicle_lidar_robosense"]},
+               "vehicle_lidar_robosense": {"type": "sensor_cs", "parent": "s110_lidar_ouster_south", "children": []}}
+    return {"openlabel": {"metadata": {"schema_version": "1.0.0"}, "coordinate_systems": systems,
+                          "frames": {str(k): {"frame_properties": properties, "objects": _tumtraf_objects(k)}}}}
+
+
+def tumtraf_release(root: Path, frames: int = 3) -> Path:
+    """A TUMTraf-V2X release root: ``train/labels_point_clouds/<registered>/<sec>_<nsec>_<registered>.json``,
+    OpenLABEL written as the dev kit writes it (``json.dumps(..., ensure_ascii=True, indent=4)``)."""
+    folder = root / "train" / "labels_point_clouds" / TUMTRAF_REGISTERED
+    folder.mkdir(parents=True)
+    for k in range(frames):
+        text = json.dumps(_tumtraf_record(k), ensure_ascii=True, indent=4)
+        (folder / f"{_tumtraf_stamp(k)[0]}_{TUMTRAF_REGISTERED}.json").write_text(text, encoding="utf-8")
+    return root
