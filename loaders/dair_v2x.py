@@ -33,6 +33,9 @@ DAIR dataset read it) have gaps and quirks, handled so:
   :class:`LoaderError`. A file that exists but is malformed is still a :class:`LoaderError`;
 - numbers stored as strings (``"delta_x": "-0.52"``, label sizes, calibration entries) are read as
   numbers; any other string where a number belongs is a :class:`LoaderError` naming file and field;
+  the label fields not read (the infrastructure side's ``truncated_state``, ``occluded_state``,
+  ``alpha`` are strings such as ``"0"`` and ``"-1.57"``) are not checked;
+- a ``system_error_offset`` given as an empty string ``""`` (or absent) is no offset, silently;
 - a load over a second shows a progress bar (tqdm, on stderr).
 
 World frame: DAIR-V2X's world frame. Agents ``"vehicle"`` (the ego; typical car size) and
@@ -158,8 +161,7 @@ def _poses(root: Path, info_file: Path, pair, where: str, vehicle_id: str,
     offset (DAIR-V2X's ``tools/dataset_converter/calib_i2v.py`` adds it before composing), so it is
     not added again."""
     try:
-        offset = (pair.get("system_error_offset") if isinstance(pair, dict) else None) or {"delta_x": 0.0,
-                                                                                            "delta_y": 0.0}
+        offset = system_error_offset(pair.get("system_error_offset") if isinstance(pair, dict) else None)
         return (_vehicle_to_world(root, vehicle_id),
                 _infrastructure_to_world(root, infra_id, info_file, offset, f"{where}.system_error_offset"), False)
     except MissingFile as world_missing:
@@ -168,6 +170,15 @@ def _poses(root: Path, info_file: Path, pair, where: str, vehicle_id: str,
             raise world_missing from None
         calib = _read(i2v_file)
         return np.eye(4), _rigid(i2v_file, calib.get("transform", calib) if isinstance(calib, dict) else calib), True
+
+
+def system_error_offset(value):
+    """The pair's ``system_error_offset``, with no offset (zeros) where the release gives none: the key
+    absent, ``null`` or an empty string ``""`` (as some DAIR-V2X-C pairs ship it). Anything else is
+    read as ``{delta_x, delta_y}`` and checked there."""
+    if value is None or value == "":
+        return {"delta_x": 0.0, "delta_y": 0.0}
+    return value
 
 
 def _relative_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
@@ -285,9 +296,21 @@ def _yaw(pose: np.ndarray, yaw: float = 0.0) -> float:
 
 def _labels(path: Path, pose: np.ndarray) -> list[dict]:
     """The label file's boxes mapped to the world frame."""
+    return label_boxes(path, label_list(path), pose)
+
+
+def label_list(path: Path) -> list:
+    """The list of labelled objects a DAIR-V2X label file holds (:class:`MissingFile` when absent)."""
     labels = _read(path)
     if not isinstance(labels, list):
         raise LoaderError(f"{path}: expected a list of labelled objects")
+    return labels
+
+
+def label_boxes(path: Path, labels: list, pose: np.ndarray) -> list[dict]:
+    """``{category, x, y, z, length, width, height, yaw}`` of each label of ``path``, mapped to the
+    world with ``pose`` (sensor -> world, 4x4). Only the box fields are read: the others
+    (``truncated_state``, ``occluded_state``, ``alpha``, ``2d_box``), numbers or strings, are ignored."""
     boxes = []
     for i, label in enumerate(labels):
         where = f"[{i}]"

@@ -4,7 +4,7 @@ from __future__ import annotations
 import re
 from pathlib import Path
 
-from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, v2x_sim
+from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, tumtraf_v2x, v2x_seq, v2x_sim
 from . import detections as detection_files
 from .errors import LoaderError, existing_path, unreadable
 from .scene import Sequence
@@ -72,13 +72,16 @@ def _loader_for(path: Path):
 
 
 def _modules() -> list:
-    return [argoverse2, sind, interaction, dair_v2x, v2x_sim, opv2v, table]
+    return [argoverse2, sind, interaction, v2x_seq, dair_v2x, tumtraf_v2x, v2x_sim, opv2v, table]
 
 
 _EXPECTED = (
     "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
     "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
     "V2XSet / V2V4Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
-    "folder (cooperative/data_info.json), a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> "
+    "folder (cooperative/data_info.json pairing point clouds), a V2X-Seq-SPD folder (cooperative/data_info.json "
+    "pairing vehicle_frame and infrastructure_frame), a TUMTraf-V2X root, split or "
+    "labels_point_clouds/s110_lidar_ouster_south_and_vehicle_lidar_robosense_registered folder, "
+    "a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> "
     "sensors), or a generic table (.csv / .parquet with a frame column)"
 )

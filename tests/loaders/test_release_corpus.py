@@ -4,8 +4,10 @@ frame; then what each release gets right that hand-made fixtures missed."""
 from __future__ import annotations
 
 import dataclasses
+import json
 import math
 import shutil
+import warnings
 
 import numpy as np
 import pytest
@@ -28,6 +30,10 @@ WRITERS = {
     "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
     "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                             world_calib=False),
+    "dair_v2x_c_no_offset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
+                                                               offset=""),
+    "v2x_seq_spd": lambda root: releases.spd_release(root / "V2X-Seq-SPD"),
+    "tumtraf_v2x": lambda root: releases.tumtraf_release(root / "tumtraf_v2x_cooperative_perception_dataset"),
     "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
@@ -37,7 +43,11 @@ WRITERS = {
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
     "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
-    "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
+    "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]),
+    "dair_v2x_c_no_offset": (3, ["vehicle", "infrastructure"]),
+    "v2x_seq_spd": (3, ["vehicle", "infrastructure"]),
+    "tumtraf_v2x": (3, ["vehicle", "infrastructure"]),
+    "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
     "table": (2, ["700", "702"]),
 }
@@ -154,6 +164,124 @@ def test_dair_subset_uses_lidar_i2v_without_adding_the_offset_twice(corpus):
         np.testing.assert_allclose(subset[k].agent_pose("vehicle"), np.eye(3), atol=1e-12)
         truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
         np.testing.assert_allclose(relative, truth, atol=1e-9)
+
+
+def test_dair_string_label_states_and_empty_offset_load_silently(corpus):
+    infra_label = corpus["dair_v2x_c_no_offset"] / "infrastructure-side" / "label" / "virtuallidar" / "000020.json"
+    first = json.loads(infra_label.read_text())[0]
+    assert all(isinstance(first[k], str) for k in ("truncated_state", "occluded_state", "alpha"))
+    info = json.loads((corpus["dair_v2x_c_no_offset"] / "cooperative" / "data_info.json").read_text())
+    assert {pair["system_error_offset"] for pair in info} == {""}
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sequence = loaders.open(corpus["dair_v2x_c_no_offset"])
+    assert sequence.warnings == []
+    truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
+    for frame in sequence:
+        relative = se2.inverse(frame.agent_pose("vehicle")) @ frame.agent_pose("infrastructure")
+        np.testing.assert_allclose(relative, truth, atol=1e-9)
+    assert len(sequence[0].visibility["infrastructure"]) == len(json.loads(infra_label.read_text()))
+
+
+def _shift_infrastructure_label(root, object_id: int, metres: float) -> None:
+    """Move one infrastructure label of the first frame ``metres`` along its LiDAR's x, beyond any derived match."""
+    path = root / "infrastructure-side" / "label" / "virtuallidar" / "000000.json"
+    labels = json.loads(path.read_text())
+    label = next(label for label in labels if label["track_id"] == releases.spd_track("-1", object_id))
+    label["3d_location"]["x"] += metres
+    releases.write_json(path, labels)
+
+
+def test_spd_cooperative_label_gives_the_association_and_the_ids_persist(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    _shift_infrastructure_label(root, 707, 3.0)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        sequence = loaders.open(root)
+    assert sequence.name.startswith("v2x-seq-spd") and sequence.scenarios == {"0000": 0}
+    np.testing.assert_allclose(sequence.timestamps, [0.0, 0.1, 0.2], atol=1e-9)
+    first, last = sequence[0], sequence[-1]
+    track = {i: releases.spd_track("cooperative", i) for i in (702, 703, 705, 706, 707)}
+    assert set(first.track_ids) == set(last.track_ids) and track[705] not in set(first.track_ids)
+    seen = first.visibility
+    assert track[702] not in seen["vehicle"] and track[702] in seen["infrastructure"]
+    assert track[703] in seen["vehicle"] and track[703] not in seen["infrastructure"]
+    assert track[707] in seen["vehicle"] and track[707] in seen["infrastructure"]   # 3 m apart, fused by the label
+    ids, boxes = first.agent_view("infrastructure")
+    fused = first.boxes()[list(first.track_ids).index(track[707])]
+    assert np.linalg.norm(boxes[list(ids).index(track[707])][:2] - fused[:2]) == pytest.approx(3.0, abs=1e-6)
+    truth = se2.inverse(releases.lidar_pose("641")) @ releases.lidar_pose("-1")
+    relative = se2.inverse(first.agent_pose("vehicle")) @ first.agent_pose("infrastructure")
+    np.testing.assert_allclose(relative, truth, atol=1e-9)                          # system_error_offset added
+
+
+def test_spd_pair_without_cooperative_label_is_associated_by_distance_and_said(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    _shift_infrastructure_label(root, 707, 3.0)
+    (root / "cooperative" / "label" / "000009.json").unlink()
+    with pytest.warns(UserWarning, match=r"1 of 3 pair\(s\) have no cooperative label.*vehicle frames 000009"):
+        sequence = loaders.open(root)
+    seen = sequence[0].visibility
+    vehicle_707, infra_707 = (f"v{releases.spd_track('641', 707)}", f"i{releases.spd_track('-1', 707)}")
+    assert vehicle_707 in seen["vehicle"] and infra_707 in seen["infrastructure"]      # beyond 2 m: not matched
+    assert f"v{releases.spd_track('641', 700)}" in seen["infrastructure"]               # within 2 m: matched
+    assert len(sequence.warnings) == 1 and releases.spd_track("cooperative", 700) in set(sequence[1].track_ids)
+
+
+def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2x_seq_spd"], tmp_path / "V2X-Seq-SPD")
+    info = json.loads((root / "cooperative" / "data_info.json").read_text())
+    info[1]["infrastructure_frame"] = "000099"
+    releases.write_json(root / "cooperative" / "data_info.json", info)
+    with pytest.raises(loaders.LoaderError, match=r"data_info.json: \[1\].infrastructure_frame: '000099' is not a "
+                                                  r"frame_id of infrastructure-side/data_info.json"):
+        loaders.open(root)
+
+
+def test_tumtraf_vehicle_pose_boxes_and_sensor_id_visibility(corpus):
+    root = corpus["tumtraf_v2x"]
+    registered = root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED
+    for opened_at in (root, root / "train", registered):
+        sequence = loaders.open(opened_at)
+        assert len(sequence) == 3 and sequence.scenarios == {"train": 0} and sequence.warnings == []
+    np.testing.assert_allclose(sequence.timestamps, [0.0, 0.1, 0.2], atol=1e-6)
+    frame = sequence[0]
+    truth = se2.inverse(releases.lidar_pose("-1")) @ releases.lidar_pose("641")
+    np.testing.assert_allclose(frame.agent_pose("vehicle"), truth, atol=1e-9)
+    np.testing.assert_allclose(frame.agent_pose("infrastructure"), np.eye(3), atol=1e-12)
+    uuid = {i: releases.tumtraf_uuid(i) for i in (700, 702, 703, 704, 705)}
+    box = frame.boxes()[list(frame.track_ids).index(uuid[704])]
+    world = se2.apply_points(releases.lidar_pose("-1"), [box[:2]])[0]
+    np.testing.assert_allclose(world, [3.5, -20.0], atol=1e-9)
+    assert frame.categories[list(frame.track_ids).index(uuid[704])] == "truck"
+    assert set(frame.track_ids) == set(sequence[2].track_ids) and uuid[705] not in set(frame.track_ids)
+    seen = frame.visibility
+    assert uuid[702] in seen["infrastructure"] and uuid[702] not in seen["vehicle"]
+    assert uuid[703] in seen["vehicle"] and uuid[703] not in seen["infrastructure"]
+    assert uuid[700] in seen["vehicle"] and uuid[700] in seen["infrastructure"]
+
+
+def test_tumtraf_without_sensor_id_has_no_visibility_and_says_so(corpus, tmp_path):
+    root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
+    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[1]
+    record = json.loads(path.read_text())
+    item = next(iter(record["openlabel"]["frames"]["1"]["objects"].values()))
+    item["object_data"]["cuboid"]["attributes"]["text"] = []
+    path.write_text(json.dumps(record, indent=4))
+    with pytest.warns(UserWarning, match=r"1 of 27 object\(s\) have no sensor_id attribute"):
+        sequence = loaders.open(root)
+    assert sequence.visibility is None and sequence[0].agents is not None
+
+
+def test_tumtraf_frame_without_the_vehicle_transform_names_the_key(corpus, tmp_path):
+    root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
+    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[0]
+    record = json.loads(path.read_text())
+    record["openlabel"]["frames"]["0"]["frame_properties"]["transforms"] = {}
+    path.write_text(json.dumps(record))
+    with pytest.raises(loaders.LoaderError, match=r"missing key openlabel.frames.0.frame_properties.transforms."
+                                                  r"vehicle_lidar_robosense_to_s110_lidar_ouster_south"):
+        loaders.open(root)
 
 
 def test_dair_pair_missing_a_file_is_skipped_and_counted(corpus, tmp_path):
