@@ -37,6 +37,8 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   ``Sequence.agent_views``.
 - V2V4Real (recognised by ``ass_id`` keys): boxes are in each CAV's own LiDAR frame (right-handed,
   real sensors), mapped to the world with that CAV's ``lidar_pose``; category from ``obj_type``.
+  ``lidar_pose`` may be six numbers or a 4x4 sensor-to-world matrix, and the files may carry the tags
+  ``yaml.dump`` writes for numpy numbers and arrays (``loaders.structured.read_yaml`` reads those).
   ``ass_id`` is the cross-CAV id of the same object (-1: seen by one CAV only): associated objects
   share the track id ``"a<ass_id>"`` (the ego's box is kept), others are ``"<cav>/<id>"``.
 - LiDAR points: the ``<timestamp>.pcd`` beside a ``<timestamp>.yaml`` is that CAV's sweep in its
@@ -56,7 +58,7 @@ from cbm import se2
 from .categories import normalised
 from .errors import LoaderError
 from .scene import Sequence
-from .structured import field, number, numbers, read_yaml
+from .structured import field, matrix, number, numbers, read_yaml
 
 FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
@@ -69,6 +71,8 @@ CATEGORY_NAMES = {"walker": "pedestrian", "pedestrian": "pedestrian", "car": "ca
                   "bus": "bus", "motorcycle": "motorcycle", "bicycle": "bicycle", "cyclist": "bicycle"}
 """Actor classes of the OPV2V-family releases (normalised) -> our category names."""
 SPLITS = ("train", "validate", "test")
+RIGID_TOLERANCE = 1e-3
+"""How far a 4x4 pose's rotation part may be from orthonormal (rounding in the files)."""
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
 
@@ -209,10 +213,25 @@ def _has_ass_id(record) -> bool:
 
 
 def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tuple[float, float, float, float]:
-    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose`` (or ``key``)."""
-    x, y, z, _roll, yaw, _pitch = numbers(path, field(path, record, key), key, 6)
-    yaw = math.radians(yaw)
+    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose`` (or ``key``): six
+    numbers ``[x, y, z, roll, yaw, pitch]`` (degrees), or a 4x4 sensor-to-world matrix (V2V4Real)."""
+    value = field(path, record, key)
+    if isinstance(value, list) and value and all(isinstance(row, list) for row in value):
+        x, y, z, yaw = _matrix_pose(path, value, key)
+    else:
+        x, y, z, _roll, yaw, _pitch = numbers(path, value, key, 6)
+        yaw = math.radians(yaw)
     return (x, y, z, yaw) if right_handed else (x, -y, z, -yaw)
+
+
+def _matrix_pose(path: Path, value: list, key: str) -> tuple[float, float, float, float]:
+    """``x, y, z, yaw`` of a 4x4 rigid transform, or a ``LoaderError`` when it is not one."""
+    m = np.array(matrix(path, value, key, 4, 4))
+    rotation = m[:3, :3]
+    if not np.allclose(rotation @ rotation.T, np.eye(3), atol=RIGID_TOLERANCE) or np.linalg.det(rotation) < 0:
+        raise LoaderError(f"{path}: {key}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
+                          f"got {m.round(3).tolist()}")
+    return float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), math.atan2(m[1, 0], m[0, 0])
 
 
 def _reported_lidar_pose(path: Path, record, lidar: tuple[float, float, float, float],

@@ -25,6 +25,10 @@ WRITERS = {
     "v2xset": lambda root: releases.v2xset_scenario(root / "2021_08_20_21_48_35"),
     "adver_city": lambda root: releases.adver_city_run(root / "data_dumping"),
     "v2v4real": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0"),
+    "v2v4real_matrix": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0",
+                                                               pose="matrix"),
+    "v2v4real_numpy": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0",
+                                                              pose="numpy"),
     "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
     "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                             world_calib=False),
@@ -36,7 +40,8 @@ WRITERS = {
 }
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
-    "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
+    "v2v4real": (1, ["0", "1"]), "v2v4real_matrix": (1, ["0", "1"]), "v2v4real_numpy": (1, ["0", "1"]),
+    "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
     "table": (2, ["700", "702"]),
@@ -211,3 +216,38 @@ def test_unknown_actor_classes_keep_their_name():
     assert category({"class": "Scooter "}, "vehicles") == "Scooter"
     assert category({"obj_type": "Pedestrian"}, "vehicles") == "pedestrian"
     assert category({}, "walkers") == "pedestrian" and category({}, "cyclists") == "cyclists"
+
+
+def test_v2v4real_pose_matrix_and_numpy_tags_give_the_same_scene(corpus):
+    plain = loaders.open(corpus["v2v4real"])[0]
+    assert "!!python/object/apply:numpy" in (corpus["v2v4real_numpy"] / "0" / "000000.yaml").read_text()
+    for release in ("v2v4real_matrix", "v2v4real_numpy"):
+        frame = loaders.open(corpus[release])[0]
+        assert list(frame.track_ids) == list(plain.track_ids)
+        np.testing.assert_allclose(frame.boxes(), plain.boxes(), atol=1e-9)
+        for agent in ("0", "1"):
+            np.testing.assert_allclose(frame.agent_pose(agent), plain.agent_pose(agent), atol=1e-9)
+    np.testing.assert_allclose(plain.agent_pose("1"), releases.lidar_pose("650"), atol=1e-9)
+
+
+@pytest.mark.parametrize("pose, message", [
+    ([[1.0, 0.0, 0.0, 0.0]] * 4, r"lidar_pose: expected a rigid 4x4 transform"),
+    ([[1.0, 0.0, 0.0]] * 4, r"lidar_pose\[0\]: expected 4 numbers"),
+    ([[1.0, 0.0, 0.0, 0.0]] * 3, r"lidar_pose: expected 4 rows of 4 numbers"),
+])
+def test_v2v4real_bad_pose_matrix_is_named(corpus, tmp_path, pose, message):
+    root = shutil.copytree(corpus["v2v4real_matrix"], tmp_path / "scenario")
+    record = releases.yaml.safe_load((root / "1" / "000000.yaml").read_text())
+    releases.dump_yaml(root / "1" / "000000.yaml", {**record, "lidar_pose": pose})
+    with pytest.raises(loaders.LoaderError, match=r"1/000000.yaml: " + message):
+        loaders.open(root)
+
+
+def test_python_tags_other_than_numpy_values_are_refused(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2v4real_numpy"], tmp_path / "scenario")
+    path = root / "0" / "000000.yaml"
+    path.write_text(path.read_text().replace("numpy._core.multiarray._reconstruct", "os.system", 1)
+                    .replace("numpy.core.multiarray._reconstruct", "os.system", 1))
+    with pytest.raises(loaders.LoaderError, match=r"0/000000.yaml: not valid YAML \(.*apply:os.system: not read "
+                                                  r"\(only numpy numbers and arrays are\)\)"):
+        loaders.open(root)

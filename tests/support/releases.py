@@ -156,8 +156,12 @@ def adver_city_run(root: Path) -> Path:
     return root
 
 
-def v2v4real_scenario(root: Path) -> Path:
-    """V2V4Real: CAVs ``0`` and ``1``, boxes in each CAV's LiDAR frame with ``obj_type`` and ``ass_id``."""
+def v2v4real_scenario(root: Path, pose: str = "numbers") -> Path:
+    """V2V4Real: CAVs ``0`` and ``1``, boxes in each CAV's LiDAR frame with ``obj_type`` and ``ass_id``.
+    ``pose``: ``lidar_pose`` as six ``numbers``, a 4x4 ``matrix`` (nested lists), or ``numpy``: the
+    matrix a numpy array and every box number a numpy float, dumped as PyYAML dumps numpy values
+    (``!!python/object/apply:numpy...`` tags), as the release's files are."""
+    real = np.float64 if pose == "numpy" else float
     for folder, agent in (("0", "641"), ("1", "650")):
         to_lidar = se2.inverse(lidar_pose(agent))
         vehicles = {}
@@ -165,15 +169,23 @@ def v2v4real_scenario(root: Path) -> Path:
             if category == "pedestrian" or str(i) in AGENTS:
                 continue
             (lx, ly), = se2.apply_points(to_lidar, [[x, y]])
-            vehicles[i] = {"angle": [0.0, math.degrees(yaw + se2.yaw_of(to_lidar)), 0.0], "center": [0.0, 0.0, 0.0],
-                           "extent": [length / 2, width / 2, height / 2], "location": [float(lx), float(ly), -1.0],
+            numbers = {"angle": [0.0, math.degrees(yaw + se2.yaw_of(to_lidar)), 0.0], "center": [0.0, 0.0, 0.0],
+                       "extent": [length / 2, width / 2, height / 2], "location": [lx, ly, -1.0]}
+            vehicles[i] = {**{key: [real(v) for v in values] for key, values in numbers.items()},
                            "obj_type": category.capitalize(), "ass_id": i}
-        lidar = lidar_pose(agent)
-        x, y = se2.translation_of(lidar)
-        dump_yaml(root / folder / "000000.yaml", {"lidar_pose": [float(x), float(y), 1.9, 0.0,
-                                                                 math.degrees(se2.yaw_of(lidar)), 0.0],
-                                                  "vehicles": vehicles})
+        dump_yaml(root / folder / "000000.yaml", {"lidar_pose": _v2v4real_pose(agent, pose), "vehicles": vehicles})
     return root
+
+
+def _v2v4real_pose(agent: str, pose: str):
+    """An agent's ``lidar_pose`` as six numbers, a 4x4 list of lists or a 4x4 numpy array."""
+    lidar = lidar_pose(agent)
+    x, y = se2.translation_of(lidar)
+    if pose == "numbers":
+        return [float(x), float(y), 1.9, 0.0, math.degrees(se2.yaw_of(lidar)), 0.0]
+    matrix = np.eye(4)
+    matrix[:2, :2], matrix[:3, 3] = lidar[:2, :2], [x, y, 1.9]
+    return matrix if pose == "numpy" else matrix.tolist()
 
 
 # --- DAIR-V2X-C ------------------------------------------------------------------------------------------------
