@@ -78,7 +78,7 @@ def _modules() -> list:
 _EXPECTED = (
     "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
     "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
-    "V2XSet / V2V4Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
+    "V2XSet / V2V4Real / V2X-Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
     "folder (cooperative/data_info.json), a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> "
     "sensors), or a generic table (.csv / .parquet with a frame column)"
 )

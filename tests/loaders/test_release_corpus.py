@@ -29,6 +29,7 @@ WRITERS = {
                                                                pose="matrix"),
     "v2v4real_numpy": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0",
                                                               pose="numpy"),
+    "v2x_real": lambda root: releases.v2x_real_root(root / "v2xreal"),
     "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
     "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                             world_calib=False),
@@ -41,6 +42,7 @@ WRITERS = {
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
     "v2v4real": (1, ["0", "1"]), "v2v4real_matrix": (1, ["0", "1"]), "v2v4real_numpy": (1, ["0", "1"]),
+    "v2x_real": (2, ["1", "2", "-1"]),
     "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]), "sind_without_lfs": (None, None),
     "v2x_sim": (2, ["0", "1", "2"]), "argoverse2": (3, ["ego"]), "interaction": (None, None),
@@ -60,7 +62,7 @@ def corpus(tmp_path_factory) -> dict:
 
 def opened(release: str, path):
     """The release opened; those that say what they skipped or used instead warn once."""
-    if release in ("sind_without_lfs", "dair_v2x_c_subset"):
+    if release in ("sind_without_lfs", "dair_v2x_c_subset", "v2x_real"):
         with pytest.warns(UserWarning):
             return loaders.open(path)
     return loaders.open(path)
@@ -250,4 +252,33 @@ def test_python_tags_other_than_numpy_values_are_refused(corpus, tmp_path):
                     .replace("numpy.core.multiarray._reconstruct", "os.system", 1))
     with pytest.raises(loaders.LoaderError, match=r"0/000000.yaml: not valid YAML \(.*apply:os.system: not read "
                                                   r"\(only numpy numbers and arrays are\)\)"):
+        loaders.open(root)
+
+
+def test_v2x_real_categories_infrastructure_and_static_props(corpus):
+    with pytest.warns(UserWarning, match=r"1 static object\(s\) \(trash_can\) are not road users: left out of trials"):
+        sequence = loaders.open(corpus["v2x_real"])
+    assert sequence.name == "v2x_real/v2xreal" and len(sequence.warnings) == 1 and sequence.ego == "1"
+    frame = sequence[0]
+    categories = dict(zip(frame.track_ids, frame.categories))
+    assert (categories["700"], categories["702"], categories["704"]) == ("car", "van", "truck")
+    assert (categories["1300"], categories["1401"], categories["1400"]) == ("pedestrian", "bicycle", "trash_can")
+    box = frame.boxes()[list(frame.track_ids).index("707")]          # right-handed: nothing mirrored
+    np.testing.assert_allclose(box[[0, 1, 3, 6]], [16.0, -12.0, 4.6, 1.2], atol=1e-9)
+    np.testing.assert_allclose(frame.agent_pose("-1"), releases.lidar_pose("-1"), atol=1e-9)
+    infra = frame.agents.filter(frame.agents["agent_id"] == "-1")
+    assert (infra["length"][0], infra["height"][0]) == (0.6, 5.0)        # a pole, as V2XSet's roadside units
+    trial = build_trial(frame, ScenarioParams(protocol="opv2v"), seed=0, cav="2")
+    ids = set(map(str, np.concatenate([trial.ego_ids, trial.cav_ids])))
+    assert "1400" not in ids and "1401" in ids
+
+
+@pytest.mark.parametrize("flag, message", [(True, r"infra: expected false in agent folder '2' \(negative ids are "
+                                                  r"infrastructure\), got true"),
+                                           ("yes please", r"infra: expected true or false, got 'yes please'")])
+def test_v2x_real_infra_flag_must_agree_with_the_folder(corpus, tmp_path, flag, message):
+    root = shutil.copytree(corpus["v2x_real"], tmp_path / "v2xreal")
+    path = root / "train" / "2023-03-17-15-53-02_1_0" / "2" / "000001.yaml"
+    releases.dump_yaml(path, {**releases.yaml.safe_load(path.read_text()), "infra": flag})
+    with pytest.raises(loaders.LoaderError, match=r"2/000001.yaml: " + message):
         loaders.open(root)

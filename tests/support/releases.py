@@ -188,6 +188,43 @@ def _v2v4real_pose(agent: str, pose: str):
     return matrix if pose == "numpy" else matrix.tolist()
 
 
+
+V2X_REAL_AGENTS = {"1": "641", "2": "650", "-1": "-1"}
+"""V2X-Real agent folder -> the corpus agent it stands for (vehicles 1, 2; infrastructure -1)."""
+V2X_REAL_TYPES = {"car": "Car", "van": "Van", "truck": "ConcreteTruck", "pedestrian": "Pedestrian"}
+V2X_REAL_EXTRA = [(1400, "TrashCan", 8.0, -6.0, 0.0, 0.6, 0.6, 1.0),
+                  (1401, "BicycleRider", 14.0, 7.0, 0.2, 1.8, 0.6, 1.7)]
+"""Objects only the V2X-Real corpus has: a static prop and a cyclist (obj_type as the release writes it)."""
+
+
+def v2x_real_record(folder: str, k: int) -> dict:
+    """One V2X-Real agent's ``<timestamp>.yaml``: world-frame (right-handed) boxes with ``obj_type``,
+    ``lidar_pose`` and ``true_ego_pose`` in degrees, the ``infra`` flag; car 706 parked (``static``)."""
+    agent = V2X_REAL_AGENTS[folder]
+    vehicles = {}
+    for i, kind, x, y, yaw, length, width, height in seen_by(agent, moved(k) + V2X_REAL_EXTRA):
+        vehicles[i] = {"angle": [0.0, math.degrees(yaw), 0.0], "center": [0.0, 0.0, height / 2],
+                       "extent": [length / 2, width / 2, height / 2], "location": [x, y, 0.0],
+                       "obj_type": V2X_REAL_TYPES.get(kind, kind), **({"attribute": "static"} if i == 706 else {})}
+    lidar, (x, y, yaw) = lidar_pose(agent), AGENTS[agent]
+    lx, ly = se2.translation_of(lidar)
+    return {"infra": folder.startswith("-"), "lidar_pose": [float(lx), float(ly), 1.9, 0.0,
+                                                            math.degrees(se2.yaw_of(lidar)), 0.0],
+            "true_ego_pose": [x, y, 0.0, 0.0, math.degrees(yaw), 0.0], "vehicles": vehicles}
+
+
+def v2x_real_root(root: Path) -> Path:
+    """``v2xreal/train/<scenario>/{1,2,-1}/00000{0,1}.yaml`` with ``.bin`` sweeps (float32 x y z
+    intensity, numpy ``tofile``), as the release is laid out for its OpenCOOD-based code."""
+    scenario = root / "train" / "2023-03-17-15-53-02_1_0"
+    for folder, agent in V2X_REAL_AGENTS.items():
+        for k in range(2):
+            dump_yaml(scenario / folder / f"{k:06d}.yaml", v2x_real_record(folder, k))
+            xyz = sweep(agent, seen_by(agent, moved(k)), left_handed=False)
+            np.hstack([xyz, np.ones((len(xyz), 1), np.float32)]).tofile(scenario / folder / f"{k:06d}.bin")
+    return root
+
+
 # --- DAIR-V2X-C ------------------------------------------------------------------------------------------------
 
 DAIR_OFFSET = {"delta_x": -0.52, "delta_y": 0.31}
