@@ -39,6 +39,7 @@ For the paper's OPV2V setting add ``--grid localization=gaussian`` (3 m / 5 deg 
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import math
 import multiprocessing.util
 import os
@@ -112,6 +113,9 @@ def build_parser() -> Parser:
     parser.add_argument("--detections", default=None, metavar="STAGE1_BOXES_JSON",
                         help="CoAlign / HEAL stage1_boxes.json: a detector's boxes replace the simulated detections "
                              "(one dataset only)")
+    parser.add_argument("--score-threshold", type=float, default=None, metavar="S",
+                        help="drop the --detections boxes scored below S, 0 to 1: the scenario's min_score "
+                             "(default: the preset's, 0: keep all; no effect on a file without pred_score_np_list)")
     parser.add_argument("--fusion", choices=FUSIONS, default=None,
                         help="late fusion after calibration (nms: OpenCOOD's, rotated BEV IoU 0.15) and its AP@0.5 / "
                              "AP@0.7 in the summary and metrics.json")
@@ -218,6 +222,16 @@ def parse_value(name: str, text: str, default: Any) -> Any:
         raise CliError(f"--grid: {name} takes {type(default).__name__} values, got {text!r}") from None
 
 
+def score_threshold(args: argparse.Namespace) -> float:
+    """``--score-threshold``, checked: from 0 to 1, and only with ``--detections`` (it drops a detector's boxes)."""
+    value = args.score_threshold
+    if not 0.0 <= value <= 1.0:
+        raise CliError(f"--score-threshold must be a number from 0 to 1, got {value}")
+    if args.detections is None:
+        raise CliError("--score-threshold drops a detector's boxes by score: give --detections too")
+    return value
+
+
 def read_preset(name_or_file: str | None) -> PresetParams:
     """The preset ``--preset`` names (None: the default one)."""
     try:
@@ -249,6 +263,9 @@ def prepare(args: argparse.Namespace) -> Plan:
             raise CliError(str(error)) from None
     if args.detections is not None and len(args.dataset) != 1:
         raise CliError("--detections: give exactly one --dataset (the detections belong to one dataset)")
+    scenario = preset.scenario if args.condition is None else CONDITIONS[args.condition]
+    if args.score_threshold is not None:
+        scenario = dataclasses.replace(scenario, min_score=score_threshold(args))
     methods = parse_methods(args.methods)
     grid = parse_grid(args.grid, methods)
     too_large = grid_too_large(grid)
@@ -258,8 +275,7 @@ def prepare(args: argparse.Namespace) -> Plan:
         return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
                     detections=args.detections, fusion=args.fusion, agents=args.agents,
-                    scenario=preset.scenario if args.condition is None else CONDITIONS[args.condition],
-                    params=preset.params)
+                    scenario=scenario, params=preset.params)
     except ValueError as error:
         raise CliError(str(error)) from None
 

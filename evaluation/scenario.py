@@ -80,6 +80,9 @@ class ScenarioParams:
     """False boxes added to each agent's detections: ``round(false_rate * n)`` for ``n`` real detections,
     centres uniform over the agent's sensor disc (range protocol) or the bounding rectangle of its
     detections (sind, opv2v), sizes copied from its real boxes, headings uniform; they pair with nothing."""
+    min_score: float = 0.0
+    """A real detector's boxes scored below this are dropped (``loaders.detections.DetectedBoxes.above``;
+    0 keeps all; no effect on simulated detections or on a detections file without scores)."""
     seed: int = 0
     """Seed of the generator ``make_trial`` uses when it is given none."""
 
@@ -89,7 +92,7 @@ class ScenarioParams:
         if self.localization not in ("fixed", "gaussian", "drifting", "dataset", "none"):
             raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian', 'drifting', 'dataset' or "
                              f"'none', got {self.localization!r}")
-        for name in ("eta", "flip_prob", "miss_rate"):
+        for name in ("eta", "flip_prob", "miss_rate", "min_score"):
             _require(name, 0.0 <= _finite(self, name) <= 1.0, "a number in [0, 1]")
         for name in ("sigma_p", "sigma_theta", "false_rate"):
             _require(name, _finite(self, name) >= 0.0, "a finite number >= 0")
@@ -173,9 +176,10 @@ class FrameInputs:
     """Class label of each object (same order as ``ids``), for the methods that take labels (VIPS)."""
     note: str = ""
     """How the agents were chosen (e.g. ``auto``), for the people reading the result."""
-    detections: Mapping[str, np.ndarray] | None = None
-    """A real detector's boxes of ``"ego"`` and / or ``"cav"`` (``(N, 7)``, each in its agent's
-    frame): they replace that agent's simulated detections (``evaluation.detected.with_detections``)."""
+    detections: Mapping[str, Any] | None = None
+    """A real detector's boxes of ``"ego"`` and / or ``"cav"`` (``loaders.detections.DetectedBoxes``,
+    each in its agent's frame): those scored at least ``min_score`` replace that agent's simulated
+    detections (``evaluation.detected.with_detections``)."""
     stream: int = 0
     """The CAV's rank among the frame's CAVs: its trial draws from ``trial_rng(seed, index, stream)``."""
     cohort: tuple[FrameInputs, ...] = ()
@@ -200,7 +204,8 @@ class FrameInputs:
         if not self.detections:
             return trial
         agents = {"ego": self.trial.get("ego_id"), "cav": self.trial.get("cav_id")}
-        return with_detections(trial, self.detections, self.trial["boxes"], self.trial["ids"], agents)
+        kept = {role: found.above(params.min_score).boxes for role, found in self.detections.items()}
+        return with_detections(trial, kept, self.trial["boxes"], self.trial["ids"], agents)
 
     def drift(self, params: ScenarioParams, seed: int) -> np.ndarray | None:
         """This frame's drifting localization error (None unless ``localization="drifting"``)."""

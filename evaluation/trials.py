@@ -31,6 +31,7 @@ import numpy as np
 from cbm import se2
 from evaluation.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
 from loaders import Frame, Sequence
+from loaders.detections import DetectedBoxes
 
 from .agents import (
     TARGET_DISTANCE,
@@ -185,11 +186,11 @@ def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:
     return [dataclasses.replace(item, cohort=cohort) for item in inputs]
 
 
-def _detections(frame: Frame, ego: str, cav: str) -> dict[str, np.ndarray]:
+def _detections(frame: Frame, ego: str, cav: str) -> dict[str, DetectedBoxes]:
     """The detector's boxes (``loaders.detections``) of the ego and the CAV, by role, where the
     frame has them: they replace the simulated detections of those agents."""
     found = frame.detections or {}
-    return {role: found[agent].boxes for role, agent in (("ego", ego), ("cav", cav)) if agent in found}
+    return {role: found[agent] for role, agent in (("ego", ego), ("cav", cav)) if agent in found}
 
 
 def _visibility_by_range(inputs: dict, sensor_range: float) -> dict[str, np.ndarray]:

@@ -13,6 +13,9 @@ OpenCOOD sample index (a string), each value ``null`` (no box) or an object with
   front-left, front-right, rear-right, rear-left, then the top face in the same order);
 - ``uncertainty_np_list``: per agent, ``(N, D)`` the uncertainty head's output for each box
   (D = 2 for x, y, 3 with yaw); kept as saved (a missing key gives ``D = 0``);
+- ``pred_score_np_list`` (optional): per agent, ``(N,)`` the detector's confidence in each box,
+  kept as ``DetectedBoxes.scores`` (None without the key: then no score threshold applies,
+  ``DetectedBoxes.above``);
 - ``lidar_pose_clean_np``: per agent, the true LiDAR pose ``[x, y, z, roll, yaw, pitch]``
   (metres, degrees); ``lidar_pose_np`` (the noisy one, in some forks) is not needed.
 
@@ -59,6 +62,15 @@ class DetectedBoxes:
     """(N, 7) ``x, y, z, length, width, height, yaw`` in the agent's LiDAR frame (right-handed)."""
     uncertainty: np.ndarray
     """(N, D) the detector's uncertainty per box, as saved."""
+    scores: np.ndarray | None = None
+    """(N,) the detector's confidence per box, or None when the file has no ``pred_score_np_list``."""
+
+    def above(self, threshold: float) -> DetectedBoxes:
+        """The boxes scored at least ``threshold`` (all of them without scores, or at threshold 0)."""
+        if self.scores is None or threshold <= 0:
+            return self
+        keep = self.scores >= threshold
+        return DetectedBoxes(self.boxes[keep], self.uncertainty[keep], self.scores[keep])
 
 
 def attach(sequence: Sequence, path: Path) -> Sequence:
@@ -185,8 +197,19 @@ def _sample_boxes(path: Path, key: str, sample, agents: list[str], left_handed: 
             if uncertainty.ndim != 2 or len(uncertainty) != len(corners):
                 raise LoaderError(f"{path}: {where}: expected {len(corners)} rows (one per box), "
                                   f"got shape {uncertainty.shape}")
-        out[agent] = DetectedBoxes(fit_boxes(corners), uncertainty)
+        out[agent] = DetectedBoxes(fit_boxes(corners), uncertainty, _scores(path, key, sample, k, len(corners)))
     return out
+
+
+def _scores(path: Path, key: str, sample: dict, k: int, count: int) -> np.ndarray | None:
+    """Agent ``k``'s ``(N,)`` box scores, or None when the sample has no ``pred_score_np_list``."""
+    if sample.get("pred_score_np_list") is None:
+        return None
+    where = f"{key}.pred_score_np_list[{k}]"
+    scores = _array(path, _nth(path, key, sample, "pred_score_np_list", k), where).reshape(-1)
+    if len(scores) != count:
+        raise LoaderError(f"{path}: {where}: expected {count} scores (one per box), got {len(scores)}")
+    return scores
 
 
 def _array(path: Path, value, where: str, expected: str = "nested lists of numbers") -> np.ndarray:

@@ -78,7 +78,7 @@ def _modules() -> list:
 _EXPECTED = (
     "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
     "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
-    "V2XSet / V2V4Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
+    "V2XSet / V2V4Real / V2X-Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
     "folder (cooperative/data_info.json pairing point clouds), a V2X-Seq-SPD folder (cooperative/data_info.json "
     "pairing vehicle_frame and infrastructure_frame), a TUMTraf-V2X root, split or "
     "labels_point_clouds/s110_lidar_ouster_south_and_vehicle_lidar_robosense_registered folder, "

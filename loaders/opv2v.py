@@ -1,4 +1,4 @@
-"""OPV2V, V2XSet and V2V4Real scenarios: folders of per-CAV YAML annotations.
+"""OPV2V, V2XSet, V2V4Real and V2X-Real scenarios: folders of per-CAV YAML annotations.
 
 Layout (as OpenCOOD's ``BaseDataset`` walks it): ``<split>/<scenario>/<cav id>/<timestamp>.yaml``.
 Open a scenario folder, a split folder (``train/``, ``validate/``, ``test/``: its scenarios), a
@@ -37,14 +37,20 @@ absent from that frame. Loads over a second show a progress bar (tqdm, on stderr
   ``Sequence.agent_views``.
 - V2V4Real (recognised by ``ass_id`` keys): boxes are in each CAV's own LiDAR frame (right-handed,
   real sensors), mapped to the world with that CAV's ``lidar_pose``; category from ``obj_type``.
+  ``lidar_pose`` may be six numbers or a 4x4 sensor-to-world matrix, and the files may carry the tags
+  ``yaml.dump`` writes for numpy numbers and arrays (``loaders.structured.read_yaml`` reads those).
   ``ass_id`` is the cross-CAV id of the same object (-1: seen by one CAV only): associated objects
   share the track id ``"a<ass_id>"`` (the ego's box is kept), others are ``"<cav>/<id>"``.
+- V2X-Real (recognised by ``infra`` / ``true_ego_pose`` keys; ``loaders.v2x_real``): world-frame boxes
+  as OPV2V's but right-handed (nothing mirrored); its infrastructure has negative ids, and its street
+  furniture (``STATIC``: trash cans, fire hydrants) is left out of trials with one warning counting it.
 - LiDAR points: the ``<timestamp>.pcd`` beside a ``<timestamp>.yaml`` is that CAV's sweep in its
   LiDAR frame (``Sequence.point_clouds``, read on demand by ``Frame.points``; CARLA's mirrored).
 """
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 
 import numpy as np
@@ -53,10 +59,11 @@ from tqdm import tqdm
 
 from cbm import se2
 
+from . import v2x_real
 from .categories import normalised
 from .errors import LoaderError
 from .scene import Sequence
-from .structured import field, number, numbers, read_yaml
+from .structured import field, matrix, number, numbers, read_yaml
 
 FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
@@ -66,9 +73,14 @@ SKIPPED = ("additional", "camera_gt", "gnss_imu")
 ``<frame>_gnss_imu.yaml``, OPV2V's additional and camera ground-truth files)."""
 BLOCK_CATEGORY = {"vehicles": "car", "walkers": "pedestrian"}
 CATEGORY_NAMES = {"walker": "pedestrian", "pedestrian": "pedestrian", "car": "car", "van": "van", "truck": "truck",
-                  "bus": "bus", "motorcycle": "motorcycle", "bicycle": "bicycle", "cyclist": "bicycle"}
+                  "bus": "bus", "motorcycle": "motorcycle", "bicycle": "bicycle", "cyclist": "bicycle",
+                  **v2x_real.CATEGORY_NAMES, **v2x_real.STATIC_PROPS}
 """Actor classes of the OPV2V-family releases (normalised) -> our category names."""
+STATIC = frozenset(v2x_real.STATIC_PROPS.values())
+"""Categories of labelled street furniture: never road users, left out of trials."""
 SPLITS = ("train", "validate", "test")
+RIGID_TOLERANCE = 1e-3
+"""How far a 4x4 pose's rotation part may be from orthonormal (rounding in the files)."""
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
 
@@ -116,7 +128,7 @@ def _scenarios(path: Path) -> list[tuple[str, Path]]:
 
 
 def load(path: str | Path) -> Sequence:
-    """Load an OPV2V / V2XSet / V2V4Real release root, split folder, scenario folder or one file."""
+    """Load an OPV2V / V2XSet / V2V4Real / V2X-Real release root, split folder, scenario folder or one file."""
     path = Path(path)
     if path.is_file():
         agent = path.parent.name if _is_integer(path.parent.name) else "0"
@@ -141,19 +153,21 @@ def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict
     stamps = sorted(files[order[0]])
     records = {(k, cav): read_yaml(files[cav][stamp])
                for k, stamp in enumerate(stamps) for cav in order if stamp in files[cav]}
-    v2v4real = any(_has_ass_id(record) for record in records.values())
+    kind = _kind(records.values())
     objects, agents, seen, predicted, left_out, views = [], [], [], {}, set(), {}
     kept: dict[int, set[str]] = {}
     for (k, cav), record in records.items():
         source, frame = files[cav][stamps[k]], offset + k
-        pose = _pose(source, record, v2v4real)
+        if kind == "v2x_real":
+            v2x_real.check_infra(source, record, cav)
+        pose = _pose(source, record, kind != "opv2v")
         agents.append(_agent_row(frame, cav, pose))
-        reported = _reported_lidar_pose(source, record, pose, v2v4real)
+        reported = _reported_lidar_pose(source, record, pose, kind != "opv2v")
         if reported is not None:
             predicted[(frame, cav)] = reported
         view = views.setdefault((frame, cav), ([], []))
-        for block, track, row in _boxes(source, record, cav, pose, v2v4real):
-            if block != "vehicles":
+        for block, track, row in _boxes(source, record, cav, pose, kind):
+            if block != "vehicles" or row["category"] in STATIC:
                 left_out.add(row["category"])
             view[0].append(track)
             view[1].append([row[c] for c in ("x", "y", "z", "length", "width", "height", "yaw")])
@@ -161,19 +175,28 @@ def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict
             if track not in kept.setdefault(frame, set()):
                 kept[frame].add(track)
                 objects.append({"frame": frame, "track_id": track, **row})
-    return {"name": name, "stamps": stamps, "ego": order[0], "v2v4real": v2v4real, "objects": objects,
+    return {"name": name, "stamps": stamps, "ego": order[0], "kind": kind, "objects": objects,
             "agents": agents, "seen": seen, "predicted": predicted, "left_out": left_out,
+            "static": {(o["track_id"], o["category"]) for o in objects if o["category"] in STATIC},
             "views": {key: (np.array(ids, dtype=str), np.array(boxes, float).reshape(-1, 7))
                       for key, (ids, boxes) in views.items()},
-            "points": {(offset + k, cav): (files[cav][stamps[k]].with_suffix(".pcd"), not v2v4real)
+            "points": {(offset + k, cav): (files[cav][stamps[k]].with_suffix(".pcd"), kind == "opv2v")
                        for k, cav in records if files[cav][stamps[k]].with_suffix(".pcd").is_file()}}
+
+
+def _kind(records) -> str:
+    """``v2x_real`` (an ``infra`` or ``true_ego_pose`` key), ``v2v4real`` (``ass_id`` keys) or ``opv2v``."""
+    records = list(records)
+    if any(v2x_real.is_record(record) for record in records):
+        return "v2x_real"
+    return "v2v4real" if any(_has_ass_id(record) for record in records) else "opv2v"
 
 
 def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
     """The scenarios' rows as one sequence (frame ids prefixed by the scenario unless ``single``)."""
     starts = np.cumsum([0] + [len(p["stamps"]) for p in parts])
     frame_ids = [s if single else f"{p['name']}/{s}" for p in parts for s in p["stamps"]]
-    kind = "v2v4real" if any(p["v2v4real"] for p in parts) else "opv2v"
+    kind = next((k for k in ("v2x_real", "v2v4real") if any(p["kind"] == k for p in parts)), "opv2v")
     sequence = Sequence(
         name=f"{kind}/{name}",
         objects=_table([r for p in parts for r in p["objects"]], OBJECT_SCHEMA),
@@ -190,6 +213,11 @@ def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
     sequence.point_clouds = {key: source for p in parts for key, source in p["points"].items()}
     sequence.left_out_of_trials = frozenset().union(*(p["left_out"] for p in parts))
     sequence.agent_views = {key: view for p in parts for key, view in p["views"].items()}
+    static = [(p["name"], track, name) for p in parts for track, name in p["static"]]
+    if static:
+        note = v2x_real.left_out_note(len(static), {name for _, _, name in static})
+        sequence.warnings.append(note)
+        warnings.warn(note, UserWarning, stacklevel=3)
     return sequence
 
 
@@ -209,10 +237,25 @@ def _has_ass_id(record) -> bool:
 
 
 def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tuple[float, float, float, float]:
-    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose`` (or ``key``)."""
-    x, y, z, _roll, yaw, _pitch = numbers(path, field(path, record, key), key, 6)
-    yaw = math.radians(yaw)
+    """``x, y, z, yaw`` (radians, right-handed world) of a CAV's ``lidar_pose`` (or ``key``): six
+    numbers ``[x, y, z, roll, yaw, pitch]`` (degrees), or a 4x4 sensor-to-world matrix (V2V4Real)."""
+    value = field(path, record, key)
+    if isinstance(value, list) and value and all(isinstance(row, list) for row in value):
+        x, y, z, yaw = _matrix_pose(path, value, key)
+    else:
+        x, y, z, _roll, yaw, _pitch = numbers(path, value, key, 6)
+        yaw = math.radians(yaw)
     return (x, y, z, yaw) if right_handed else (x, -y, z, -yaw)
+
+
+def _matrix_pose(path: Path, value: list, key: str) -> tuple[float, float, float, float]:
+    """``x, y, z, yaw`` of a 4x4 rigid transform, or a ``LoaderError`` when it is not one."""
+    m = np.array(matrix(path, value, key, 4, 4))
+    rotation = m[:3, :3]
+    if not np.allclose(rotation @ rotation.T, np.eye(3), atol=RIGID_TOLERANCE) or np.linalg.det(rotation) < 0:
+        raise LoaderError(f"{path}: {key}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
+                          f"got {m.round(3).tolist()}")
+    return float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), math.atan2(m[1, 0], m[0, 0])
 
 
 def _reported_lidar_pose(path: Path, record, lidar: tuple[float, float, float, float],
@@ -240,7 +283,7 @@ def _agent_row(frame: int, cav: str, pose: tuple[float, float, float, float]) ->
             "length": length, "width": width, "height": height}
 
 
-def _boxes(path: Path, record, cav: str, pose, v2v4real: bool):
+def _boxes(path: Path, record, cav: str, pose, kind: str):
     """``(block, track_id, box row)`` for every actor in one CAV's file (``vehicles`` and any other actor
     block such as Adver-City's ``walkers``), in the right-handed world."""
     vehicles = field(path, record, "vehicles")
@@ -248,7 +291,7 @@ def _boxes(path: Path, record, cav: str, pose, v2v4real: bool):
         raise LoaderError(f"{path}: vehicles: expected a mapping of vehicle id -> annotation")
     for block in _actor_blocks(record):
         for actor_id, entry in (record[block] or {}).items():
-            yield (block, *_box(path, block, actor_id, entry, cav, pose, v2v4real))
+            yield (block, *_box(path, block, actor_id, entry, cav, pose, kind))
 
 
 def _actor_blocks(record: dict) -> list[str]:
@@ -258,7 +301,7 @@ def _actor_blocks(record: dict) -> list[str]:
     return ["vehicles", *sorted(others, key=str)]
 
 
-def _box(path: Path, block: str, actor_id, entry, cav: str, pose, v2v4real: bool) -> tuple[str, dict]:
+def _box(path: Path, block: str, actor_id, entry, cav: str, pose, kind: str) -> tuple[str, dict]:
     where = f"{block}[{actor_id}]"
     location = numbers(path, field(path, entry, "location", where), f"{where}.location", 3)
     center = (numbers(path, field(path, entry, "center", where), f"{where}.center", 3)
@@ -268,13 +311,13 @@ def _box(path: Path, block: str, actor_id, entry, cav: str, pose, v2v4real: bool
     if min(extent) <= 0:
         raise LoaderError(f"{path}: {where}.extent: expected positive half sizes, got {extent}")
     x, y, z = (a + b for a, b in zip(location, center))
-    if v2v4real:
+    if kind == "v2v4real":
         x, y, yaw = _to_world(pose, x, y, yaw)
         z += pose[2]
         ass_id = int(number(path, field(path, entry, "ass_id", where), f"{where}.ass_id"))
         track = f"a{ass_id}" if ass_id != -1 else f"{cav}/{actor_id}"
     else:
-        y, yaw = -y, -yaw
+        y, yaw = (y, yaw) if kind == "v2x_real" else (-y, -yaw)
         track = str(actor_id)
     return track, {"category": category(entry, block), "x": x, "y": y, "z": z,
                    "length": 2 * extent[0], "width": 2 * extent[1], "height": 2 * extent[2],

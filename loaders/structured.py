@@ -9,13 +9,16 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import Any, BinaryIO, NoReturn
 
+import numpy as np
 import yaml
 
 from .errors import READ_ERRORS, LoaderError, nonempty_file
 
 
 class _Loader(yaml.SafeLoader):
-    """YAML 1.1 safe loader that also reads ``1e-5`` (no dot) as a float, as OpenCOOD's does."""
+    """YAML 1.1 safe loader that also reads ``1e-5`` (no dot) as a float, as OpenCOOD's does, and the
+    tags ``yaml.dump`` writes for numpy numbers and arrays (V2V4Real's files) as plain numbers and
+    nested lists; no other Python tag is read."""
 
 
 _Loader.add_implicit_resolver(
@@ -27,6 +30,64 @@ _Loader.add_implicit_resolver(
                    |\.(?:nan|NaN|NAN))$""", re.X),
     list("-+0123456789."),
 )
+
+
+NUMPY_MODULES = ("numpy.core.multiarray", "numpy._core.multiarray")
+"""Where numpy's ``scalar`` and ``_reconstruct`` live (numpy 1 / numpy 2), as the tags name them."""
+NUMBER_KINDS = "biuf"
+"""dtype kinds read from numpy tags: booleans, integers, floats (never objects, which pickle)."""
+
+
+def _refuse(node: yaml.Node, what: str) -> yaml.constructor.ConstructorError:
+    return yaml.constructor.ConstructorError(None, None, f"{node.tag}: {what}", node.start_mark)
+
+
+def _apply_parts(loader: _Loader, node: yaml.Node) -> tuple[list, list]:
+    """``(args, state)`` of a ``!!python/object/apply`` node (a sequence of args, or a mapping)."""
+    if isinstance(node, yaml.SequenceNode):
+        return loader.construct_sequence(node, deep=True), []
+    if isinstance(node, yaml.MappingNode):
+        parts = loader.construct_mapping(node, deep=True)
+        return list(parts.get("args") or []), list(parts.get("state") or [])
+    raise _refuse(node, "expected arguments")
+
+
+def _numpy_apply(loader: _Loader, suffix: str, node: yaml.Node):
+    """A numpy dtype, number (a Python int / float / bool) or array (nested lists) from the tag
+    ``!!python/object/apply:<suffix>``; any other callable is refused."""
+    module, _, name = suffix.rpartition(".")
+    if suffix != "numpy.dtype" and (module not in NUMPY_MODULES or name not in ("scalar", "_reconstruct")):
+        raise _refuse(node, "not read (only numpy numbers and arrays are)")
+    args, state = _apply_parts(loader, node)
+    try:
+        if suffix == "numpy.dtype":
+            return _dtype(args, state)
+        if name == "scalar":
+            dtype, raw = args
+            return np.frombuffer(raw, dtype, count=1)[0].item()
+        _version, shape, dtype, fortran, raw = state
+        return np.frombuffer(raw, dtype).reshape(shape, order="F" if fortran else "C").tolist()
+    except (TypeError, ValueError, IndexError) as exc:
+        raise _refuse(node, f"expected a numpy number or array as yaml.dump writes it ({exc})") from exc
+
+
+def _dtype(args: list, state: list) -> np.dtype:
+    dtype = np.dtype(args[0])
+    if dtype.kind not in NUMBER_KINDS:
+        raise ValueError(f"dtype {args[0]!r} is not a number type")
+    order = state[1] if len(state) > 1 else "="
+    return dtype.newbyteorder(order) if order in "<>" else dtype
+
+
+def _numpy_name(loader: _Loader, suffix: str, node: yaml.Node) -> str:
+    if suffix != "numpy.ndarray":
+        raise _refuse(node, "not read (only numpy.ndarray is)")
+    return suffix
+
+
+_Loader.add_multi_constructor("tag:yaml.org,2002:python/object/apply:", _numpy_apply)
+_Loader.add_multi_constructor("tag:yaml.org,2002:python/name:", _numpy_name)
+_Loader.add_constructor("tag:yaml.org,2002:python/tuple", lambda loader, node: loader.construct_sequence(node))
 
 
 def read_yaml(path: Path):

@@ -1,6 +1,7 @@
 """The Scenario tab: protocol, localization error, detection noise, co-visibility, clutter (missed
-detections, false boxes), seed. A slider the protocol does not read is disabled, a localization the
-dataset cannot give is not offered, and the tab's note says why."""
+detections, false boxes), a detector's score threshold, seed. A slider the protocol does not read
+(or the dataset gives nothing to) is disabled, a localization the dataset cannot give is not
+offered, and the tab's note says why."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -32,6 +33,8 @@ SLIDERS = {
                   "would make, 0 to 1 (each agent draws its own misses)"),
     "false_rate": (SCENARIO_WORDS["false_rate"], 0.0, 2.0, 0.05, "false boxes added to each agent's detections, "
                    "per real detection (0.3: 3 false boxes for 10 real ones); they match no object"),
+    "min_score": (SCENARIO_WORDS["min_score"], 0.0, 1.0, 0.05, "a detector's boxes (--detections) "
+                        "scored below this are dropped; 0 keeps all"),
 }
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}
 """The protocols under which a slider acts (the others act under every protocol); opv2v reads the
@@ -66,7 +69,7 @@ class ScenarioControls:
         """Disable the sliders the scenario does not read, with the reason in their hint and the note."""
         reasons: dict[str, list[str]] = {}
         for name, slider in self.sliders.items():
-            why = unread_reason(settings, name)
+            why = unread_reason(settings, name) or (self.offers.scores if name == "min_score" else None)
             assign(slider, disabled=why is not None,
                    hint=SLIDERS[name][4] if why is None else f"Disabled: {why}. {SLIDERS[name][4]}")
             if why is not None:

@@ -110,6 +110,7 @@ SCENARIO_WORDS = {
     "sensor_range": "sensor range (m)",
     "miss_rate": "missed detections (share)",
     "false_rate": "false boxes (per detection)",
+    "min_score": "detector score at least",
     "seed": "seed",
 }
 """Every scenario field's label (words and unit), as the Scenario tab shows it."""

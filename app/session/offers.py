@@ -22,6 +22,8 @@ class Offers:
     """Why the View tab's LiDAR points are unavailable."""
     reported_poses: str | None = None
     """Why localization ``dataset`` is unavailable."""
+    scores: str | None = None
+    """Why the Scenario tab's score threshold has nothing to drop (no detector's boxes with scores)."""
 
     def pose_graph(self, cavs: int) -> str | None:
         """Why a method that takes the other CAVs (the pose graph) cannot run with ``cavs`` CAVs."""
@@ -44,4 +46,7 @@ def offers_of(sequence: Sequence) -> Offers:
                                                 "sweeps do)"
     poses = None if sequence.predicted_poses else "this dataset reports no CAV poses of its own (OPV2V's " \
                                                   "predicted_ego_pos)"
-    return Offers(points, poses)
+    scored = any(boxes.scores is not None for agents in sequence.detections.values() for boxes in agents.values())
+    scores = None if scored else "no detector's boxes with scores here (--detections with a stage1_boxes.json " \
+                                 "that has pred_score_np_list)"
+    return Offers(points, poses, scores)

@@ -1,5 +1,6 @@
 """evaluate.py end to end: the files it writes, byte-identical tables, one-line errors with exit status 2."""
 import importlib.util
+import json
 import subprocess
 import sys
 from pathlib import Path
@@ -98,6 +99,9 @@ def test_the_range_protocol_on_the_shipped_scene_names_its_agents(tmp_path):
     (["--workers", "0"], "--workers must be at least 1"),
     (["--dataset", "synthetic:40", "synthetic:40:seed=1", "--detections", "stage1_boxes.json"],
      "give exactly one --dataset"),
+    (["--score-threshold", "1.5", "--detections", "stage1_boxes.json"],
+     "--score-threshold must be a number from 0 to 1, got 1.5"),
+    (["--score-threshold", "0.5"], "--score-threshold drops a detector's boxes by score: give --detections too"),
 ])
 def test_bad_input_is_one_line_on_stderr_and_exit_status_2(args, message, capsys, tmp_path):
     with pytest.raises(SystemExit) as stop:
@@ -161,3 +165,20 @@ def test_a_detectors_boxes_replace_the_simulated_ones(tmp_path):
     runs = [pl.read_csv(folder / "trials.csv") for folder in (simulated, detected)]
     assert len(runs[0]) == len(runs[1]) == 1
     assert runs[0].drop("dataset").row(0) != runs[1].drop("dataset").row(0)
+
+
+def test_the_score_threshold_drops_a_detectors_low_scored_boxes(tmp_path):
+    fixtures = REPO / "tests" / "loaders" / "fixtures"
+    samples = json.loads((fixtures / "stage1" / "stage1_boxes.json").read_text())
+    samples["13"]["pred_score_np_list"] = [[0.9, 0.3], [0.6, 0.2]]
+    scored = tmp_path / "stage1_boxes.json"
+    scored.write_text(json.dumps(samples))
+    common = ["--dataset", str(fixtures / "opv2v" / "scenario"), "--protocol", "opv2v", "--frames", "0:1",
+              "--methods", "cbm", "--no-timing", "--detections", str(scored)]
+    runs = []
+    for threshold in ("0", "0.5"):
+        assert evaluate_cli.main([*common, "--score-threshold", threshold, "--out", str(tmp_path / threshold)]) == 0
+        runs.append(pl.read_csv(tmp_path / threshold / "trials.csv"))
+    assert runs[0]["min_score"].to_list() == [0.0] and runs[1]["min_score"].to_list() == [0.5]
+    counts = [(run["n_ego"].item(), run["n_cav"].item()) for run in runs]
+    assert counts[1][0] == counts[0][0] - 1 == 1 and counts[1][1] <= counts[0][1]    # the ego's 0.3 box dropped

@@ -150,3 +150,57 @@ def test_a_file_with_a_byte_order_mark_is_read_as_json_loads_reads_it(tmp_path, 
     path = tmp_path / "stage1_boxes.json"
     path.write_bytes(b"\xef\xbb\xbf" + (fixtures / STAGE1).read_bytes())
     assert list(loaders.open(fixtures / SCENARIO, detections=path).detections) == [0]
+
+
+SCORES = [[0.9, 0.3], [0.6, 0.2]]
+"""pred_score_np_list for sample 13 (agents 641 and 650, two boxes each), as CoAlign saves it."""
+
+
+def _with_scores(samples):
+    samples["13"]["pred_score_np_list"] = SCORES
+
+
+def test_scores_are_read_and_the_threshold_drops_boxes_below_it(tmp_path, fixtures):
+    sequence = loaders.open(fixtures / SCENARIO, detections=_rewritten(tmp_path, fixtures, _with_scores))
+    ego = sequence[0].detections["641"]
+    np.testing.assert_allclose(ego.scores, SCORES[0])
+    assert len(ego.above(0.5).boxes) == 1 and ego.above(0.0) is ego
+    np.testing.assert_allclose(ego.above(0.5).boxes, ego.boxes[:1])
+    counts = []
+    for threshold in (0.0, 0.5, 0.95):
+        trial = build_trial(sequence[0], ScenarioParams(protocol="opv2v", min_score=threshold), seed=0,
+                            cav="650")
+        counts.append((len(trial.ego_boxes), len(trial.cav_boxes)))
+    assert counts == [(2, 2), (1, 1), (0, 0)]
+
+
+def test_without_scores_the_threshold_keeps_every_box(detected):
+    assert detected[0].detections["641"].scores is None
+    trial = build_trial(detected[0], ScenarioParams(protocol="opv2v", min_score=0.9), seed=0, cav="650")
+    assert (len(trial.ego_boxes), len(trial.cav_boxes)) == (2, 2)
+
+
+def test_a_file_written_without_uncertainty_loads(tmp_path, fixtures):
+    def drop(samples):
+        for sample in samples.values():
+            if sample:
+                sample.pop("uncertainty_np_list")
+    path = _rewritten(tmp_path, fixtures, drop)
+    assert "uncertainty_np_list" not in path.read_text()
+    ego = loaders.open(fixtures / SCENARIO, detections=path)[0].detections["641"]
+    assert ego.boxes.shape == (2, 7) and ego.uncertainty.shape == (2, 0)
+
+
+@pytest.mark.parametrize("scores, message", [([[0.9], [0.6, 0.2]], r"expected 2 scores \(one per box\), got 1"),
+                                             ([[0.9, "high"], [0.6, 0.2]], r"expected nested lists of numbers"),
+                                             ([[0.9, 0.3]], r"expected one entry per agent of cav_id_list")])
+def test_bad_scores_name_the_sample_and_field(tmp_path, fixtures, scores, message):
+    path = _rewritten(tmp_path, fixtures, lambda d: d["13"].__setitem__("pred_score_np_list", scores))
+    with pytest.raises(loaders.LoaderError, match=r"13.pred_score_np_list(\[\d\])?: " + message):
+        loaders.open(fixtures / SCENARIO, detections=path)
+
+
+@pytest.mark.parametrize("threshold", [-0.1, 1.5, float("nan")])
+def test_min_score_outside_0_1_is_refused(threshold):
+    with pytest.raises(ValueError, match="min_score"):
+        ScenarioParams(min_score=threshold)

@@ -20,20 +20,25 @@ from cbm import se2
 from evaluation.scenario import ScenarioParams
 from evaluation.trials import build_trial
 from loaders.opv2v import category
-from support import releases
+from support import releases, releases_v2i
 
 WRITERS = {
     "opv2v": lambda root: releases.opv2v_root(root / "OPV2V"),
     "v2xset": lambda root: releases.v2xset_scenario(root / "2021_08_20_21_48_35"),
     "adver_city": lambda root: releases.adver_city_run(root / "data_dumping"),
     "v2v4real": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0"),
+    "v2v4real_matrix": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0",
+                                                               pose="matrix"),
+    "v2v4real_numpy": lambda root: releases.v2v4real_scenario(root / "testoutput_CAV_data_2022-03-15-09-54-40_0",
+                                                              pose="numpy"),
+    "v2x_real": lambda root: releases.v2x_real_root(root / "v2xreal"),
     "dair_v2x_c": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure"),
     "dair_v2x_c_subset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                             world_calib=False),
     "dair_v2x_c_no_offset": lambda root: releases.dair_release(root / "cooperative-vehicle-infrastructure",
                                                                offset=""),
-    "v2x_seq_spd": lambda root: releases.spd_release(root / "V2X-Seq-SPD"),
-    "tumtraf_v2x": lambda root: releases.tumtraf_release(root / "tumtraf_v2x_cooperative_perception_dataset"),
+    "v2x_seq_spd": lambda root: releases_v2i.spd_release(root / "V2X-Seq-SPD"),
+    "tumtraf_v2x": lambda root: releases_v2i.tumtraf_release(root / "tumtraf_v2x_cooperative_perception_dataset"),
     "sind_without_lfs": lambda root: releases.sind_without_lfs(root / "Xian_412_m1"),
     "v2x_sim": lambda root: releases.v2x_sim_root(root / "V2X-Sim-2.0-mini"),
     "argoverse2": lambda root: shutil.copytree(releases.FIXTURES / "argoverse2", root / "logs"),
@@ -42,7 +47,9 @@ WRITERS = {
 }
 EXPECTED = {  # release -> (frames, agents of the first frame)
     "opv2v": (4, ["641", "650"]), "v2xset": (2, ["641", "650", "-1"]), "adver_city": (1, ["641", "650", "-1", "-2"]),
-    "v2v4real": (1, ["0", "1"]), "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
+    "v2v4real": (1, ["0", "1"]), "v2v4real_matrix": (1, ["0", "1"]), "v2v4real_numpy": (1, ["0", "1"]),
+    "v2x_real": (2, ["1", "2", "-1"]),
+    "dair_v2x_c": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_subset": (3, ["vehicle", "infrastructure"]),
     "dair_v2x_c_no_offset": (3, ["vehicle", "infrastructure"]),
     "v2x_seq_spd": (3, ["vehicle", "infrastructure"]),
@@ -65,7 +72,7 @@ def corpus(tmp_path_factory) -> dict:
 
 def opened(release: str, path):
     """The release opened; those that say what they skipped or used instead warn once."""
-    if release in ("sind_without_lfs", "dair_v2x_c_subset"):
+    if release in ("sind_without_lfs", "dair_v2x_c_subset", "v2x_real"):
         with pytest.warns(UserWarning):
             return loaders.open(path)
     return loaders.open(path)
@@ -187,7 +194,7 @@ def _shift_infrastructure_label(root, object_id: int, metres: float) -> None:
     """Move one infrastructure label of the first frame ``metres`` along its LiDAR's x, beyond any derived match."""
     path = root / "infrastructure-side" / "label" / "virtuallidar" / "000000.json"
     labels = json.loads(path.read_text())
-    label = next(label for label in labels if label["track_id"] == releases.spd_track("-1", object_id))
+    label = next(label for label in labels if label["track_id"] == releases_v2i.spd_track("-1", object_id))
     label["3d_location"]["x"] += metres
     releases.write_json(path, labels)
 
@@ -201,7 +208,7 @@ def test_spd_cooperative_label_gives_the_association_and_the_ids_persist(corpus,
     assert sequence.name.startswith("v2x-seq-spd") and sequence.scenarios == {"0000": 0}
     np.testing.assert_allclose(sequence.timestamps, [0.0, 0.1, 0.2], atol=1e-9)
     first, last = sequence[0], sequence[-1]
-    track = {i: releases.spd_track("cooperative", i) for i in (702, 703, 705, 706, 707)}
+    track = {i: releases_v2i.spd_track("cooperative", i) for i in (702, 703, 705, 706, 707)}
     assert set(first.track_ids) == set(last.track_ids) and track[705] not in set(first.track_ids)
     seen = first.visibility
     assert track[702] not in seen["vehicle"] and track[702] in seen["infrastructure"]
@@ -222,10 +229,10 @@ def test_spd_pair_without_cooperative_label_is_associated_by_distance_and_said(c
     with pytest.warns(UserWarning, match=r"1 of 3 pair\(s\) have no cooperative label.*vehicle frames 000009"):
         sequence = loaders.open(root)
     seen = sequence[0].visibility
-    vehicle_707, infra_707 = (f"v{releases.spd_track('641', 707)}", f"i{releases.spd_track('-1', 707)}")
+    vehicle_707, infra_707 = (f"v{releases_v2i.spd_track('641', 707)}", f"i{releases_v2i.spd_track('-1', 707)}")
     assert vehicle_707 in seen["vehicle"] and infra_707 in seen["infrastructure"]      # beyond 2 m: not matched
-    assert f"v{releases.spd_track('641', 700)}" in seen["infrastructure"]               # within 2 m: matched
-    assert len(sequence.warnings) == 1 and releases.spd_track("cooperative", 700) in set(sequence[1].track_ids)
+    assert f"v{releases_v2i.spd_track('641', 700)}" in seen["infrastructure"]               # within 2 m: matched
+    assert len(sequence.warnings) == 1 and releases_v2i.spd_track("cooperative", 700) in set(sequence[1].track_ids)
 
 
 def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path):
@@ -240,7 +247,7 @@ def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path
 
 def test_tumtraf_vehicle_pose_boxes_and_sensor_id_visibility(corpus):
     root = corpus["tumtraf_v2x"]
-    registered = root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED
+    registered = root / "train" / "labels_point_clouds" / releases_v2i.TUMTRAF_REGISTERED
     for opened_at in (root, root / "train", registered):
         sequence = loaders.open(opened_at)
         assert len(sequence) == 3 and sequence.scenarios == {"train": 0} and sequence.warnings == []
@@ -249,7 +256,7 @@ def test_tumtraf_vehicle_pose_boxes_and_sensor_id_visibility(corpus):
     truth = se2.inverse(releases.lidar_pose("-1")) @ releases.lidar_pose("641")
     np.testing.assert_allclose(frame.agent_pose("vehicle"), truth, atol=1e-9)
     np.testing.assert_allclose(frame.agent_pose("infrastructure"), np.eye(3), atol=1e-12)
-    uuid = {i: releases.tumtraf_uuid(i) for i in (700, 702, 703, 704, 705)}
+    uuid = {i: releases_v2i.tumtraf_uuid(i) for i in (700, 702, 703, 704, 705)}
     box = frame.boxes()[list(frame.track_ids).index(uuid[704])]
     world = se2.apply_points(releases.lidar_pose("-1"), [box[:2]])[0]
     np.testing.assert_allclose(world, [3.5, -20.0], atol=1e-9)
@@ -263,7 +270,7 @@ def test_tumtraf_vehicle_pose_boxes_and_sensor_id_visibility(corpus):
 
 def test_tumtraf_without_sensor_id_has_no_visibility_and_says_so(corpus, tmp_path):
     root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
-    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[1]
+    path = sorted((root / "train" / "labels_point_clouds" / releases_v2i.TUMTRAF_REGISTERED).glob("*.json"))[1]
     record = json.loads(path.read_text())
     item = next(iter(record["openlabel"]["frames"]["1"]["objects"].values()))
     item["object_data"]["cuboid"]["attributes"]["text"] = []
@@ -275,7 +282,7 @@ def test_tumtraf_without_sensor_id_has_no_visibility_and_says_so(corpus, tmp_pat
 
 def test_tumtraf_frame_without_the_vehicle_transform_names_the_key(corpus, tmp_path):
     root = shutil.copytree(corpus["tumtraf_v2x"], tmp_path / "tumtraf")
-    path = sorted((root / "train" / "labels_point_clouds" / releases.TUMTRAF_REGISTERED).glob("*.json"))[0]
+    path = sorted((root / "train" / "labels_point_clouds" / releases_v2i.TUMTRAF_REGISTERED).glob("*.json"))[0]
     record = json.loads(path.read_text())
     record["openlabel"]["frames"]["0"]["frame_properties"]["transforms"] = {}
     path.write_text(json.dumps(record))
@@ -339,3 +346,67 @@ def test_unknown_actor_classes_keep_their_name():
     assert category({"class": "Scooter "}, "vehicles") == "Scooter"
     assert category({"obj_type": "Pedestrian"}, "vehicles") == "pedestrian"
     assert category({}, "walkers") == "pedestrian" and category({}, "cyclists") == "cyclists"
+
+
+def test_v2v4real_pose_matrix_and_numpy_tags_give_the_same_scene(corpus):
+    plain = loaders.open(corpus["v2v4real"])[0]
+    assert "!!python/object/apply:numpy" in (corpus["v2v4real_numpy"] / "0" / "000000.yaml").read_text()
+    for release in ("v2v4real_matrix", "v2v4real_numpy"):
+        frame = loaders.open(corpus[release])[0]
+        assert list(frame.track_ids) == list(plain.track_ids)
+        np.testing.assert_allclose(frame.boxes(), plain.boxes(), atol=1e-9)
+        for agent in ("0", "1"):
+            np.testing.assert_allclose(frame.agent_pose(agent), plain.agent_pose(agent), atol=1e-9)
+    np.testing.assert_allclose(plain.agent_pose("1"), releases.lidar_pose("650"), atol=1e-9)
+
+
+@pytest.mark.parametrize("pose, message", [
+    ([[1.0, 0.0, 0.0, 0.0]] * 4, r"lidar_pose: expected a rigid 4x4 transform"),
+    ([[1.0, 0.0, 0.0]] * 4, r"lidar_pose\[0\]: expected 4 numbers"),
+    ([[1.0, 0.0, 0.0, 0.0]] * 3, r"lidar_pose: expected 4 rows of 4 numbers"),
+])
+def test_v2v4real_bad_pose_matrix_is_named(corpus, tmp_path, pose, message):
+    root = shutil.copytree(corpus["v2v4real_matrix"], tmp_path / "scenario")
+    record = releases.yaml.safe_load((root / "1" / "000000.yaml").read_text())
+    releases.dump_yaml(root / "1" / "000000.yaml", {**record, "lidar_pose": pose})
+    with pytest.raises(loaders.LoaderError, match=r"1/000000.yaml: " + message):
+        loaders.open(root)
+
+
+def test_python_tags_other_than_numpy_values_are_refused(corpus, tmp_path):
+    root = shutil.copytree(corpus["v2v4real_numpy"], tmp_path / "scenario")
+    path = root / "0" / "000000.yaml"
+    path.write_text(path.read_text().replace("numpy._core.multiarray._reconstruct", "os.system", 1)
+                    .replace("numpy.core.multiarray._reconstruct", "os.system", 1))
+    with pytest.raises(loaders.LoaderError, match=r"0/000000.yaml: not valid YAML \(.*apply:os.system: not read "
+                                                  r"\(only numpy numbers and arrays are\)\)"):
+        loaders.open(root)
+
+
+def test_v2x_real_categories_infrastructure_and_static_props(corpus):
+    with pytest.warns(UserWarning, match=r"1 static object\(s\) \(trash_can\) are not road users: left out of trials"):
+        sequence = loaders.open(corpus["v2x_real"])
+    assert sequence.name == "v2x_real/v2xreal" and len(sequence.warnings) == 1 and sequence.ego == "1"
+    frame = sequence[0]
+    categories = dict(zip(frame.track_ids, frame.categories))
+    assert (categories["700"], categories["702"], categories["704"]) == ("car", "van", "truck")
+    assert (categories["1300"], categories["1401"], categories["1400"]) == ("pedestrian", "bicycle", "trash_can")
+    box = frame.boxes()[list(frame.track_ids).index("707")]          # right-handed: nothing mirrored
+    np.testing.assert_allclose(box[[0, 1, 3, 6]], [16.0, -12.0, 4.6, 1.2], atol=1e-9)
+    np.testing.assert_allclose(frame.agent_pose("-1"), releases.lidar_pose("-1"), atol=1e-9)
+    infra = frame.agents.filter(frame.agents["agent_id"] == "-1")
+    assert (infra["length"][0], infra["height"][0]) == (0.6, 5.0)        # a pole, as V2XSet's roadside units
+    trial = build_trial(frame, ScenarioParams(protocol="opv2v"), seed=0, cav="2")
+    ids = set(map(str, np.concatenate([trial.ego_ids, trial.cav_ids])))
+    assert "1400" not in ids and "1401" in ids
+
+
+@pytest.mark.parametrize("flag, message", [(True, r"infra: expected false in agent folder '2' \(negative ids are "
+                                                  r"infrastructure\), got true"),
+                                           ("yes please", r"infra: expected true or false, got 'yes please'")])
+def test_v2x_real_infra_flag_must_agree_with_the_folder(corpus, tmp_path, flag, message):
+    root = shutil.copytree(corpus["v2x_real"], tmp_path / "v2xreal")
+    path = root / "train" / "2023-03-17-15-53-02_1_0" / "2" / "000001.yaml"
+    releases.dump_yaml(path, {**releases.yaml.safe_load(path.read_text()), "infra": flag})
+    with pytest.raises(loaders.LoaderError, match=r"2/000001.yaml: " + message):
+        loaders.open(root)
