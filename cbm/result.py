@@ -43,7 +43,8 @@ class MatchResult:
     init: np.ndarray
     """(3, 3) the CAV->ego transform CBM started from."""
     estimated: bool
-    """False when fewer than 2 pairs were matched: no pose estimate was made."""
+    """False when no pose estimate was made: too few pairs (two centres; one box's corners for a
+    method that fits corners, V2X-Reg++)."""
     anchor: tuple[int, int] | None
     """The winning anchor pair (ego index, CAV index), or None when no anchor had a set."""
     candidate_count: int
