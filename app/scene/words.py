@@ -76,6 +76,8 @@ WORDS = {
                                  "every anchor agree within this."),
     ("freealign", "min_anchors"): ("fewest anchors", "A match needs at least this many anchors, and more pairs "
                                    "than this in all."),
+    ("freealign", "max_boxes"): ("boxes per agent", "Only each agent's nearest boxes take part: the search "
+                                 "compares every pair of boxes with every other, so its time grows fast."),
 }
 """Every method parameter's label (words and unit) and hint: no control shows a field's raw name."""
 

@@ -42,10 +42,15 @@ class FreeAlignParams:
     this and its edges to every anchor by less than this."""
     min_anchors: int = 3
     """A seed needs at least this many anchors; the best subgraph must be larger than this."""
+    max_boxes: int = 100
+    """Each agent's nearest boxes matched (ours: the search compares every pair of boxes with every
+    other, n^4 work: 1 s at 100 boxes per agent, 10-20 s at 200; the public code matches one
+    detector's output, tens of boxes)."""
 
     def __post_init__(self) -> None:
         check_positive(self, "anchor_error", "box_error")
         check_count(self, "min_anchors", 2)
+        check_count(self, "max_boxes", 3)
 
 
 def match_freealign(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
@@ -63,16 +68,24 @@ def match_freealign(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarr
        ``box_error`` one by one; each joins when its edges to every anchor agree within ``box_error``.
     3. Score (100 + summed growth residuals) / size^2; the best over all seeds, larger than ``min_anchors``.
     4. Pose: least-squares SE(2) fit of the matched centres (``init`` when nothing matched).
+    Only each agent's ``max_boxes`` nearest boxes take part.
     """
     params = check_params(params, FreeAlignParams)
     ego_boxes, cav_boxes = checked_boxes("ego_boxes", ego_boxes), checked_boxes("cav_boxes", cav_boxes)
     init = checked_transform("init", init)
     t0 = perf_counter()
-    pairs = common_subgraph(ego_boxes[:, :2], cav_boxes[:, :2], params)
+    ego_kept, cav_kept = nearest(ego_boxes, params.max_boxes), nearest(cav_boxes, params.max_boxes)
+    pairs = common_subgraph(ego_boxes[ego_kept, :2], cav_boxes[cav_kept, :2], params)
+    pairs = np.column_stack([ego_kept[pairs[:, 0]], cav_kept[pairs[:, 1]]])
     t1 = perf_counter()
     T = weighted_procrustes(cav_boxes[pairs[:, 1], :2], ego_boxes[pairs[:, 0], :2]) if len(pairs) >= 2 else init
     t2 = perf_counter()
     return make_result(ego_boxes, cav_boxes, pairs, T, init, {"subgraph": t1 - t0, "fit": t2 - t1, "total": t2 - t0})
+
+
+def nearest(boxes: np.ndarray, count: int) -> np.ndarray:
+    """Indices of the ``count`` boxes nearest their agent (its origin), nearest first."""
+    return np.argsort(np.hypot(boxes[:, 0], boxes[:, 1]), kind="stable")[:count]
 
 
 def common_subgraph(ego_xy: np.ndarray, cav_xy: np.ndarray, params: FreeAlignParams) -> np.ndarray:
@@ -150,29 +163,34 @@ def _entries(D, positions):
 
 @numba.njit(cache=True, nogil=True)
 def _seed_match(g1, g2, i, j, anchor_error, box_error, min_anchors):
-    """Steps 1-2 for the seed (i, j): the matched pairs and their score (``START_ERROR`` when too few anchors)."""
+    """Steps 1-2 for the seed (i, j): the matched pairs and their score (``START_ERROR`` when too few anchors).
+
+    Growth visits the entries below ``box_error`` smallest first, as the public code's repeated
+    minimum does: an entry of a box already paired is never the minimum, a rejected one uses up one
+    of the ``min(n1, n2) - anchors`` visits."""
     D = np.abs(g1[i][:, None] - g2[j][None, :])
     anchors = _anchors(D, g1, g2, anchor_error)
     if len(anchors) < min_anchors:
         return anchors, START_ERROR
     n1, n2 = D.shape
+    used_a, used_b = np.zeros(n1, dtype=np.bool_), np.zeros(n2, dtype=np.bool_)
     for k in range(len(anchors)):
-        D[anchors[k, 0], :] = np.inf
-        D[:, anchors[k, 1]] = np.inf
+        used_a[anchors[k, 0]], used_b[anchors[k, 1]] = True, True
+    entries = np.argwhere(D < box_error)
+    entries = entries[np.argsort(_entries(D, entries), kind="mergesort")]
     grown = np.empty((min(n1, n2), 2), dtype=np.int64)
     grown[:len(anchors)] = anchors
-    count, error = len(anchors), START_ERROR
-    for _ in range(min(n1, n2) - len(anchors)):
-        flat = np.argmin(D)
-        a, b = flat // n2, flat % n2
-        if not D[a, b] < box_error:
+    count, error, visits = len(anchors), START_ERROR, min(n1, n2) - len(anchors)
+    for k in range(len(entries)):
+        if visits == 0:
             break
+        a, b = entries[k, 0], entries[k, 1]
+        if used_a[a] or used_b[b]:
+            continue
+        visits -= 1
         if _agrees(g1, g2, anchors, len(anchors), a, b, box_error):
             grown[count, 0], grown[count, 1] = a, b
             count += 1
             error += D[a, b]
-            D[a, :] = np.inf
-            D[:, b] = np.inf
-        else:
-            D[a, b] = np.inf
+            used_a[a], used_b[b] = True, True
     return grown[:count].copy(), error / count ** 2
