@@ -216,16 +216,17 @@ def check_out_folder(out: Path) -> None:
 
 
 def write_check(rows: list[FrameCheck], thresholds: Thresholds, out: Path) -> str:
-    """Write the table, the plot and the flagged frames into ``out`` (each through a temporary file);
-    return the flagged frames' markdown."""
-    from .outputs import write_atomic
+    """Write the table, the plot and the flagged frames into ``out``, all three or none
+    (``evaluation.outputs.write_together``); return the flagged frames' markdown."""
+    from .outputs import write_together
     from .plots import plt
 
-    out.mkdir(parents=True, exist_ok=True)
     text = flagged_markdown(rows, thresholds)
-    write_atomic(out / "calibration_check.csv", lambda tmp: write_table(rows, tmp))
-    write_atomic(out / "calibration_flagged.md", lambda tmp: tmp.write_text(text))
     figure = plot(rows, thresholds)
-    write_atomic(out / "calibration_check.png", lambda tmp: figure.savefig(tmp, dpi=110, format="png"))
-    plt.close(figure)
+    try:
+        write_together(out, {"calibration_check.csv": lambda tmp: write_table(rows, tmp),
+                             "calibration_flagged.md": lambda tmp: tmp.write_text(text),
+                             "calibration_check.png": lambda tmp: figure.savefig(tmp, dpi=110, format="png")})
+    finally:
+        plt.close(figure)
     return text

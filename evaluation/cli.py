@@ -332,7 +332,11 @@ def check_calibration(parser: Parser, args: argparse.Namespace) -> int:
             rows += calibration_check.check_sequence(sequence, parse_frames(args.frames, len(sequence)), thresholds)
     except ValueError as error:
         parser.error(str(error))
-    print(calibration_check.write_check(rows, thresholds, args.out), end="")
+    try:
+        flagged = calibration_check.write_check(rows, thresholds, args.out)
+    except OutError as error:
+        parser.error(f"--out: {error}")
+    print(flagged, end="")
     print(f"wrote calibration_check.csv, calibration_check.png and calibration_flagged.md to {args.out}",
           file=sys.stderr)
     return 0
@@ -353,7 +357,7 @@ def exit_now(code: int) -> NoReturn:
 
 def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> int:
     """Check, run, write the files into a staging folder and swap it onto ``--out`` (``evaluation.outputs``);
-    1 when the files cannot be written (``--out`` keeps its earlier files)."""
+    2 when the files cannot be written (``--out`` keeps its earlier files)."""
     try:
         planned = prepare(args)
     except CliError as error:
@@ -373,7 +377,7 @@ def evaluate(parser: Parser, args: argparse.Namespace, signals: StopSignals) -> 
     except OSError as error:
         print(f"{parser.prog}: error: cannot write the run to {args.out} ({error.strerror or error}); "
               "its earlier files are untouched", file=sys.stderr)
-        return 1
+        return 2
     if signals.pending:
         name = signal.Signals(signals.pending).name
         print(f"{parser.prog}: stopped by {name} after the run was written to {args.out}", file=sys.stderr)

@@ -19,7 +19,7 @@ from loaders.errors import unreadable
 
 from . import run_files
 from .aggregates import METRIC_KEYS
-from .outputs import OutError, check_writable, write_atomic
+from .outputs import OutError, check_writable, write_together
 from .plots import plot_differences, plt
 
 PLOTTED = [key for key, _ in METRIC_KEYS[:5]]
@@ -161,11 +161,10 @@ def compare(run_a: Path, run_b: Path, out: Path | None = None) -> str:
     check_compare_out(out, given)
     fig = plot_differences(found, PLOTTED, LOWER_IS_BETTER, f"{run_b.name} minus {run_a.name}")
     try:
-        out.mkdir(parents=True, exist_ok=True)
-        write_atomic(out / "compare.md", lambda p: p.write_text(report))
-        write_atomic(out / "compare.png", lambda p: fig.savefig(p, format="png", dpi=120))
-    except OSError as error:
-        raise CompareError(f"cannot write the comparison into {out} ({error.strerror or error})") from None
+        write_together(out, {"compare.md": lambda p: p.write_text(report),
+                             "compare.png": lambda p: fig.savefig(p, format="png", dpi=120)})
+    except OutError as error:
+        raise CompareError(str(error)) from None
     finally:
         plt.close(fig)
     return report

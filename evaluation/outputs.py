@@ -48,6 +48,28 @@ def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
         raise
 
 
+def write_together(out: Path, files: dict[str, Callable[[Path], None]]) -> None:
+    """Write every file of ``files`` (name -> ``write(temporary path)``) into ``out``: all of them, or
+    none. Each is written beside its place first; only when all are complete are they moved into
+    place. On a failure (a full disk) the temporaries, and ``out`` itself when this call made it,
+    are removed, the files there before are untouched, and :class:`OutError` names ``out`` in one line."""
+    made = not out.exists()
+    temporaries = {name: out / f".{name}.{os.getpid()}.tmp" for name in files}
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for name, write in files.items():
+            write(temporaries[name])
+        for name, tmp in temporaries.items():
+            os.replace(tmp, out / name)
+    except OSError as error:
+        for tmp in temporaries.values():
+            tmp.unlink(missing_ok=True)
+        if made:
+            shutil.rmtree(out, ignore_errors=True)
+        raise OutError(f"cannot write into {out} ({error.strerror or error}); nothing was written, "
+                       "the files there before are untouched") from None
+
+
 def check_out(out: Path) -> None:
     """:class:`OutError` unless ``out`` can take a run: a new folder whose nearest existing parent
     is a writable folder, or an existing folder (empty or a previous run's) whose parent is

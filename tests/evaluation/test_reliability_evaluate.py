@@ -139,7 +139,7 @@ def test_a_failed_write_keeps_the_older_run_whole_and_leaves_no_staging_folder(o
         raise OSError(28, "No space left on device")
 
     monkeypatch.setattr(evaluation.outputs, "plot_success_curve", disk_full)
-    assert evaluation.cli.main([*QUICK, "--methods", "cbm", "--out", str(old_run)]) == 1
+    assert evaluation.cli.main([*QUICK, "--methods", "cbm", "--out", str(old_run)]) == 2
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "No space left on device" in err and "untouched" in err
     assert contents(old_run) == before and leftovers(old_run) == []
