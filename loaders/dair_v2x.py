@@ -57,7 +57,7 @@ from tqdm import tqdm
 
 from .errors import LfsPointer, LoaderError
 from .scene import Sequence
-from .structured import field, matrix, number, read_json
+from .structured import field, matrix, metres, number, read_json, rotation
 
 ASSOCIATION_RADIUS = 2.0
 FRAME_RATE = 10.0
@@ -258,12 +258,13 @@ def _frame_id(path: Path, pair, side: str, where: str) -> str:
 
 
 def _rigid(path: Path, calib, where: str = "") -> np.ndarray:
-    """4x4 transform from ``{rotation: 3x3, translation: 3x1}``."""
+    """4x4 transform from ``{rotation: 3x3, translation: 3x1}``: a rotation, and at most
+    ``structured.MAX_METRES`` of translation (``LoaderError`` naming the field otherwise)."""
     out = np.eye(4)
-    out[:3, :3] = matrix(path, _numeric(field(path, calib, "rotation", where)), f"{where}.rotation".lstrip("."), 3, 3)
-    translation = np.array(matrix(path, _numeric(field(path, calib, "translation", where)),
-                                  f"{where}.translation".lstrip("."), 3, 1))
-    out[:3, 3] = translation[:, 0]
+    out[:3, :3] = rotation(path, _numeric(field(path, calib, "rotation", where)), f"{where}.rotation".lstrip("."))
+    name = f"{where}.translation".lstrip(".")
+    translation = matrix(path, _numeric(field(path, calib, "translation", where)), name, 3, 1)
+    out[:3, 3] = [metres(path, row[0], f"{name}[{i}][0]") for i, row in enumerate(translation)]
     return out
 
 
@@ -278,8 +279,8 @@ def _vehicle_to_world(root: Path, frame_id: str) -> np.ndarray:
 def _infrastructure_to_world(root: Path, frame_id: str, info_file: Path, offset, where: str) -> np.ndarray:
     calib_file = root / "infrastructure-side" / "calib" / "virtuallidar_to_world" / f"{frame_id}.json"
     pose = _rigid(calib_file, _read(calib_file))
-    pose[0, 3] += _number(info_file, field(info_file, offset, "delta_x", where), f"{where}.delta_x")
-    pose[1, 3] += _number(info_file, field(info_file, offset, "delta_y", where), f"{where}.delta_y")
+    pose[0, 3] += metres(info_file, _numeric(field(info_file, offset, "delta_x", where)), f"{where}.delta_x")
+    pose[1, 3] += metres(info_file, _numeric(field(info_file, offset, "delta_y", where)), f"{where}.delta_y")
     return pose
 
 
@@ -316,9 +317,9 @@ def label_boxes(path: Path, labels: list, pose: np.ndarray) -> list[dict]:
         where = f"[{i}]"
         size = field(path, label, "3d_dimensions", where)
         location = field(path, label, "3d_location", where)
-        centre = np.array([_number(path, field(path, location, a, f"{where}.3d_location"), f"{where}.3d_location.{a}")
-                           for a in "xyz"] + [1.0])
-        length, width, height = (_number(path, field(path, size, a, f"{where}.3d_dimensions"),
+        centre = np.array([metres(path, _numeric(field(path, location, a, f"{where}.3d_location")),
+                                  f"{where}.3d_location.{a}") for a in "xyz"] + [1.0])
+        length, width, height = (metres(path, _numeric(field(path, size, a, f"{where}.3d_dimensions")),
                                         f"{where}.3d_dimensions.{a}")
                                  for a in "lwh")
         yaw = _number(path, field(path, label, "rotation", where), f"{where}.rotation")

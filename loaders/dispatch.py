@@ -8,6 +8,7 @@ from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, 
 from . import detections as detection_files
 from .errors import LoaderError, existing_path, unreadable
 from .scene import Sequence
+from .structured import MAX_METRES
 
 REPOSITORY_DATA = Path(__file__).resolve().parent / "data"
 SYNTHETIC_NAME = re.compile(r"^synthetic(?::(?P<count>\d+))?(?::seed=(?P<seed>-?\d+))?$")
@@ -47,9 +48,18 @@ def load(path_or_name: str | Path) -> Sequence:
             return argoverse2.load(existing_path(repository_data("argoverse2"), "shipped scene"))
     path = existing_path(path_or_name)
     try:
-        return _loader_for(path)(path)
+        return within_bounds(_loader_for(path)(path), path)
     except OSError as error:
         raise unreadable(error, path) from None
+
+
+def within_bounds(sequence: Sequence, path: Path) -> Sequence:
+    """``sequence``, or a ``LoaderError`` naming the first position or size beyond
+    ``structured.MAX_METRES`` (a number no scene has, which would overflow the trials later)."""
+    where = sequence.beyond(MAX_METRES)
+    if where is not None:
+        raise LoaderError(f"{path}: {where}; expected positions and sizes within {MAX_METRES:.0e} m")
+    return sequence
 
 
 def _synthetic(name: str, match: re.Match) -> Sequence:

@@ -63,7 +63,7 @@ from . import v2x_real
 from .categories import normalised
 from .errors import LoaderError
 from .scene import Sequence
-from .structured import field, matrix, number, numbers, read_yaml
+from .structured import field, is_rotation, matrix, number, numbers, read_yaml
 
 FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
@@ -79,8 +79,6 @@ CATEGORY_NAMES = {"walker": "pedestrian", "pedestrian": "pedestrian", "car": "ca
 STATIC = frozenset(v2x_real.STATIC_PROPS.values())
 """Categories of labelled street furniture: never road users, left out of trials."""
 SPLITS = ("train", "validate", "test")
-RIGID_TOLERANCE = 1e-3
-"""How far a 4x4 pose's rotation part may be from orthonormal (rounding in the files)."""
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
 
@@ -251,8 +249,7 @@ def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tu
 def _matrix_pose(path: Path, value: list, key: str) -> tuple[float, float, float, float]:
     """``x, y, z, yaw`` of a 4x4 rigid transform, or a ``LoaderError`` when it is not one."""
     m = np.array(matrix(path, value, key, 4, 4))
-    rotation = m[:3, :3]
-    if not np.allclose(rotation @ rotation.T, np.eye(3), atol=RIGID_TOLERANCE) or np.linalg.det(rotation) < 0:
+    if not is_rotation(m[:3, :3]):
         raise LoaderError(f"{path}: {key}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
                           f"got {m.round(3).tolist()}")
     return float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), math.atan2(m[1, 0], m[0, 0])

@@ -32,6 +32,8 @@ OBJECT_COLUMNS: dict[str, pl.DataType] = {
     "yaw": pl.Float64,
 }
 BOX_COLUMNS = ["x", "y", "z", "length", "width", "height", "yaw"]
+SIZED = ["x", "y", "z", "length", "width", "height"]
+"""The columns in metres, of objects and agents alike."""
 AGENT_COLUMNS: dict[str, pl.DataType] = {
     "agent_id": pl.Utf8,
     "x": pl.Float64,
@@ -172,6 +174,21 @@ class Sequence:
 
     def __len__(self) -> int:
         return len(self.frame_ids)
+
+    def beyond(self, limit: float) -> str | None:
+        """Where the first object or agent position or size larger than ``limit`` metres in size is
+        ("frame F, object T: x = V"), or None when every one is within it."""
+        tables = (("object", self.objects, "track_id", self._object_offsets),
+                  ("agent", self.agents, "agent_id", getattr(self, "_agent_offsets", None)))
+        for kind, table, key, offsets in tables:
+            if table is None or table.is_empty():
+                continue
+            rows, columns = np.nonzero(np.abs(table.select(SIZED).to_numpy()) > limit)
+            if len(rows):
+                row, name = int(rows[0]), SIZED[columns[0]]
+                frame = self.frame_ids[int(np.searchsorted(offsets, row, side="right")) - 1]
+                return f"frame {frame}, {kind} {table[key][row]}: {name} = {table[name][row]:g}"
+        return None
 
     def __getitem__(self, index: int) -> Frame:
         n = len(self)

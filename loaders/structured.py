@@ -145,6 +145,37 @@ def matrix(path: Path, value, where: str, rows: int, cols: int) -> list[list[flo
     return out
 
 
+MAX_METRES = 1e6
+"""Largest position or size, in metres, a file may give (1000 km: beyond any scene; finite values as
+large as 1e300 would overflow the trials far from the file)."""
+ROTATION_TOLERANCE = 1e-3
+"""Largest entry of ``R R^T - I``, and of ``det R - 1``, for a matrix that is read as a rotation."""
+
+
+def rotation(path: Path, value, where: str) -> np.ndarray:
+    """A 3x3 rotation (orthonormal, determinant 1, within :data:`ROTATION_TOLERANCE`), or a
+    ``LoaderError`` naming the field."""
+    R = np.array(matrix(path, value, where, 3, 3))
+    if not is_rotation(R):
+        raise LoaderError(f"{path}: {where}: expected a rotation (orthonormal rows, determinant 1), "
+                          f"got {R.round(3).tolist()}")
+    return R
+
+
+def is_rotation(R: np.ndarray) -> bool:
+    """Whether ``R`` is a rotation within :data:`ROTATION_TOLERANCE`."""
+    return bool(np.abs(R @ R.T - np.eye(3)).max() <= ROTATION_TOLERANCE
+                and abs(np.linalg.det(R) - 1.0) <= ROTATION_TOLERANCE)
+
+
+def metres(path: Path, value, where: str) -> float:
+    """A finite number of metres no larger in size than :data:`MAX_METRES`, or a ``LoaderError``."""
+    out = number(path, value, where)
+    if abs(out) > MAX_METRES:
+        raise LoaderError(f"{path}: {where}: expected at most {MAX_METRES:.0e} metres in size, got {out:g}")
+    return out
+
+
 def _first_line(exc: BaseException) -> str:
     text = str(exc).strip().splitlines()
     return text[0][:200] if text else type(exc).__name__
