@@ -9,6 +9,11 @@ and the walkthrough is active throughout, moving through its nine steps. Each ed
 waited for (computed and delivered) before the next.
 
     python bench/soak.py [--datasets argoverse2 synthetic:300] [--edits 300] [--warmup 30]
+    python bench/soak.py --rounds 4 [--edits 300] [--steps 100] [--datasets synthetic:300]
+
+``--rounds R`` (issue 40, item 4): R tabs in turn, each opened, edited ``--edits`` times on sigma2
+and stepped ``--steps`` frames, then closed; the server's RSS after each close. What a closed tab
+leaves behind grows it round after round.
 """
 from __future__ import annotations
 
@@ -142,12 +147,51 @@ def _released(server: ExplorerServer, freed: weakref.ref, timeout: float = 30.0)
     return False
 
 
+def closed_rounds(dataset: str, rounds: int, edits: int, steps: int) -> list[float]:
+    """The server's RSS (MB) at the start and after each of ``rounds`` tabs, opened, edited, stepped
+    and closed in turn."""
+    server = ExplorerServer(Explorer(loaders.open(dataset)), Settings(), port=0)
+    try:
+        gc.collect()
+        sizes = [rss_mb()]
+        for _ in range(rounds):
+            with headless_tab(server) as session:
+                for k in range(edits):
+                    session.apply(lambda s, k=k: s.with_params("cbm", sigma2=1.0 + (k % 37) / 4))
+                    _answered(session, k)
+                for k in range(steps):
+                    session.apply(lambda s: dataclasses.replace(s, frame=(s.frame + 1) % len(session.explorer)))
+                    _answered(session, k)
+                freed = weakref.ref(session)
+                del session
+            _released(server, freed)
+            gc.collect()
+            sizes.append(rss_mb())
+        return sizes
+    finally:
+        server.stop()
+
+
+def _answered(session: ClientSession, k: int) -> None:
+    if not session.worker.wait_idle(timeout=120):
+        raise TimeoutError(f"edit {k} was not answered in 120 s")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--datasets", nargs="+", default=["argoverse2", "synthetic:300"])
     parser.add_argument("--edits", type=int, default=300)
     parser.add_argument("--warmup", type=int, default=30)
+    parser.add_argument("--rounds", type=int, default=0, help="tabs opened, edited and closed in turn")
+    parser.add_argument("--steps", type=int, default=100, help="frame steps per round (--rounds)")
     args = parser.parse_args()
+    if args.rounds:
+        for dataset in args.datasets:
+            sizes = closed_rounds(dataset, args.rounds, args.edits, args.steps)
+            rounds = " -> ".join(f"{size:.0f}" for size in sizes)
+            print(f"{dataset}: RSS (MB) at start and after each closed tab: {rounds} "
+                  f"({sizes[-1] - sizes[1]:+.0f} MB after the first round)", flush=True)
+        return
     print(f"{'dataset':<16} {'edits':>5} {'RSS before':>11} {'RSS after':>10} {'growth':>8}  tab freed on close")
     for dataset in args.datasets:
         result = soak(dataset, args.edits, args.warmup)
