@@ -159,8 +159,9 @@ def closed_rounds(dataset: str, rounds: int, edits: int, steps: int) -> list[flo
                 for k in range(edits):
                     session.apply(lambda s, k=k: s.with_params("cbm", sigma2=1.0 + (k % 37) / 4))
                     _answered(session, k)
+                frames = len(session.explorer)
                 for k in range(steps):
-                    session.apply(lambda s: dataclasses.replace(s, frame=(s.frame + 1) % len(session.explorer)))
+                    session.apply(lambda s: dataclasses.replace(s, frame=(s.frame + 1) % frames))
                     _answered(session, k)
                 freed = weakref.ref(session)
                 del session
