@@ -161,7 +161,7 @@ def closed_rounds(dataset: str, rounds: int, edits: int, steps: int) -> list[flo
                     _answered(session, k)
                 frames = len(session.explorer)
                 for k in range(steps):
-                    session.apply(lambda s: dataclasses.replace(s, frame=(s.frame + 1) % frames))
+                    session.apply(lambda s, n=frames: dataclasses.replace(s, frame=(s.frame + 1) % n))
                     _answered(session, k)
                 freed = weakref.ref(session)
                 del session
