@@ -28,13 +28,13 @@ from dataclasses import dataclass
 from typing import Any, Literal
 
 import numpy as np
-from scipy.special import ndtr
 
 from cbm import se2
 
 from .clutter import missed, with_false_boxes
 from .detected import with_detections
 from .drift import drift_error
+from .localization import reported_cav_pose
 
 Protocol = Literal["sind", "opv2v", "range"]
 Localization = Literal["fixed", "gaussian", "drifting", "dataset", "none"]
@@ -263,8 +263,7 @@ def make_trial(
     cav_sees &= ~cav_missed if cav_id is None else ~cav_missed & (ids != cav_id)
 
     T_true = se2.inverse(ego_pose) @ cav_pose
-    reported = ego_pose if _unguessed(params) else _reported_cav_pose(params, cav_pose, loc_draw, cav_reported_pose,
-                                                                        loc_error)
+    reported = reported_cav_pose(params, ego_pose, cav_pose, loc_draw, cav_reported_pose, loc_error)
     init = se2.inverse(ego_pose) @ reported
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
     cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
@@ -359,45 +358,6 @@ def sind_split(order: np.ndarray, eta: float) -> tuple[np.ndarray, np.ndarray]:
 def in_range(boxes: np.ndarray, pose: np.ndarray, sensor_range: float) -> np.ndarray:
     """Range protocol: mask of the objects whose centre is within ``sensor_range`` of the agent."""
     return np.linalg.norm(boxes[:, :2] - se2.translation_of(pose), axis=1) <= sensor_range
-
-
-def _unguessed(params: ScenarioParams) -> bool:
-    """No GNSS and no guess: the CAV reports the ego's own pose, so ``init`` is the identity."""
-    return params.localization == "none" and params.loc_x == 0.0
-
-
-def localization_error(params: ScenarioParams, draw: np.ndarray) -> np.ndarray:
-    """(dx, dy, dyaw[rad]) added to the CAV's world pose: fixed (sec. IV-A), ``draw`` scaled (sec. V-A),
-    or (none) ``draw`` made uniform: a point of the disc of radius ``loc_x`` and any heading."""
-    if params.localization == "none":
-        u = ndtr(draw)
-        radius, direction = params.loc_x * np.sqrt(u[0]), 2.0 * np.pi * u[1]
-        return np.array([radius * np.cos(direction), radius * np.sin(direction), 2.0 * np.pi * u[2] - np.pi])
-    size = np.array([params.loc_x, params.loc_y, params.loc_yaw_rad])
-    return size if params.localization == "fixed" else size * draw
-
-
-def _reported_cav_pose(params: ScenarioParams, cav_pose: np.ndarray, draw: np.ndarray,
-                       dataset_pose: np.ndarray | None, drifted: np.ndarray | None) -> np.ndarray:
-    """The CAV's world pose as it reports it: the true pose plus ``localization_error`` or the
-    drifting error ``drifted``, or the dataset's own (``localization="dataset"``; a ``ValueError``
-    when the frame has none)."""
-    if params.localization == "drifting":
-        if drifted is None:
-            raise ValueError("localization 'drifting' needs the frame's drifting error (FrameInputs.build makes it)")
-        return perturbed_pose(cav_pose, drifted)
-    if params.localization != "dataset":
-        return perturbed_pose(cav_pose, localization_error(params, draw))
-    if dataset_pose is None:
-        raise ValueError("localization 'dataset' needs the CAV pose the dataset reports (OPV2V "
-                         "predicted_ego_pos); this frame's CAV has none")
-    return dataset_pose
-
-
-def perturbed_pose(pose: np.ndarray, error: np.ndarray) -> np.ndarray:
-    """The pose whose world (x, y, yaw) is ``pose``'s plus ``error`` (OpenCOOD-style additive pose noise)."""
-    x, y = se2.translation_of(pose) + error[:2]
-    return se2.make(x, y, se2.yaw_of(pose) + error[2])
 
 
 def _detect(boxes: np.ndarray, gauss: np.ndarray, uniform: np.ndarray, params: ScenarioParams) -> np.ndarray:

@@ -157,6 +157,14 @@ class Explorer:
         self.over_time = Runs()
         """The frames a method over time computed so far, per settings (``app.session.over_time``)."""
 
+    def forget(self) -> None:
+        """Forget what was kept for the tabs (the edit cache, the recent trials, the runs over time)
+        and hand the memory back to the system: called when the last tab closes."""
+        with self._trials_lock:
+            self._trials.clear()
+        self.over_time.clear()
+        self.reuse.clear()
+
     def __len__(self) -> int:
         return len(self.sequence)
 

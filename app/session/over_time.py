@@ -70,6 +70,11 @@ class Runs:
         self._runs: list[tuple[Settings, Run]] = []
         self._lock = threading.Lock()
 
+    def clear(self) -> None:
+        """Forget every run (no tab shows one any more)."""
+        with self._lock:
+            self._runs.clear()
+
     def frame(self, settings: Settings, index: int, trial_of: Callable, progress: Callable[[int, int], None],
               stop: Callable[[], bool]) -> FrameOverTime:
         """Frame ``index`` over time, computing the frames before it first (``trial_of(j)``: frame j's

@@ -28,6 +28,7 @@ from .counting import counts_and_votes
 from .distances import HEADROOM, Distances, counted, distances_within
 from .join import Grids
 from .listing import CandidateSets, Listing, both_blocks, candidate_sets, new_listing
+from .threads import TRIM_FROM, trim_freed
 from .voting import PairSets, voted_by_member
 
 T = TypeVar("T")
@@ -152,9 +153,19 @@ class Reuse:
 
     def _trim(self) -> None:
         """Forget the least recently used inputs past ``frames`` or ``most_bytes`` (what the
-        earlier calls' joins added counts), keeping the latest; called under the lock."""
+        earlier calls' joins added counts), keeping the latest; called under the lock. Freed
+        memory past ``threads.TRIM_FROM`` goes back to the system."""
+        freed = 0
         while len(self._entries) > self.frames or (len(self._entries) > 1 and self.nbytes() > self.most_bytes):
-            self._entries.popitem(last=False)
+            freed += _nbytes(self._entries.popitem(last=False)[1])
+        if freed >= TRIM_FROM:
+            trim_freed()
+
+    def clear(self) -> None:
+        """Forget every kept input (no tab needs them any more) and hand the memory back."""
+        with self._lock:
+            self._entries.clear()
+        trim_freed()
 
     def nbytes(self) -> int:
         """The bytes of every array the kept inputs hold (what local matching added to them too)."""
