@@ -28,7 +28,7 @@ from .session.history import FrameHistory, row_over_time, settings_key, sweep_ro
 from .session.kernels import COMPILING, Kernels
 from .session.offers import offers_of
 from .session.over_time import Stopped
-from .session.presets import PresetError, discover, save_preset, skipped_markdown
+from .session.presets import PresetError, discover, in_use, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
 from .session.settings import AUTO_CAV, Settings
@@ -77,6 +77,7 @@ class ClientSession:
         panels.bind(self.controls, self)
         panels.metrics.bind(self.controls.metrics, self)
         self.controls.presets.skipped.content = skipped_markdown(problems)
+        self.controls.presets.in_use(in_use(self.presets, settings))
         if problems:
             self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
         for warning in explorer.sequence.warnings:
@@ -119,6 +120,7 @@ class ClientSession:
             self.controls.show(new)
         else:
             self.controls.reflect(new)
+        self.controls.presets.in_use(in_use(self.presets, new))
 
     def step(self, delta: int) -> None:
         self.apply(lambda s: dataclasses.replace(s, frame=(s.frame + delta) % len(self.explorer)), move_controls=True)
@@ -154,6 +156,7 @@ class ClientSession:
         self.presets, problems = discover()
         self.controls.presets.offer(descriptions(self.presets))
         self.controls.presets.skipped.content = skipped_markdown(problems)
+        self.controls.presets.in_use(in_use(self.presets, self._settings))
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self, oblique: bool = False) -> None:
