@@ -100,13 +100,15 @@ class ClientSession:
 
     def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
         """Replace the settings by ``edit(settings)`` and recompute (coalesced); an edit that
-        changes nothing computes nothing. Controls that apply to the new settings are shown;
+        changes nothing computes nothing, one to fewer CAVs than the method needs switches the method
+        and says so (``Offers.adapted``). Controls that apply to the new settings are shown;
         ``move_controls`` also moves every control to them (a preset, a jump, a step)."""
         try:
             with self._lock:
                 new = edit(self._settings)
                 if new == self._settings:
                     return
+                new, switched = self.offers.adapted(self._settings, new)
                 refused = self.offers.refusal(new)
                 if refused:
                     raise ValueError(refused)
@@ -116,7 +118,9 @@ class ClientSession:
             self.notify("Setting refused", str(error), "red")
             self.controls.show(self._settings)
             return
-        if move_controls:
+        if switched:
+            self.notify("Method switched", switched, "blue")
+        if move_controls or switched:
             self.controls.show(new)
         else:
             self.controls.reflect(new)
