@@ -28,7 +28,7 @@ from .session.history import FrameHistory, row_over_time, settings_key, sweep_ro
 from .session.kernels import COMPILING, Kernels
 from .session.offers import offers_of
 from .session.over_time import Stopped
-from .session.presets import PresetError, discover, save_preset, skipped_markdown
+from .session.presets import PresetError, discover, in_use, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
 from .session.settings import AUTO_CAV, Settings
@@ -77,6 +77,7 @@ class ClientSession:
         panels.bind(self.controls, self)
         panels.metrics.bind(self.controls.metrics, self)
         self.controls.presets.skipped.content = skipped_markdown(problems)
+        self.controls.presets.in_use(in_use(self.presets, settings))
         if problems:
             self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
         for warning in explorer.sequence.warnings:
@@ -99,13 +100,15 @@ class ClientSession:
 
     def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
         """Replace the settings by ``edit(settings)`` and recompute (coalesced); an edit that
-        changes nothing computes nothing. Controls that apply to the new settings are shown;
+        changes nothing computes nothing, one to fewer CAVs than the method needs switches the method
+        and says so (``Offers.adapted``). Controls that apply to the new settings are shown;
         ``move_controls`` also moves every control to them (a preset, a jump, a step)."""
         try:
             with self._lock:
                 new = edit(self._settings)
                 if new == self._settings:
                     return
+                new, switched = self.offers.adapted(self._settings, new)
                 refused = self.offers.refusal(new)
                 if refused:
                     raise ValueError(refused)
@@ -115,10 +118,13 @@ class ClientSession:
             self.notify("Setting refused", str(error), "red")
             self.controls.show(self._settings)
             return
-        if move_controls:
+        if switched:
+            self.notify("Method switched", switched, "blue")
+        if move_controls or switched:
             self.controls.show(new)
         else:
             self.controls.reflect(new)
+        self.controls.presets.in_use(in_use(self.presets, new))
 
     def step(self, delta: int) -> None:
         self.apply(lambda s: dataclasses.replace(s, frame=(s.frame + delta) % len(self.explorer)), move_controls=True)
@@ -154,6 +160,7 @@ class ClientSession:
         self.presets, problems = discover()
         self.controls.presets.offer(descriptions(self.presets))
         self.controls.presets.skipped.content = skipped_markdown(problems)
+        self.controls.presets.in_use(in_use(self.presets, self._settings))
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self, oblique: bool = False) -> None:

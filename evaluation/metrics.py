@@ -141,7 +141,8 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
     estimate; success_rate = share of all trials that pass ``is_success``; success_rate_2 and
     success_rate_3 the same at 2 and 3 m / deg; abstain_rate = share of trials the method abstained
     on; returned_success = success rate over the trials it did not abstain on (how far its answers
-    can be trusted); median runtime. Ratios with a zero denominator are NaN.
+    can be trusted); median runtime; median consensus margin over the trials that have one. Ratios
+    with a zero denominator are NaN.
     """
     matched = sum(m.n_matched for m in metrics)
     correct = sum(m.n_correct for m in metrics)
@@ -152,6 +153,7 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
     rtes = np.array([m.rte for m in estimated])
     runtimes = np.array([m.runtime_s for m in metrics if not math.isnan(m.runtime_s)])
     returned = [m for m in metrics if not m.abstained]
+    margins = np.array([m.margin for m in metrics if not math.isnan(m.margin)])
     return {
         "n_trials": float(len(metrics)),
         "n_estimated": float(len(estimated)),
@@ -169,6 +171,7 @@ def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max:
         "returned_success": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in returned),
                                    len(returned)),
         "runtime_median_s": _median(runtimes),
+        "margin_median": _median(margins),
     }
 
 

@@ -24,7 +24,7 @@ from loaders.errors import unreadable
 
 from .aggregates import curve_csv, method_metrics, metrics_json, success_curve
 from .latex import summary_latex
-from .plots import plot_precision_vs_eta, plot_rre_rte, plot_success_curve, plt
+from .plots import plot_precision_vs_eta, plot_rre_rte, plot_success_curve, plt, run_title, titled
 from .report import summary_markdown, variant_names
 from .run import Plan, without_timing
 
@@ -173,9 +173,10 @@ def write_files(folder: Path, plan: Plan, table: pl.DataFrame, timing: bool = Tr
     figures = {"rre_rte.png": plot_rre_rte(rows, variants), "success_curve.png": plot_success_curve(curve)}
     if len(plan.sweep.grid.get("eta", ())) > 1:
         figures["precision_vs_eta.png"] = plot_precision_vs_eta(rows, variants, plan.sweep)
+    title = run_title([(s.name, [f.index for f in s.inputs]) for s in plan.sources], plan.sweep.scenario.protocol)
     for name, fig in figures.items():
         try:
-            fig.savefig(folder / name, format="png", dpi=120)
+            titled(fig, title).savefig(folder / name, format="png", dpi=120)
         finally:
             plt.close(fig)
     return summary

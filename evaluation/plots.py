@@ -3,6 +3,7 @@ eta) and its OPV2V figure (RRE and RTE distributions)."""
 from __future__ import annotations
 
 import math
+import textwrap
 from typing import Any
 
 import matplotlib
@@ -12,11 +13,28 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from evaluation.sweep import Sweep, summarise  # noqa: E402
 
-from .report import fmt, levels  # noqa: E402
+from .report import _ranges, fmt, levels  # noqa: E402
 
 LOG_FLOOR = 1e-3
 """RRE (deg) and RTE (m) below this are drawn at it on the log-scale plot."""
 MARKERS = "osD^vP*Xh<>"
+
+
+def run_title(sources: list[tuple[str, list[int]]], protocol: str) -> str:
+    """What a run's plots show, for their title: each dataset with its frames, and the protocol."""
+    return "; ".join(_frames_words(name, sorted(set(frames))) for name, frames in sources) + f" · protocol {protocol}"
+
+
+def _frames_words(name: str, frames: list[int]) -> str:
+    return f"{name}, {len(frames)} frame{'s' * (len(frames) != 1)} ({_ranges(frames)})"
+
+
+def titled(fig: plt.Figure, title: str) -> plt.Figure:
+    """``fig`` with ``title`` above its panels (wrapped to the figure's width), laid out again."""
+    width = max(40, int(fig.get_figwidth() * 12))
+    fig.suptitle("\n".join(textwrap.wrap(title, width)), fontsize=9)
+    fig.tight_layout()
+    return fig
 
 
 def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep: Sweep) -> plt.Figure:

@@ -65,8 +65,9 @@ def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *,
            ray: str | None = None) -> list[Candidate]:
     """Every setting the ``searcher`` tried on ``frames``, scored, best first.
 
-    ``base`` holds the CBM parameters that stay fixed (e.g. the heading mode). Ties keep the order
-    tried, so the ranking is reproducible; the same ``seed`` gives the same trials as the app (and
+    ``base`` holds the CBM parameters that stay fixed (e.g. the heading mode). Ties are broken by
+    the mean RTE, then the median consensus margin (``rank_key``), else keep the order tried, so
+    the ranking is reproducible; the same ``seed`` gives the same trials as the app (and
     the same Optuna draws). ``n_trials`` is Optuna's budget (default: the grid's size).
     """
     space = dict(DEFAULT_SPACE if space is None else space)
@@ -83,7 +84,20 @@ def search(frames: Sequence[FrameInputs], scenario: ScenarioParams, *,
         tried = optuna_candidates(space, score, seed, grid_size(space) if n_trials is None else n_trials)
     else:
         tried = score(space)
-    return sorted(tried, key=lambda c: -c.score)
+    return sorted(tried, key=rank_key)
+
+
+def rank_key(candidate: Candidate) -> tuple[float, float, float]:
+    """Best first: the higher score; on a tie the lower mean RTE, then the higher median consensus
+    margin (an undefined one ranks last)."""
+    summary = candidate.summary
+    rte, margin = summary.get("rte_mean", math.nan), summary.get("margin_median", math.nan)
+    return -candidate.score, math.inf if math.isnan(rte) else rte, math.inf if math.isnan(margin) else -margin
+
+
+def all_tie(candidates: Sequence[Candidate]) -> bool:
+    """Whether every candidate (two or more) has the same score: the tie-breaks alone rank them."""
+    return len(candidates) > 1 and len({c.score for c in candidates}) == 1
 
 
 def scorer(frames: Sequence[FrameInputs], scenario: ScenarioParams, fixed: Mapping[str, Sequence[Any]],

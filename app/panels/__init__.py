@@ -43,12 +43,12 @@ class Controls:
 
 def build(gui: viser.GuiApi, settings: Settings, n_frames: int, descriptions: Mapping[str, str],
           offers: Offers) -> Controls:
-    """The panels of a new tab, in screen order: the frame slider and play first, then the metrics
-    and the timeline, the CAVs, and the tabs (Explore and Steps are added to ``Controls.tabs`` after).
+    """The panels of a new tab, in screen order: the frame slider and play first, the status line,
+    the tabs (Explore and Steps are added to ``Controls.tabs`` after), so that the tab row shows in
+    the first screen of a 1280x720 window; then the metrics, the timeline and the CAVs.
     ``descriptions``: the presets by name; ``offers``: what the dataset cannot offer, and why."""
     navigation = frame.build_navigation(gui, settings, n_frames)
-    shown = metrics.build(gui, navigation.frame)
-    frames = frame.build(gui, settings, navigation)
+    status = metrics.build_status(gui)
     tabs = gui.add_tab_group()
     with tabs.add_tab("Scenario"):
         scenario_controls = scenario.build(gui, settings, offers)
@@ -58,6 +58,8 @@ def build(gui: viser.GuiApi, settings: Settings, n_frames: int, descriptions: Ma
         view_controls = view.build(gui, settings, offers)
     with tabs.add_tab("Presets"):
         preset_controls = presets.build(gui, descriptions)
+    shown = metrics.build(gui, navigation.frame, status)
+    frames = frame.build(gui, settings, navigation)
     controls = Controls(shown, frames, tabs, scenario_controls, method_controls, view_controls, preset_controls)
     controls.reflect(settings)
     return controls

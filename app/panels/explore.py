@@ -38,6 +38,8 @@ from .reports import jump_markdown, search_markdown, sequence_markdown, stale_ma
 
 NO_RUN = "(run the sequence first)"
 NO_SEARCH = "(search first)"
+APPLY_HINT = "Moves CBM's sliders to the setting picked above"
+APPLY_BEFORE = f"Disabled: no search yet (search σ1, σ2, σ3 first). {APPLY_HINT}"
 RATIOS_TITLE, ERRORS_TITLE = "precision and recall per frame", "pose error per frame"
 JUMP_HINT = "that frame with the run's settings and noise draw"
 WAITING = "*waiting for another tab's job…*"
@@ -88,7 +90,7 @@ class ExplorePanel:
                 self.search_button = gui.add_button("search σ1, σ2, σ3")
                 self.search_table = gui.add_markdown("")
                 self.best = gui.add_dropdown("setting", (NO_SEARCH,))
-                self.apply = gui.add_button("apply to the sliders")
+                self.apply = gui.add_button("apply to the sliders", disabled=True, hint=APPLY_BEFORE)
             self.calibration = CalibrationCheck(tab.explorer.sequence)
             with gui.add_folder("Dataset calibration", expand_by_default=False):
                 self.check = gui.add_button("check the dataset's calibration", disabled=not self.calibration.usable,
@@ -229,6 +231,7 @@ class ExplorePanel:
         self.search_table.content = search_markdown(result)
         self.best.options = tuple(result.option(k) for k in range(min(10, len(result.candidates))))
         self.best.value = self.best.options[0]
+        self.apply.disabled, self.apply.hint = False, APPLY_HINT
 
     def apply_setting(self, option: str) -> None:
         """Move CBM's sliders to the searched setting ``option`` (as listed in the dropdown)."""

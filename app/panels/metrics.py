@@ -1,7 +1,8 @@
-"""The outputs above the controls: a status line (what the tab is waiting for), the frame's
-metrics, the timeline of the frames computed so far, and its controls: step to the previous or next
-failed frame, jump to a failed frame, pin the current settings as a baseline. The timeline marks
-every failed frame on the one frame slider at the top of the panel (``frame``).
+"""The outputs of the frame on screen: a status line (what the tab is waiting for) under the frame
+controls, and, under the tabs, the frame's metrics, the timeline of the frames computed so far with
+its help folded behind a "?", and its controls: step to the previous or next failed frame, jump to
+a failed frame, pin the current settings as a baseline. The timeline marks every failed frame on the
+one frame slider at the top of the panel (``frame``).
 
 viser 1.1.1 sends no clicks on a chart; the frame slider spans the same frames."""
 from __future__ import annotations
@@ -21,6 +22,7 @@ from .plot import add_timeline, send, timeline_series
 
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
+HELP, HELP_SHOWN = "? what the timeline shows", "? hide the timeline's help"
 HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned; a gap: frames not "
         "computed. Fills with every frame computed (stepping, play, *run all frames*) until a setting other than "
         "frame, CAV or view changes.")
@@ -51,9 +53,17 @@ class MetricsControls:
     failures: viser.GuiButtonGroupHandle
     failed: viser.GuiDropdownHandle
     pin: viser.GuiButtonHandle
+    help: viser.GuiButtonHandle
+    """The "?" that shows or hides ``legend``, the timeline's help."""
+    legend: viser.GuiMarkdownHandle
+
+    def toggle_help(self) -> None:
+        """Show the timeline's help when it is folded away, fold it away when it shows."""
+        self.legend.visible = not self.legend.visible
+        self.help.label = HELP_SHOWN if self.legend.visible else HELP
 
     def say(self, status: str) -> None:
-        """Show ``status`` above the metrics; an empty one hides the line."""
+        """Show ``status`` under the frame controls; an empty one hides the line."""
         self.status.content = status
         self.status.visible = bool(status)
 
@@ -81,20 +91,27 @@ class MetricsControls:
         self.pin.label = UNPIN if pinned else PIN
 
 
-def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle) -> MetricsControls:
-    """The metrics and the timeline's controls; ``frame_slider`` (built above them) carries the marks."""
+def build_status(gui: viser.GuiApi) -> tuple[viser.GuiMarkdownHandle, viser.GuiButtonHandle]:
+    """The status line and the stop button, under the frame controls (shown only when they speak)."""
     status = gui.add_markdown("", visible=False)
     stop = gui.add_button("stop computing the frames before", visible=False, color="red",
                           hint="keep the frames computed so far and show the last of them")
+    return status, stop
+
+
+def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle,
+          status: tuple[viser.GuiMarkdownHandle, viser.GuiButtonHandle]) -> MetricsControls:
+    """The metrics and the timeline's controls; ``frame_slider`` (built above them) carries the
+    marks, ``status`` is ``build_status``'s line and button."""
     text = gui.add_markdown("Computing the first frame…")
     plot = add_timeline(gui)
-    scrubber = frame_slider
     failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
     failed = gui.add_dropdown("jump to", (f"{FAILED_HEADER} (0 known)",),
                               hint="a failed frame known so far ")
     pin = gui.add_button(PIN, hint="keep these settings and their per-frame results to compare against")
-    gui.add_markdown(HINT)
-    return MetricsControls(status, stop, text, plot, scrubber, failures, failed, pin)
+    help_button = gui.add_button(HELP, hint="what the timeline's dots, bar, dashes and gaps mean")
+    legend = gui.add_markdown(HINT, visible=False)
+    return MetricsControls(*status, text, plot, frame_slider, failures, failed, pin, help_button, legend)
 
 
 def bind(c: MetricsControls, tab: TimelineTab) -> None:
@@ -102,6 +119,7 @@ def bind(c: MetricsControls, tab: TimelineTab) -> None:
     c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
     on_user(c.failed, lambda: jump(tab, c.failed.value))
     c.pin.on_click(lambda e: toggle_pin(tab))
+    c.help.on_click(lambda e: c.toggle_help())
 
 
 def go_to(tab: TabActions, frame: int) -> None:

@@ -1,5 +1,6 @@
-"""The Presets tab: pick a shipped or saved preset and read what it sets before loading it, load it,
-save the current settings under a name; below, the preset files that were skipped and why."""
+"""The Presets tab: which preset the settings are (the list starts on it), pick a shipped or saved
+preset and read what it sets before loading it, load it, save the current settings under a name;
+below, the preset files that were skipped and why."""
 from __future__ import annotations
 
 from collections.abc import Mapping
@@ -7,13 +8,15 @@ from dataclasses import dataclass, field
 
 import viser
 
-from .actions import TabActions, on_user
+from .actions import TabActions, assign, on_user
 
 NONE = "(none)"
 
 
 @dataclass
 class PresetControls:
+    using: viser.GuiMarkdownHandle
+    """Which preset the settings are, or the one they were changed from."""
     preset: viser.GuiDropdownHandle
     about: viser.GuiMarkdownHandle
     """The picked preset's description, shown before it is loaded."""
@@ -23,6 +26,8 @@ class PresetControls:
     skipped: viser.GuiMarkdownHandle
     """Which preset files were skipped and why (empty when none was)."""
     descriptions: dict[str, str] = field(default_factory=dict)
+    last: str | None = None
+    """The preset last in use (what the settings were changed from)."""
 
     def offer(self, descriptions: Mapping[str, str]) -> None:
         """List the presets (name -> description), keeping the one picked when it is still there."""
@@ -32,6 +37,22 @@ class PresetControls:
         self.preset.value = picked if picked in self.descriptions else self.preset.options[0]
         self.describe()
 
+    def in_use(self, name: str | None) -> None:
+        """Say that the settings are the preset ``name`` (None: none) and, when another preset than
+        before is in use, move the list to it (a preset picked to read stays picked otherwise); when
+        they are none, name the preset they were changed from."""
+        if name is not None and name != self.last:
+            self.last = name
+            assign(self.preset, value=name)
+            self.describe()
+        if name is not None:
+            words = f"*In use: **{name}**.*"
+        elif self.last is not None:
+            words = f"*In use: your own settings, changed from **{self.last}**.*"
+        else:
+            words = "*In use: your own settings (no preset).*"
+        assign(self.using, content=words)
+
     def describe(self) -> None:
         """Show what the picked preset is for."""
         text = self.descriptions.get(self.preset.value, "")
@@ -39,7 +60,8 @@ class PresetControls:
 
 
 def build(gui: viser.GuiApi, descriptions: Mapping[str, str]) -> PresetControls:
-    controls = PresetControls(preset=gui.add_dropdown("preset", tuple(descriptions) or (NONE,)),
+    controls = PresetControls(using=gui.add_markdown(""),
+                              preset=gui.add_dropdown("preset", tuple(descriptions) or (NONE,)),
                               about=gui.add_markdown(""), load=gui.add_button("load"),
                               name=gui.add_text("save as", "my-preset"), save=gui.add_button("save current settings"),
                               skipped=gui.add_markdown(""))

@@ -6,6 +6,7 @@ from typing import Any
 
 from cbm.methods import METHODS
 from evaluation.diagnosis import Finding
+from evaluation.search import all_tie
 
 from ..scene.differences import Difference, change_lines, now_words
 from ..scene.text import number
@@ -36,18 +37,33 @@ def sequence_markdown(run: SequenceRun) -> str:
 
 
 def search_markdown(result: SearchResult, top: int = 5) -> str:
-    """The table of the best settings against the current ones."""
-    lines = [(f"**Best of {len(result.candidates)} settings** by {OBJECTIVE_LABELS[result.objective]} over "
-              f"{len(result.frames)} frames (seed {result.settings.scenario.seed})"), "",
-             "| | σ1 | σ2 | σ3 | limit | score | success | P / R |", "|---|---|---|---|---|---|---|---|"]
+    """The table of the best settings against the current ones, with how ties were broken."""
+    objective = OBJECTIVE_LABELS[result.objective]
+    lines = [(f"**Best of {len(result.candidates)} settings** by {objective} over "
+              f"{len(result.frames)} frames (seed {result.settings.scenario.seed})"), "", ties_words(result), "",
+             "| | σ1 | σ2 | σ3 | limit | score | RTE | margin | success | P / R |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     rows = [(f"#{k + 1}", c) for k, c in enumerate(result.candidates[:top])] + [("current", result.current)]
     for name, c in rows:
         p = {**result.current.params, **c.params}
         s = c.summary
         lines.append(f"| {name} | {p['sigma1']:g} | {p['sigma2']:g} | {p['sigma3']:g} | {p['distance_limit']:g} "
-                     f"| {number(c.score, digits=3)} | {number(100 * s['success_rate'], digits=1)} % "
+                     f"| {number(c.score, digits=3)} | {number(s['rte_mean'], ' m')} "
+                     f"| {number(s['margin_median'], '', 1)} | {number(100 * s['success_rate'], digits=1)} % "
                      f"| {number(s['precision'])} / {number(s['recall'])} |")
     return "\n".join(lines)
+
+
+def ties_words(result: SearchResult) -> str:
+    """How the ranking was decided: every setting tying on the objective is said first."""
+    name = result.objective if result.objective != "f1" else "F1"
+    if all_tie(result.candidates):
+        return (f"*All {len(result.candidates)} tie on {name} ({number(result.candidates[0].score, digits=3)}): "
+                "ranked by mean RTE (lower first), then median consensus margin (higher first).*")
+    tied = sum(c.score == result.candidates[0].score for c in result.candidates) if result.candidates else 0
+    if tied > 1:
+        return f"*{tied} tie on {name} at the top: ranked by mean RTE, then median consensus margin.*"
+    return "*Ties on the score are ranked by mean RTE, then median consensus margin.*"
 
 
 def worst_markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[int, list[Finding]]) -> str:

@@ -1,6 +1,6 @@
 """The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, camera,
 presentation mode and the dark theme, and the legend of the palette in use. LiDAR points are
-disabled, with the reason, on a dataset without point clouds."""
+disabled, with the reason, on a dataset without point clouds; their subsampling also while they are off."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -19,6 +19,15 @@ TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", 
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 POINTS_HINT = "The ego's and the CAV's LiDAR points (datasets with .pcd files), the CAV's placed like its boxes"
+EVERY_HINT = "Draw every Nth LiDAR point (1: all of them)"
+POINTS_OFF = "LiDAR points are off: tick LiDAR points to draw them"
+
+
+def points_note(unavailable: str | None, idle: str | None) -> str:
+    """The note under the points' controls: why they are greyed out (empty when they are not)."""
+    if unavailable is not None:
+        return f"*Disabled ({unavailable}): LiDAR points, points: every Nth.*"
+    return f"*Disabled ({idle}): points: every Nth.*" if idle else ""
 
 
 @dataclass
@@ -38,7 +47,7 @@ class ViewControls:
     legend: viser.GuiMarkdownHandle
     fused: viser.GuiCheckboxHandle
     note: viser.GuiMarkdownHandle
-    """Why the LiDAR points are disabled (hidden when they are not)."""
+    """Why the LiDAR points or their subsampling are disabled (hidden when they are not)."""
     offers: Offers = field(default_factory=Offers)
 
     def show(self, settings: Settings) -> None:
@@ -53,7 +62,10 @@ class ViewControls:
         why = self.offers.points
         assign(self.points, disabled=why is not None,
                hint=POINTS_HINT if why is None else f"Disabled: {why}. {POINTS_HINT}")
-        assign(self.points_every, disabled=not settings.view.points or why is not None)
+        idle = why or (None if settings.view.points else POINTS_OFF)
+        assign(self.points_every, disabled=idle is not None,
+               hint=EVERY_HINT if idle is None else f"Disabled: {idle}. {EVERY_HINT}")
+        assign(self.note, content=points_note(why, idle), visible=idle is not None)
         assign(self.legend, content=palette(settings.view).legend + cavs_legend(settings.cavs))
 
 
@@ -77,8 +89,8 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         dark=gui.add_checkbox("dark theme", view.dark, hint="A dark page and scene, in this browser tab only"),
         points=gui.add_checkbox("LiDAR points", view.points, hint=POINTS_HINT),
         points_every=gui.add_slider("points: every Nth", 1, 50, 1, view.points_every,
-                                    hint="Draw every Nth LiDAR point (1: all of them)"),
-        note=gui.add_markdown(f"*Disabled ({offers.points}): LiDAR points.*", visible=offers.points is not None),
+                                    hint=EVERY_HINT),
+        note=gui.add_markdown("", visible=False),
         legend=gui.add_markdown(palette(view).legend + cavs_legend(settings.cavs)),
         fused=gui.add_checkbox("fused boxes (late fusion)", view.fused,
                                hint="The ego's and the CAV's boxes merged by NMS at this pose: outlines green for "

@@ -28,13 +28,14 @@ def label_px(view: ViewOptions) -> float:
 
 
 def caption_lines(outcome: Outcome) -> list[str]:
-    """The frame and its verdict, precision and recall, the pose errors: one line each (with
-    several CAVs, the first CAV's, and the caption says so)."""
+    """The frame and its verdict, precision and recall, the pose errors (to the key numbers'
+    precision: an RRE of 0.04° is not "0.0°"): one line each (with several CAVs, the first CAV's,
+    and the caption says so)."""
     m = outcome.metrics
     which = f"CAV 1 of {len(outcome.others) + 1} · " if outcome.others else ""
     return [f"Frame {outcome.frame_index} · {which}{'success' if is_success(m) else 'failed'}",
             f"precision {number(m.precision)} · recall {number(m.recall)}",
-            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°', 1)}"]
+            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}"]
 
 
 def caption_html(outcome: Outcome) -> str:

@@ -58,6 +58,9 @@ class Palette:
 
 
 LABELS_NOTE = ", each pair labelled with its ids"
+CROSSED_NOTE = (" A box crossed out in grey (with the ground-truth ghosts): a false box, a detection of no object"
+                " (the scenario's false boxes).")
+"""The legends' words on the crosses over false boxes."""
 """The legends' words on the pair labels (the HTML recording, which draws no labels, leaves them out)."""
 
 STANDARD = Palette(
@@ -66,7 +69,7 @@ STANDARD = Palette(
     ghost=GHOST, map=MAP, map_other=MAP_OTHER,
     legend="Boxes: **ego** blue, **CAV** orange (faint: before calibration). Lines: green right pair, red wrong "
            "pair, grey dashed a true pair missed; the boxes of a wrong pair are outlined red, of a missed one grey"
-           + LABELS_NOTE + ".")
+           + LABELS_NOTE + "." + CROSSED_NOTE)
 
 OKABE_ITO = Palette(
     ego_boxes=(0, 114, 178), cav_boxes=(230, 159, 0), cav_before=(240, 205, 130),
@@ -76,7 +79,7 @@ OKABE_ITO = Palette(
     legend="Colour-blind-safe palette (Okabe-Ito). Boxes: **ego** blue, **CAV** orange (faint: before "
            "calibration). Lines: **right** pair bluish green, solid; **wrong** pair vermillion, thick and dashed; "
            "a true pair **missed** thin grey dots; the boxes of a wrong pair are outlined vermillion, of a missed "
-           "one grey" + LABELS_NOTE + ".")
+           "one grey" + LABELS_NOTE + "." + CROSSED_NOTE)
 
 DARK_SCENE = {"ghost": (90, 90, 90), "cav_before": (150, 100, 40), "map_other": (46, 46, 52),
               "map": {"lane_boundary": (52, 52, 58), "crossing": (75, 62, 30), "drivable_area": (40, 40, 46)}}

@@ -119,7 +119,8 @@ def recording_data(recording: Recording, dataset: str, presentation: bool) -> di
     return {"app": APP_NAME, "version": app_version(), "dataset": dataset,
             "exported": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
             "settings": settings_lines(settings),
-            "legend": re.sub(r"\*\*", "", palette.legend).replace(colours.LABELS_NOTE, ""),
+            "legend": re.sub(r"\*\*", "", palette.legend).replace(colours.LABELS_NOTE, "")
+                                                             .replace(colours.CROSSED_NOTE, ""),
             "palette": palette_data(palette), "frames": [frame_data(r) for r in records]}
 
 

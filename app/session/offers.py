@@ -1,8 +1,10 @@
 """What the app offers on the dataset it serves: a choice that cannot work here (LiDAR points on a
 dataset without point clouds, the dataset's own localization on one that reports no poses, the
-joint pose graph with a single CAV) is not offered, and the page says why."""
+joint pose graph with a single CAV) is not offered, and the page says why. Setting fewer CAVs than
+the chosen method needs switches the method to the one it builds on, and says so (``adapted``)."""
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass
 
 from cbm.methods import METHODS
@@ -30,6 +32,19 @@ class Offers:
         if cavs >= GRAPH_CAVS:
             return None
         return f"it calibrates several CAVs jointly: set CAVs to {GRAPH_CAVS} or more first"
+
+    def adapted(self, before: Settings, after: Settings) -> tuple[Settings, str | None]:
+        """``after``, its method switched to the one whose parameters it shares (the pose graph: CBM)
+        when the CAV count changed to fewer than the method needs; and the switch in words (None:
+        nothing switched)."""
+        method = METHODS[after.method]
+        if after.cavs == before.cavs or not method.takes_peers or self.pose_graph(after.cavs) is None:
+            return after, None
+        fallback = METHODS[method.params_key]
+        words = (f"{method.label} needs {GRAPH_CAVS} CAVs or more, so with {after.cavs} CAV the method is now "
+                 f"{fallback.label}, with the same thresholds. Set CAVs to {GRAPH_CAVS} or more to choose "
+                 f"{method.label} again (Method tab).")
+        return dataclasses.replace(after, method=fallback.name), words
 
     def refusal(self, settings: Settings) -> str | None:
         """Why ``settings`` cannot be computed on this dataset, in one sentence; None when they can."""

@@ -12,6 +12,7 @@ the same.
 """
 from __future__ import annotations
 
+import dataclasses
 import hashlib
 import os
 import tempfile
@@ -48,6 +49,14 @@ class Preset:
         """This preset over the app's defaults, keeping ``current``'s frame, CAV and view (the
         preset's ``[view]`` keys, if any, replace the view's)."""
         return from_preset(self.tables, Settings(frame=current.frame, cav=current.cav, view=current.view))
+
+
+def in_use(presets: dict[str, Preset], settings: Settings) -> str | None:
+    """The first preset ``settings`` compute as (loading it would change no result: the frame, the
+    CAVs and the view aside); None when none does."""
+    kept = {"frame": settings.frame, "cav": settings.cav, "cavs": settings.cavs, "view": settings.view}
+    return next((name for name, preset in presets.items()
+                 if dataclasses.replace(preset.apply(settings), **kept) == settings), None)
 
 
 def user_dir() -> Path:

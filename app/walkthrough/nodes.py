@@ -1,7 +1,7 @@
 """The walkthrough's scene nodes (under ``/walkthrough``): a step's meshes, line sets and labels
 copied into viser nodes, the normal scene (``/scene``, ``/labels``) hidden meanwhile, and the
-CAV's boxes placed by a pose so that an animation moves one node and sends nothing else. Lines show
-the colours the steps' words name (``scene.linecolours``)."""
+CAV's boxes, vehicle and label placed by a pose so that an animation moves three nodes and sends
+nothing else. Lines show the colours the steps' words name (``scene.linecolours``)."""
 from __future__ import annotations
 
 import dataclasses
@@ -13,12 +13,15 @@ from cbm import se2
 
 from ..scene.linecolours import as_shown
 from ..scene.view import SceneView
+from .shapes import CAV_LABEL, cav_label
 from .steps import Step
 
 ROOT = "/walkthrough"
 NORMAL_ROOTS = ("/scene", "/labels")
 """The parents of the normal scene's nodes: hidden while the walkthrough is on."""
 CAV_NODE = "cav_boxes"
+CAV_NODES = (CAV_NODE, "cav_vehicle")
+"""The nodes given in the CAV's frame, placed by a pose (its boxes and its vehicle)."""
 
 
 def glide(start: np.ndarray, end: np.ndarray, steps: int) -> list[np.ndarray]:
@@ -58,8 +61,10 @@ class WalkthroughNodes:
             self.place(step.cav_pose)
 
     def place(self, pose: np.ndarray) -> None:
-        """Stand the CAV's boxes at ``pose`` (one pose update)."""
-        self.view.place(CAV_NODE, pose)
+        """Stand the CAV's boxes, vehicle and label at ``pose`` (an update each)."""
+        for name in CAV_NODES:
+            self.view.place(name, pose)
+        self.view.label(CAV_LABEL, *cav_label(pose))
 
     def hide(self) -> None:
         """Hide every walkthrough node and show the normal scene again."""

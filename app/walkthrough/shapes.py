@@ -6,12 +6,15 @@ from __future__ import annotations
 
 import numpy as np
 
+from cbm import se2
+
 from ..scene import geometry, planes
 from ..scene.cavs import SLIM
-from ..scene.colours import CAV_BOXES, EGO_BOXES
+from ..scene.colours import CAV_BOXES, CAV_VEHICLE, EGO_BOXES, EGO_VEHICLE
 from ..scene.drawing import Lines, Mesh, no_lines
 from ..scene.inspector import band_segments, region_segments
 
+CAV_LABEL = "cav_agent"
 WEIGHT_CLASSES = ((0.75, 7.0), (0.5, 4.5), (0.25, 2.5), (0.0, 1.0))
 """(least Welsch weight, line width) of each class of pairs drawn in the robust fit's step."""
 
@@ -28,6 +31,24 @@ def cav_mesh(boxes: np.ndarray) -> Mesh:
     slim = boxes.copy()
     slim[:, 3:5] *= SLIM[0]
     return Mesh(*geometry.footprint_mesh(slim, planes.cav(1)), CAV_BOXES)
+
+
+def agent_meshes() -> dict[str, Mesh]:
+    """The ego's vehicle at the scene's origin and the CAV's at its own (its node is placed by a
+    pose), in the main scene's colours: every step shows who sees what."""
+    body = geometry.vehicle_mesh([np.eye(3)])
+    return {"ego_vehicle": Mesh(*body, EGO_VEHICLE), "cav_vehicle": Mesh(*body, CAV_VEHICLE)}
+
+
+def agent_labels(pose: np.ndarray) -> dict[str, tuple[str, tuple[float, float, float]]]:
+    """"ego" over the ego, "CAV" over the CAV where ``pose`` stands it (``cav_label``)."""
+    return {"ego_agent": ("ego", (0.0, 0.0, planes.LABELS)), CAV_LABEL: cav_label(pose)}
+
+
+def cav_label(pose: np.ndarray) -> tuple[str, tuple[float, float, float]]:
+    """The CAV's label where ``pose`` stands the CAV (an animation moves it with the vehicle)."""
+    x, y = map(float, se2.translation_of(pose))
+    return "CAV", (x, y, planes.LABELS)
 
 
 def pair_segments(ego_xy: np.ndarray, cav_xy: np.ndarray, pairs: np.ndarray,

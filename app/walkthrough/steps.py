@@ -43,7 +43,8 @@ class Step:
     meshes: dict[str, Mesh]
     labels: dict[str, Label]
     cav_pose: np.ndarray
-    """(3, 3) where the node of the CAV's boxes (``meshes["cav_boxes"]``, CAV frame) stands."""
+    """(3, 3) where the nodes of the CAV's boxes and vehicle (``meshes["cav_boxes"]``,
+    ``meshes["cav_vehicle"]``, CAV frame) stand."""
     motion: tuple[np.ndarray, np.ndarray] | None = field(default=None)
     """(from, to) poses the CAV's boxes glide between when the animation plays; None: no motion."""
     focus: tuple[float, float] | None = None
@@ -81,12 +82,16 @@ def _step(facts: Facts, k: int, text: str, lines: dict[str, Lines], labels: dict
           pose: np.ndarray | None = None, motion: tuple[np.ndarray, np.ndarray] | None = None,
           span: float | None = None) -> Step:
     trial = facts.trial
-    meshes = {"ego_boxes": shapes.ego_mesh(trial.ego_boxes), "cav_boxes": shapes.cav_mesh(trial.cav_boxes)}
+    pose = facts.result.init if pose is None else pose
+    meshes = {"ego_boxes": shapes.ego_mesh(trial.ego_boxes), "cav_boxes": shapes.cav_mesh(trial.cav_boxes),
+              **shapes.agent_meshes()}
     focus = None if facts.pair is None or k not in FOCUSED else tuple(map(float, facts.ego_xy[facts.pair[0]]))
     if focus is not None and span is None:
         span = reach(focus, lines)
-    return Step(NAMES[k][0], title(k, count(facts)), text, lines, meshes, labels or {},
-                facts.result.init if pose is None else pose, motion, focus, _clipped(span or SPAN[0]))
+    labels = {**shapes.agent_labels(pose), **(labels or {})}
+    return Step(NAMES[k][0], title(k, count(facts)), text, lines, meshes, labels, pose, motion, focus,
+                _clipped(span or SPAN[0]))
+
 
 
 def reach(focus: tuple[float, float], lines: dict[str, Lines]) -> float:

@@ -7,7 +7,7 @@ from pathlib import Path
 
 import pytest
 
-from app.session.presets import SHIPPED_DIR, PresetError, discover, read, save_preset
+from app.session.presets import SHIPPED_DIR, PresetError, discover, in_use, read, save_preset
 from app.session.settings import Settings, from_preset, to_preset
 from evaluation.conditions import condition
 from evaluation.scenario import ScenarioParams
@@ -83,3 +83,13 @@ def test_environment_variable_sets_the_user_folder(tmp_path: Path, monkeypatch: 
     monkeypatch.setenv("CBM_EXPLORER_PRESETS", str(tmp_path))
     save_preset("mine", Settings())
     assert (tmp_path / "mine.toml").exists() and "mine" in discover()[0]
+
+
+def test_the_preset_in_use_is_the_one_the_settings_compute_as(tmp_path: Path) -> None:
+    presets, _ = discover(users=tmp_path)
+    start = Settings()
+    assert in_use(presets, start) == "default"
+    moved = dataclasses.replace(start, frame=7, cavs=2, view=dataclasses.replace(start.view, ghosts=True))
+    assert in_use(presets, moved) == "default", "the frame, the CAVs and the view are no part of a preset"
+    assert in_use(presets, presets["clutter"].apply(start)) == "clutter"
+    assert in_use(presets, start.with_params("cbm", sigma2=2.5)) is None

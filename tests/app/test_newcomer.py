@@ -50,6 +50,17 @@ def test_what_the_shipped_scene_cannot_offer_and_why(explorer: Explorer) -> None
     assert offers.refusal(dataclasses.replace(graph, cavs=2)) is None and offers.refusal(Settings()) is None
 
 
+def test_fewer_cavs_than_the_pose_graph_needs_switch_the_method_to_cbm_and_say_so(explorer: Explorer) -> None:
+    offers = offers_of(explorer.sequence)
+    three = dataclasses.replace(Settings(), method="cbm-graph", cavs=3)
+    switched, words = offers.adapted(three, dataclasses.replace(three, cavs=1))
+    assert (switched.method, switched.cavs, switched.cbm) == ("cbm", 1, three.cbm) and offers.refusal(switched) is None
+    assert words.startswith(f"{METHODS['cbm-graph'].label} needs 2 CAVs or more, so with 1 CAV the method is now CBM")
+    assert offers.adapted(three, dataclasses.replace(three, cavs=2)) == (dataclasses.replace(three, cavs=2), None)
+    chosen = dataclasses.replace(Settings(), method="cbm-graph")
+    assert offers.adapted(Settings(), chosen) == (chosen, None), "choosing the graph at 1 CAV is refused, not switched"
+
+
 def test_an_opv2v_release_offers_its_points_and_poses() -> None:
     fixtures = Path(__file__).resolve().parents[1] / "loaders" / "fixtures"
     assert offers_of(loaders.open(str(fixtures / "opv2v" / "scenario"))).reported_poses is None

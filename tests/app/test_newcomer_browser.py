@@ -1,6 +1,7 @@
 """What a newcomer sees first, in a real browser at 1280x720 on the shipped scene: the frame controls
 in the first screen and the tabs on one row (issue 24, item 6), controls labelled in words (item 7),
-and only what can work on this dataset offered, the rest disabled with the reason (item 8)."""
+and only what can work on this dataset offered, the rest disabled with the reason (item 8); fewer
+CAVs than the pose graph needs switch the method to CBM and say so (issue 39, item 7)."""
 from __future__ import annotations
 
 import re
@@ -134,9 +135,13 @@ def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server
     ui.wait_until(lambda: tab.last.settings.method == "cbm-graph", 60)
     cavs.fill("1")
     cavs.blur()
-    page.get_by_text("is not offered with 1 CAV").first.wait_for(timeout=10_000)
-    ui.wait_until(lambda: cavs.input_value() == "3")
-    assert tab.settings.cavs == 3 and tab.settings.method == "cbm-graph"
-    assert page.get_by_text("Recompute failed").count() == 0
+    page.get_by_text("Method switched").first.wait_for(timeout=20_000)
+    page.get_by_text(f"{GRAPH} needs 2 CAVs or more, so with 1 CAV the method is now CBM").first.wait_for(
+        timeout=20_000)
+    ui.wait_until(lambda: tab.last.settings.cavs == 1 and tab.last.settings.method == "cbm", 60)
+    ui.wait_until(lambda: page.locator(f'[id="{ui.label(page, "method").get_attribute("for")}"]').input_value()
+                  == METHODS["cbm"].label)
+    assert cavs.input_value() == "1"
+    assert page.get_by_text("Recompute failed").count() == 0 and page.get_by_text("Setting refused").count() == 0
     page.close()
 

@@ -1,5 +1,6 @@
-"""The View tab's "LiDAR points" toggle and its subsampling slider, in a real browser, on an OPV2V
-fixture that ships one ASCII and one binary .pcd sweep (40 points each)."""
+"""The View tab's "LiDAR points" toggle and its subsampling slider (greyed out, with the reason, while
+the points are off), in a real browser, on an OPV2V fixture that ships one ASCII and one binary .pcd
+sweep (40 points each)."""
 from __future__ import annotations
 
 from pathlib import Path
@@ -40,14 +41,24 @@ def _type_into(page, text: str, value: str) -> None:
     box.blur()
 
 
+def every_nth_disabled(page) -> bool:
+    """Whether "points: every Nth" shows greyed out."""
+    return ui.slider(page, "points: every Nth").get_attribute("data-disabled") == "true"
+
+
 def test_points_toggle_and_subsampling(browser, server) -> None:
     page = ui.open_page(browser, server)
     session = ui.session(server, 1)
     assert _shown(session, "ego_points") == 0 and _shown(session, "cav_points") == 0
 
     page.get_by_role("tab", name="View").click()
+    ui.wait_until(lambda: every_nth_disabled(page))
+    note = page.get_by_text("Disabled (LiDAR points are off: tick LiDAR points to draw them): points: every Nth.")
+    note.first.wait_for(timeout=20_000)
     ui.label(page, "LiDAR points").click()
     ui.wait_until(lambda: _shown(session, "ego_points") == 4 and _shown(session, "cav_points") == 4, timeout=60)
+    ui.wait_until(lambda: not every_nth_disabled(page))
+    note.first.wait_for(state="hidden", timeout=20_000)
     assert {"/scene/ego_points", "/scene/cav_points"} <= session.view.node_names
     ego = np.asarray(_cloud(session, "ego_points").points, dtype=float)
     # the ego's first point: (6, 0, -1.5) in its left-handed LiDAR frame, lifted by the 1.9 m sensor height

@@ -79,7 +79,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     caption.wait_for(timeout=20_000)
     assert caption.inner_text().splitlines() == [f"Frame {FRAME} · {'success' if is_success(m) else 'failed'}",
                                                  f"precision {m.precision:.2f} · recall {m.recall:.2f}",
-                                                 f"RTE {m.rte:.2f} m · RRE {m.rre:.1f}°"]
+                                                 f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°"]
     assert ui.in_first_screen(caption)
     page.locator("#cbm-key-numbers").wait_for(state="hidden", timeout=20_000)
     assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in tab.view.labels.values() if label.visible)

@@ -49,7 +49,8 @@ def test_nine_titled_steps_with_the_frames_numbers(outcome: Outcome) -> None:
     assert ("the same object" if facts.pair in facts.truth() else "two different objects") in shown[1].text
     assert shown[2].focus == tuple(facts.ego_xy[i]) and shown[0].focus is None and shown[8].focus is None
     for step in shown:
-        assert set(step.meshes) == {"ego_boxes", "cav_boxes"} and 2 <= len(step.text.split(". ")) <= 8
+        assert set(step.meshes) == {"ego_boxes", "cav_boxes", "ego_vehicle", "cav_vehicle"}
+        assert 2 <= len(step.text.split(". ")) <= 8 and step.labels["ego_agent"][0] == "ego"
 
 
 def test_local_matching_draws_one_wedge_and_diamond(outcome: Outcome) -> None:

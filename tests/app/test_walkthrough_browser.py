@@ -21,6 +21,8 @@ from support import browser as ui
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
 DOCS_IMAGE = Path(__file__).resolve().parents[2] / "docs" / "img" / "walkthrough.png"
+AGENTS = {f"{ROOT}/ego_vehicle", f"{ROOT}/cav_vehicle", f"{ROOT}/labels/ego_agent", f"{ROOT}/labels/cav_agent"}
+"""The ego and the CAV, drawn and labelled in every step (issue 39)."""
 
 
 @pytest.fixture(scope="module")
@@ -44,6 +46,7 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
     page.get_by_role("button", name="start walkthrough").click()
     _title(page, 0)
     ui.wait_until(lambda: f"{ROOT}/ego_boxes" in walk.nodes.visible_names)
+    ui.wait_until(lambda: AGENTS <= walk.nodes.visible_names)
     assert all(not frame.visible for frame in walk.nodes._normal)
     page.get_by_text("Play the animation").first.wait_for(timeout=10_000)
 
@@ -51,6 +54,7 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
         page.get_by_role("button", name="next step ▶").click()
         _title(page, k)
         ui.wait_until(lambda k=k: walk.step is not None and walk.step.key == steps.NAMES[k][0])
+        ui.wait_until(lambda: AGENTS <= walk.nodes.visible_names)
         if k == 2:
             ui.wait_until(lambda: looks_at_the_object(tab), 20)
     ui.wait_until(lambda: f"{ROOT}/truth" in walk.nodes.visible_names)
@@ -65,6 +69,9 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
     page.get_by_role("button", name="play animation").click()
     end = walk.step.motion[1]
     ui.wait_until(lambda: np.allclose(cav.position[:2], end[:2, 2], atol=1e-4), timeout=20)
+    label = walk.nodes.view.labels["cav_agent"]
+    assert np.allclose(walk.nodes.meshes["cav_vehicle"].position, cav.position, atol=1e-4)
+    assert np.allclose(label.position[:2], end[:2, 2], atol=1e-4), "the CAV's label moves with it"
 
     for k in (5, 4, 3, 2):
         page.get_by_role("button", name="◀ prev step").click()
