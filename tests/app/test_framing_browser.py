@@ -15,6 +15,7 @@ import pytest
 import loaders
 from app.scene import framing
 from app.session.explorer import Explorer
+from app.walkthrough import steps
 from support import browser as ui
 from support import pixels, releases
 
@@ -28,11 +29,13 @@ def matters(name: str) -> bool:
     return name.startswith(MATTERS)
 
 
-def label_boxes(tab, names=None) -> dict[str, tuple[float, float, float, float]]:
-    """(left, top, right, bottom) page pixels of the tab's visible labels (``names``: those only)."""
-    camera, px = tab.client.camera, tab.view.label_px
+def label_boxes(tab, names=None, view=None) -> dict[str, tuple[float, float, float, float]]:
+    """(left, top, right, bottom) page pixels of the visible labels of the tab's scene (``view``: of
+    that ``SceneView``; ``names``: those only)."""
+    view = view or tab.view
+    camera, px = tab.client.camera, view.label_px
     boxes = {}
-    for name, handle in list(tab.view.labels.items()):
+    for name, handle in list(view.labels.items()):
         if handle.visible and (names is None or names(name)):
             spot = framing.label_spot(handle.text, *handle.position[:2], px)
             u, v = pixels.project(camera, np.array([handle.position]))[0]
@@ -63,9 +66,9 @@ def misplaced(page, tab) -> list[str]:
     return wrong
 
 
-def overprinted(tab) -> list[tuple[str, str]]:
+def overprinted(tab, view=None) -> list[tuple[str, str]]:
     """Pairs of visible labels whose boxes overlap."""
-    boxes = label_boxes(tab)
+    boxes = label_boxes(tab, view=view)
     names = sorted(boxes)
     return [(a, b) for k, a in enumerate(names) for b in names[:k] if meets(boxes[a], boxes[b])]
 
@@ -170,4 +173,20 @@ def test_clear_in_the_inspector_removes_the_click_label(browser, server) -> None
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="clear", exact=True).click()
     ui.wait_until(lambda: not tab.view.labels["picked"].visible, 60)
+    page.close()
+
+
+def test_the_walkthroughs_vote_labels_do_not_overprint(browser, server) -> None:
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    walk = tab.walkthrough
+    page.get_by_role("tab", name="Steps").click()
+    page.get_by_role("button", name="start walkthrough").click()
+    ui.wait_until(lambda: walk.step is not None and walk.step.key == steps.NAMES[0][0], 60)
+    for k in range(1, 5):
+        page.get_by_role("button", name="next step ▶").click()
+        ui.wait_until(lambda k=k: walk.step.key == steps.NAMES[k][0], 60)
+    votes = [name for name, label in walk.nodes.view.labels.items() if label.visible and name.startswith("votes_")]
+    assert len(votes) >= 2, "step 5 labels several candidates' votes (else this test proves nothing)"
+    assert overprinted(tab, walk.nodes.view) == []
     page.close()
