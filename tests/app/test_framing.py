@@ -2,15 +2,19 @@
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
+import pytest
 
+import loaders
 from app.scene import framing, labelling
 from app.scene.camera import KEY_NUMBERS_LINE_PX, key_numbers_area
 from app.scene.drawing import draw
 from app.scene.framing import Area, Canvas, Spot
 from app.session.explorer import Explorer
 from app.session.settings import Settings
+from evaluation.trials import NoTrial
 
 CANVAS = Canvas(np.radians(50.0), 892.0, 720.0)
 """A 1280x720 window's canvas left of the docked control panel."""
@@ -74,3 +78,30 @@ def test_a_failed_frame_with_three_cavs_is_framed_whole_outside_the_key_numbers(
     area = framing.free_area(CANVAS, covered)
     pose = framing.frame(framing.spots_of(drawing), CANVAS, area)
     assert framing.all_inside(framing.spots_of(drawing), *pose, CANVAS, area)
+
+
+FIXTURES = Path(__file__).resolve().parents[1] / "loaders" / "fixtures"
+
+
+def first_outcome(explorer: Explorer, settings: Settings):
+    """The outcome of the first frame the protocol finds an ego and a CAV on (INTERACTION's frame 0 has none)."""
+    for frame in range(len(explorer)):
+        try:
+            return explorer.compute(dataclasses.replace(settings, frame=frame))
+        except NoTrial:
+            continue
+    raise AssertionError("no frame with an ego and a CAV")
+
+
+@pytest.mark.parametrize("dataset, protocol", [
+    ("synthetic:60", None), ("argoverse2", None), (FIXTURES / "interaction" / "vehicle_tracks_000.csv", None),
+    (FIXTURES / "sind" / "Xian_412_m1", "sind"), (FIXTURES / "opv2v" / "scenario", None),
+    (FIXTURES / "v2v4real", None), (FIXTURES / "dair_v2x" / "cooperative-vehicle-infrastructure", "opv2v")])
+def test_every_dataset_read_is_framed_whole_beside_the_key_numbers(dataset, protocol) -> None:
+    explorer = Explorer(loaders.open(dataset))
+    settings = Settings() if protocol is None else Settings().with_scenario(protocol=protocol)
+    drawing = draw(first_outcome(explorer, settings), explorer.map_segments)
+    area = framing.free_area(CANVAS, Area(516.0, 16.0, 876.0, 160.0))
+    spots = framing.spots_of(drawing)
+    assert len(spots) >= 4, "the ego, the CAV and their labels"
+    assert framing.all_inside(spots, *framing.frame(spots, CANVAS, area), CANVAS, area)
