@@ -171,8 +171,8 @@ class ClientSession:
         outcome, picture = self.last, self.last_drawing
         if outcome is None or picture is None:
             return
-        self.camera.frame(picture, outcome.settings.view, self._covered(outcome.settings.view), oblique)
-        self.view.lay_out()
+        self.view.lay_out(self.camera.frame(picture, outcome.settings.view, self._covered(outcome.settings.view),
+                                            oblique))
 
     def hide_click_label(self) -> None:
         self.view.hide_label("picked")
@@ -184,13 +184,11 @@ class ClientSession:
             return None
         return key_numbers_area(self.key_numbers.handle.content, self.camera.canvas, GAP, WIDTH)
 
-    def _aim(self, outcome: Outcome, picture: Drawing, reframe: bool) -> None:
-        """Frame the result (``reframe``: a first frame, a jump, a new layout or mode), else follow it."""
+    def _aim(self, outcome: Outcome, picture: Drawing, reframe: bool) -> float | None:
+        """Frame the result (``reframe``: a first frame, a jump, a new layout or mode), else follow
+        it; the metres per pixel to spread its labels at (None: the camera's)."""
         view, covered = outcome.settings.view, self._covered(outcome.settings.view)
-        if reframe:
-            self.camera.frame(picture, view, covered)
-        else:
-            self.camera.follow(picture, view, covered)
+        return (self.camera.frame if reframe else self.camera.follow)(picture, view, covered)
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""
@@ -311,8 +309,7 @@ class ClientSession:
         with self.client.atomic():
             self.key_numbers.show(outcome)
             staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
-            self._aim(outcome, picture, relaid or staged or first or jumped)
-            self.view.show(picture)
+            self.view.show(picture, self._aim(outcome, picture, relaid or staged or first or jumped))
             self.controls.metrics.show(picture.metrics_markdown, self._note)
             self.caption.show(outcome)
             self._refresh_cav_choices(outcome)

@@ -30,8 +30,9 @@ TOP_DOWN = {"position": (5.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
 """The camera before the first frame: straight above the scene ahead of the ego."""
 OBLIQUE = {"position": (-30.0, 0.0, 35.0), "look_at": (8.0, 0.0, 0.0)}
 """The 3D view: behind and above the ego, looking forward and down (about 43 degrees)."""
-FRAMINGS = 2
-"""Rounds of framing and spreading the labels apart before the last framing."""
+FRAMINGS, OVERSHOOT = 6, 1.2
+"""Rounds of spreading the labels apart and framing them, and how much coarser than the last
+camera's scale each round spreads them at (``TabCamera._framed``)."""
 ARRIVED_M = 0.1
 """Metres within which the browser's report of its camera counts as the pose the app sent."""
 KEY_NUMBERS_HEAD_PX, KEY_NUMBERS_LINE_PX, KEY_NUMBERS_CHARS = 68.0, 18.5, 46
@@ -88,40 +89,53 @@ class TabCamera:
             self.held = held
         move_camera(self.client, position, look_at)
 
-    def frame(self, drawing: Drawing, view: ViewOptions, covered: Area | None, oblique: bool = False) -> None:
+    def frame(self, drawing: Drawing, view: ViewOptions, covered: Area | None, oblique: bool = False) -> float | None:
         """The tab's default camera on ``drawing``: what matters framed in the free part of the canvas
-        (presentation mode: over the agents; ``oblique``: the 3D view of the layout, held)."""
+        (presentation mode: over the agents; ``oblique``: the 3D view of the layout, held). Returns
+        the metres per pixel to spread the labels at (None: the camera's own)."""
         if oblique:
             start = OBLIQUE
             self.move(*over_layout(start["position"], start["look_at"], drawing.centre_y,
                                    screen_of(self.client.camera)), held=True)
-        elif view.presentation and drawing.agents:
+            return None
+        if view.presentation and drawing.agents:
             self.move(*camera_over(drawing.agents, self.client.camera.fov))
-        else:
-            self.move(*self._framed(drawing, covered))
+            return None
+        pose, scale = self._framed(drawing, covered)
+        self.move(*pose)
+        return scale
 
-    def _framed(self, drawing: Drawing, covered: Area | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
-        """``framing.frame`` on ``drawing`` with its labels spread apart as the camera framed shows them
-        (spreading moves labels, which moves the framing a little: ``FRAMINGS`` rounds)."""
+    def _framed(self, drawing: Drawing, covered: Area | None) -> tuple[tuple[tuple[float, ...], ...], float]:
+        """A camera framing ``drawing`` with its labels spread apart, and the metres per pixel they
+        are spread at: no less than the camera's, so that it shows them apart. Spreading at a
+        coarser scale stacks more labels, which may call for a higher camera: ``FRAMINGS`` rounds,
+        each spreading at ``OVERSHOOT`` times the scale the last camera showed."""
         canvas = self.canvas
-        area = framing.free_area(canvas, covered)
-        labels = drawing.labels
+        areas = framing.free_areas(canvas, covered)
+        pose = framing.frame(framing.spots_of(drawing), canvas, areas)
+        scale = framing.metres_per_px(*pose, canvas)
         for _ in range(FRAMINGS):
-            pose = framing.frame(framing.spots_of(drawing, labels), canvas, area)
-            labels = spread(drawing.labels, framing.metres_per_px(*pose, canvas), drawing.label_px)
-        return framing.frame(framing.spots_of(drawing, labels), canvas, area)
+            labels = spread(drawing.labels, scale, drawing.label_px)
+            pose = framing.frame(framing.spots_of(drawing, labels), canvas, areas)
+            shown = framing.metres_per_px(*pose, canvas)
+            if shown <= scale:
+                break
+            scale = shown * OVERSHOOT
+        return pose, scale
 
-    def follow(self, drawing: Drawing, view: ViewOptions, covered: Area | None) -> None:
+    def follow(self, drawing: Drawing, view: ViewOptions, covered: Area | None) -> float | None:
         """Stepping: frame ``drawing`` again only when something that matters would leave the free
-        part of the canvas, *camera follows* is on, and neither a person nor the 3D view holds the camera."""
+        part of the canvas, *camera follows* is on, and neither a person nor the 3D view holds the
+        camera. Returns what ``frame`` does (None when the camera stays)."""
         if not view.follow or self.moved_by_person or self.held:
-            return
+            return None
         camera, canvas = self.client.camera, self.canvas
         position, look_at = tuple(camera.position), tuple(camera.look_at)
         labels = spread(drawing.labels, framing.metres_per_px(position, look_at, canvas), drawing.label_px)
-        area = framing.free_area(canvas, covered, margin=0.0)
-        if not framing.all_inside(framing.spots_of(drawing, labels), position, look_at, canvas, area):
-            self.frame(drawing, view, covered)
+        areas = framing.free_areas(canvas, covered, margin=0.0)
+        if not framing.inside_one(framing.spots_of(drawing, labels), position, look_at, canvas, areas):
+            return self.frame(drawing, view, covered)
+        return None
 
     def _reported(self, camera: viser.CameraHandle) -> None:
         """A report of the browser's camera: the pose sent has arrived, or a person moved it since."""

@@ -94,15 +94,15 @@ def canvas_of(camera: Any) -> Canvas:
     return Canvas(fov, width / ratio, height / ratio)
 
 
-def free_area(canvas: Canvas, covered: Area | None, margin: float = MARGIN_PX) -> Area:
-    """The largest rectangle of the canvas beside or beyond the ``covered`` one (a panel floating in a
-    corner), less ``margin`` all round."""
-    whole = Area(0.0, 0.0, canvas.width, canvas.height)
+def free_areas(canvas: Canvas, covered: Area | None, margin: float = MARGIN_PX) -> list[Area]:
+    """The rectangles of the canvas beside, above or below the ``covered`` one (a panel floating in a
+    corner; None: the whole canvas), each less ``margin`` all round, the largest first."""
     if covered is None:
-        return whole.inset(margin)
+        return [Area(0.0, 0.0, canvas.width, canvas.height).inset(margin)]
     options = (Area(0.0, 0.0, covered.left, canvas.height), Area(covered.right, 0.0, canvas.width, canvas.height),
                Area(0.0, 0.0, canvas.width, covered.top), Area(0.0, covered.bottom, canvas.width, canvas.height))
-    return max(options, key=lambda area: area.size).inset(margin)
+    shrunk = [area.inset(margin) for area in sorted(options, key=lambda area: -area.size)]
+    return [area for area in shrunk if area.right - area.left > 0 and area.bottom - area.top > 0]
 
 
 def label_spot(text: str, x: float, y: float, label_px: float) -> Spot:
@@ -163,7 +163,12 @@ def framed(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, 
     return (look_x - TILT * height, look_y, height), (look_x, look_y, 0.0)
 
 
-def frame(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:
+def frame(spots: list[Spot], canvas: Canvas, areas: list[Area]) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The camera closest to the ground that frames every spot in one of ``areas`` (``frame_in``)."""
+    return min((frame_in(spots, canvas, area) for area in areas), key=lambda pose: pose[0][2])
+
+
+def frame_in(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """``framed``, the area narrowed a step at a time until the camera's perspective (which the
     estimate leaves out) keeps every spot inside it too."""
     pose = framed(spots, canvas, area)
@@ -186,6 +191,12 @@ def project(position: tuple[float, ...], look_at: tuple[float, ...], canvas: Can
     depth = rel @ forward
     return np.stack([canvas.width / 2 + canvas.focal * (rel @ right) / depth,
                      canvas.height / 2 - canvas.focal * (rel @ up) / depth], axis=1)
+
+
+def inside_one(spots: list[Spot], position: tuple[float, ...], look_at: tuple[float, ...], canvas: Canvas,
+               areas: list[Area]) -> bool:
+    """Whether every spot shows whole inside one of ``areas`` (all in the same) through that camera."""
+    return any(all_inside(spots, position, look_at, canvas, area) for area in areas)
 
 
 def all_inside(spots: list[Spot], position: tuple[float, ...], look_at: tuple[float, ...], canvas: Canvas,

@@ -63,6 +63,8 @@ class SceneView:
         """Height of the labels' text in CSS pixels, as the last drawing shown asks."""
         self.wanted: Labels = {}
         """Every label to show, where it belongs (``show`` spreads them apart on screen)."""
+        self.scale = 0.0
+        """Metres per pixel the labels were last spread at."""
 
     @property
     def node_names(self) -> set[str]:
@@ -70,8 +72,9 @@ class SceneView:
         return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values(),
                                  *self.clouds.values())}
 
-    def show(self, drawing: Drawing) -> None:
-        """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""
+    def show(self, drawing: Drawing, scale: float | None = None) -> None:
+        """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone;
+        the labels spread apart at ``scale`` metres per pixel (``lay_out``)."""
         with self.client.atomic():
             self._show_meshes(drawing.meshes)
             self._show_lines(drawing.lines)
@@ -79,7 +82,7 @@ class SceneView:
                 if self._changed(name, fingerprint((cloud.points,), cloud.color)):
                     self._cloud(name, cloud)
             self.label_px = drawing.label_px
-            self._show_labels(drawing.labels)
+            self._show_labels(drawing.labels, scale)
 
     def show_only(self, meshes: dict[str, Mesh], lines: dict[str, Lines],
                   labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
@@ -124,18 +127,21 @@ class SceneView:
             if line_set.pose is not None and self._moved(name, line_set.pose):
                 _place(self.lines[name], line_set.pose)
 
-    def _show_labels(self, labels: Labels) -> None:
-        """Show ``labels`` (hiding the others), spread apart for the camera as it stands."""
+    def _show_labels(self, labels: Labels, scale: float | None = None) -> None:
+        """Show ``labels`` (hiding the others), spread apart (``lay_out``)."""
         self.wanted = dict(labels)
         for name in set(self.labels) - set(self.wanted):
             self.labels[name].visible = False
-        self.lay_out()
+        self.lay_out(scale)
 
-    def lay_out(self) -> None:
-        """Write every wanted label where ``labelling.spread`` puts it for the camera as it stands."""
+    def lay_out(self, scale: float | None = None) -> None:
+        """Write every wanted label where ``labelling.spread`` puts it at ``scale`` metres per pixel
+        (the scale a framing spread them at), or the camera's as it stands when that is coarser:
+        labels spread at a coarser scale than the camera's show apart."""
         camera = self.client.camera
-        scale = framing.metres_per_px(tuple(camera.position), tuple(camera.look_at), framing.canvas_of(camera))
-        for name, (text, position) in spread(self.wanted, scale, self.label_px).items():
+        here = framing.metres_per_px(tuple(camera.position), tuple(camera.look_at), framing.canvas_of(camera))
+        self.scale = max(scale or 0.0, here)
+        for name, (text, position) in spread(self.wanted, self.scale, self.label_px).items():
             self._write(name, text, position)
 
     def _hide(self, handles: dict, name: str) -> None:
@@ -146,7 +152,7 @@ class SceneView:
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name`` at ``position``, or as near below it as keeps it off the others."""
         self.wanted[name] = (text, position)
-        self.lay_out()
+        self.lay_out(self.scale)
 
     def _write(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name``, its text ``label_px`` high."""

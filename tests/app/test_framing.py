@@ -35,18 +35,20 @@ def overlapping(boxes: list[tuple[float, float, float, float]]) -> list[tuple[in
 def test_spots_far_apart_all_show_inside_the_free_area_with_their_labels() -> None:
     spots = [Spot(0.0, 0.0), framing.label_spot("ego", 0.0, 0.0, 14.0), framing.label_spot("CAV", 47.0, -30.0, 14.0),
              framing.label_spot("missed 0ee9d30a", -20.0, 35.0, 14.0)]
-    area = framing.free_area(CANVAS, Area(516.0, 16.0, 876.0, 160.0))
-    pose = framing.frame(spots, CANVAS, area)
-    assert framing.all_inside(spots, *pose, CANVAS, area)
-    assert not framing.all_inside(spots, (5.0, 0.0, 60.0), (8.0, 0.0, 0.0), CANVAS, area), \
+    areas = framing.free_areas(CANVAS, Area(516.0, 16.0, 876.0, 160.0))
+    pose = framing.frame(spots, CANVAS, areas)
+    assert framing.inside_one(spots, *pose, CANVAS, areas)
+    assert not framing.inside_one(spots, (5.0, 0.0, 60.0), (8.0, 0.0, 0.0), CANVAS, areas), \
         "the old fixed camera missed some (else this test proves nothing)"
 
 
-def test_the_free_area_is_the_larger_part_beside_or_below_a_corner_panel() -> None:
-    below = framing.free_area(CANVAS, Area(516.0, 16.0, 876.0, 160.0), margin=0.0)
-    assert below == Area(0.0, 160.0, 892.0, 720.0)
-    beside = framing.free_area(CANVAS, Area(516.0, 16.0, 876.0, 600.0), margin=0.0)
-    assert beside == Area(0.0, 0.0, 516.0, 720.0)
+def test_the_free_areas_lie_beside_and_below_a_corner_panel_and_the_closest_framing_wins() -> None:
+    areas = framing.free_areas(CANVAS, Area(516.0, 16.0, 876.0, 160.0), margin=0.0)
+    assert areas[:2] == [Area(0.0, 160.0, 892.0, 720.0), Area(0.0, 0.0, 516.0, 720.0)]
+    tall = [Spot(-60.0, 0.0), Spot(60.0, 0.0)]
+    wide = [Spot(0.0, -60.0), Spot(0.0, 60.0)]
+    assert framing.frame(tall, CANVAS, areas) == framing.frame_in(tall, CANVAS, areas[1]), "the tall part beside"
+    assert framing.frame(wide, CANVAS, areas) == framing.frame_in(wide, CANVAS, areas[0]), "the wide part below"
 
 
 def test_the_key_numbers_area_grows_with_their_lines_and_wraps_long_ones() -> None:
@@ -75,9 +77,9 @@ def test_a_failed_frame_with_three_cavs_is_framed_whole_outside_the_key_numbers(
     outcome = explorer.compute(dataclasses.replace(Settings(frame=139), cavs=3))
     drawing = draw(outcome, explorer.map_segments)
     covered = Area(516.0, 16.0, 876.0, 250.0)
-    area = framing.free_area(CANVAS, covered)
-    pose = framing.frame(framing.spots_of(drawing), CANVAS, area)
-    assert framing.all_inside(framing.spots_of(drawing), *pose, CANVAS, area)
+    areas = framing.free_areas(CANVAS, covered)
+    pose = framing.frame(framing.spots_of(drawing), CANVAS, areas)
+    assert framing.inside_one(framing.spots_of(drawing), *pose, CANVAS, areas)
 
 
 FIXTURES = Path(__file__).resolve().parents[1] / "loaders" / "fixtures"
@@ -101,7 +103,7 @@ def test_every_dataset_read_is_framed_whole_beside_the_key_numbers(dataset, prot
     explorer = Explorer(loaders.open(dataset))
     settings = Settings() if protocol is None else Settings().with_scenario(protocol=protocol)
     drawing = draw(first_outcome(explorer, settings), explorer.map_segments)
-    area = framing.free_area(CANVAS, Area(516.0, 16.0, 876.0, 160.0))
+    areas = framing.free_areas(CANVAS, Area(516.0, 16.0, 876.0, 160.0))
     spots = framing.spots_of(drawing)
     assert len(spots) >= 4, "the ego, the CAV and their labels"
-    assert framing.all_inside(spots, *framing.frame(spots, CANVAS, area), CANVAS, area)
+    assert framing.inside_one(spots, *framing.frame(spots, CANVAS, areas), CANVAS, areas)

@@ -136,7 +136,24 @@ def test_a_failed_frame_after_next_failure_shows_every_wrong_and_missed_pair(bro
     ui.wait_until(lambda: tab.last.frame_index != start, 120)
     assert tab.last.frame_index in tab.history.failures()
     assert_framed(page, tab, wanted=4)
+
+    frame = tab.last.frame_index
+    page.get_by_role("tab", name="Scenario").click()
+    type_into(page, "CAVs", "3")
+    ui.wait_until(lambda: tab.last.settings.cavs == 3 and tab.last.frame_index == frame, 120)
+    page.get_by_role("tab", name="View").click()
+    page.get_by_role("button", name="reset camera").click()
+    ui.wait_until(lambda: page.locator("#cbm-key-numbers").inner_text().count("CAV") >= 3, 60)
+    assert_framed(page, tab, wanted=8)
     page.close()
+
+
+def type_into(page, label: str, value: str) -> None:
+    """Type ``value`` into the number box of the control labelled ``label``."""
+    row = ui.label(page, label).locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]")
+    box = row.locator("input.mantine-NumberInput-input")
+    box.fill(value)
+    box.press("Enter")
 
 
 @pytest.mark.parametrize("sample", ["opv2v", "dair"])
