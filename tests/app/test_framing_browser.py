@@ -207,3 +207,35 @@ def test_the_walkthroughs_vote_labels_do_not_overprint(browser, server) -> None:
     assert len(votes) >= 2, "step 5 labels several candidates' votes (else this test proves nothing)"
     assert overprinted(tab, walk.nodes.view) == []
     page.close()
+
+
+def test_stepping_keeps_the_camera_still_while_all_shows_and_camera_follows_off_never_moves_it(
+        browser, server) -> None:
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    settled(page, tab)
+    camera = tab.client.camera
+    still = camera.position.copy()
+    page.get_by_role("button", name="next ▶").click()
+    ui.wait_until(lambda: tab.last.frame_index == 1, 120)
+    assert np.allclose(camera.position, still, atol=0.05), "the next frame shows whole under the same camera"
+    assert_framed(page, tab, wanted=1)
+
+    page.get_by_role("tab", name="View").click()
+    ui.label(page, "camera follows").click()
+    ui.wait_until(lambda: not tab.settings.view.follow, 60)
+    ui.go_to_frame(page, tab, 139)
+    assert np.allclose(camera.position, still, atol=0.05)
+    assert misplaced(page, tab), "frame 139's CAV lies off the first frame's view (else this proves nothing)"
+    page.close()
+
+
+def test_stepping_to_a_frame_whose_cav_would_leave_the_view_frames_it(browser, server) -> None:
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    settled(page, tab)
+    first = tab.client.camera.position.copy()
+    ui.go_to_frame(page, tab, 139)
+    ui.wait_until(lambda: not np.allclose(tab.client.camera.position, first, atol=0.05), 60)
+    assert_framed(page, tab, wanted=2)
+    page.close()
