@@ -15,10 +15,12 @@ from cbm.methods import METHODS
 from . import panels
 from .panels.actions import Edit
 from .panels.explore import ExplorePanel
-from .panels.keynumbers import KeyNumbers, unusable_markdown
+from .panels.keynumbers import GAP, WIDTH, KeyNumbers, unusable_markdown
 from .panels.plot import timeline_data
 from .scene import picking, planes, presentation
+from .scene.camera import TabCamera, key_numbers_area
 from .scene.drawing import Drawing, draw
+from .scene.framing import Area
 from .scene.pinned import with_baseline
 from .scene.view import SceneView
 from .session.baseline import Baseline
@@ -31,7 +33,7 @@ from .session.over_time import Stopped
 from .session.presets import PresetError, discover, in_use, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
-from .session.settings import AUTO_CAV, Settings
+from .session.settings import AUTO_CAV, Settings, ViewOptions
 from .walkthrough.panel import WalkthroughPanel
 
 TIMELINE_DELAY = 0.2
@@ -67,7 +69,10 @@ class ClientSession:
         self._choices_frame = -1
         self.presets, problems = discover()
         self.view = SceneView(client)
-        self.view.reset_camera()
+        self.camera = TabCamera(client)
+        self.camera.on_measured = self.reset_camera
+        self._frame_for: Settings | None = None
+        """Settings whose result the camera is to frame when shown (a jump to a frame)."""
         self.caption = presentation.Caption(client)
         self.key_numbers = KeyNumbers(client.gui)
         self.offers = offers_of(explorer.sequence)
@@ -98,21 +103,25 @@ class ClientSession:
     def current(self) -> tuple[Outcome | None, Drawing | None]:
         return self.last, self.last_drawing
 
-    def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
+    def apply(self, edit: Edit, *, move_controls: bool = False, frame_camera: bool = False) -> None:
         """Replace the settings by ``edit(settings)`` and recompute (coalesced); an edit that
         changes nothing computes nothing, one to fewer CAVs than the method needs switches the method
         and says so (``Offers.adapted``). Controls that apply to the new settings are shown;
-        ``move_controls`` also moves every control to them (a preset, a jump, a step)."""
+        ``move_controls`` also moves every control to them (a preset, a jump, a step);
+        ``frame_camera``: the camera frames the result (at once when nothing changes)."""
         try:
             with self._lock:
                 new = edit(self._settings)
                 if new == self._settings:
+                    if frame_camera:
+                        self.reset_camera()
                     return
                 new, switched = self.offers.adapted(self._settings, new)
                 refused = self.offers.refusal(new)
                 if refused:
                     raise ValueError(refused)
                 self._settings = new
+                self._frame_for = new if frame_camera else self._frame_for
                 self.worker.submit(new)
         except (ValueError, TypeError) as error:
             self.notify("Setting refused", str(error), "red")
@@ -164,10 +173,29 @@ class ClientSession:
         self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
 
     def reset_camera(self, oblique: bool = False) -> None:
-        """Back to the top-down view of the current layout (presentation mode: over the two agents);
-        ``oblique``: the 3D view, from behind and above the ego."""
-        view = self._settings.view if self.last is None else self.last.settings.view
-        presentation.aim(self.view, view, self.last_drawing, oblique)
+        """Frame the frame on screen from straight above (presentation mode: over the two agents);
+        ``oblique``: the 3D view, from behind and above the ego. The labels are spread apart again."""
+        outcome, picture = self.last, self.last_drawing
+        if outcome is None or picture is None:
+            return
+        self.view.lay_out(self.camera.frame(picture, outcome.settings.view, self._covered(outcome.settings.view),
+                                            oblique))
+
+    def hide_click_label(self) -> None:
+        self.view.hide_label("picked")
+
+    def _covered(self, view: ViewOptions) -> Area | None:
+        """The part of the canvas a floating panel covers: the key numbers' (none in presentation
+        mode, whose camera frames the agents for a caption at the page's bottom left)."""
+        if view.presentation:
+            return None
+        return key_numbers_area(self.key_numbers.handle.content, self.camera.canvas, GAP, WIDTH)
+
+    def _aim(self, outcome: Outcome, picture: Drawing, reframe: bool) -> float | None:
+        """Frame the result (``reframe``: a first frame, a jump, a new layout or mode), else follow
+        it; the metres per pixel to spread its labels at (None: the camera's)."""
+        view, covered = outcome.settings.view, self._covered(outcome.settings.view)
+        return (self.camera.frame if reframe else self.camera.follow)(picture, view, covered)
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""
@@ -284,13 +312,12 @@ class ClientSession:
         outcome, picture = computed
         first = not self.view.meshes
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
+        jumped, self._frame_for = self._frame_for == outcome.settings, None
         with self.client.atomic():
-            self.view.show(picture)
-            staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
-            if relaid or staged or first:
-                presentation.aim(self.view, outcome.settings.view, picture)
-            self.controls.metrics.show(picture.metrics_markdown, self._note)
             self.key_numbers.show(outcome)
+            staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
+            self.view.show(picture, self._aim(outcome, picture, relaid or staged or first or jumped))
+            self.controls.metrics.show(picture.metrics_markdown, self._note)
             self.caption.show(outcome)
             self._refresh_cav_choices(outcome)
             self.explore.refresh(outcome, picture)

@@ -28,9 +28,10 @@ class TabActions(Protocol):
     def current(self) -> tuple[Outcome | None, Drawing | None]:
         """The outcome on screen and its drawing (None before the first frame)."""
 
-    def apply(self, edit: Edit, *, move_controls: bool = False) -> None:
+    def apply(self, edit: Edit, *, move_controls: bool = False, frame_camera: bool = False) -> None:
         """Replace the settings by ``edit(settings)`` and recompute; ``move_controls`` when the
-        change did not come from the controls (a preset, a jump, a search result)."""
+        change did not come from the controls (a preset, a jump, a search result); ``frame_camera``
+        when the camera is to frame the result (a jump to a frame)."""
 
     def step(self, delta: int) -> None: ...
 
@@ -40,6 +41,9 @@ class TabActions(Protocol):
         """The vehicle id behind an entry of the CAV list."""
 
     def reset_camera(self, oblique: bool = False) -> None: ...
+
+    def hide_click_label(self) -> None:
+        """Hide the label of the object clicked last."""
 
     def load_preset(self, name: str) -> None: ...
 

@@ -195,13 +195,15 @@ class ExplorePanel:
             return
         found = self.run_differences()
         if not found:
-            self.tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True)
+            self.tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True, frame_camera=True)
             return
         run, apply = self.run, self.tab.apply
         confirm.ask(self.gui, f"Jump to frame {frame}", jump_markdown(frame, found), {
             "set the run's settings and jump": lambda: apply(
-                lambda s: dataclasses.replace(run.settings, frame=frame, view=s.view), move_controls=True),
-            "jump, keep my settings": lambda: apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True),
+                lambda s: dataclasses.replace(run.settings, frame=frame, view=s.view), move_controls=True,
+                frame_camera=True),
+            "jump, keep my settings": lambda: apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True,
+                                                    frame_camera=True),
             "cancel": None})
 
     # dataset calibration
@@ -215,7 +217,8 @@ class ExplorePanel:
         """Show a flagged frame of the calibration check with its CAV, under the current settings."""
         row = self.calibration.row_of(chosen)
         if row is not None:
-            self.tab.apply(lambda s: dataclasses.replace(s, frame=row.frame, cav=row.cav), move_controls=True)
+            self.tab.apply(lambda s: dataclasses.replace(s, frame=row.frame, cav=row.cav), move_controls=True,
+                           frame_camera=True)
 
     # parameter search
 
@@ -292,6 +295,7 @@ class ExplorePanel:
             layouts.move_camera(self.tab.client, *self.camera_before)
             self.camera_before = None
         self.inspected = self.shown = None
+        self.tab.hide_click_label()
         self.inspector_view.show(inspector.empty())
         self.inspector_text.content = "Click a box in the scene to see its context."
 

@@ -87,7 +87,7 @@ def bind(c: FrameControls, tab: TabActions) -> None:
         c.scenario.value = scenario_of(c.starts, tab.settings.frame)
         c.scenario.visible = True
         on_user(c.scenario, lambda: tab.apply(
-            lambda s: dataclasses.replace(s, frame=c.starts[c.scenario.value]), move_controls=True))
+            lambda s: dataclasses.replace(s, frame=c.starts[c.scenario.value]), move_controls=True, frame_camera=True))
 
 
 def _stepped(c: FrameControls, tab: TabActions, button: str) -> None:

@@ -123,7 +123,8 @@ def bind(c: MetricsControls, tab: TimelineTab) -> None:
 
 
 def go_to(tab: TabActions, frame: int) -> None:
-    tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True)
+    """Jump to ``frame``, the camera framing it."""
+    tab.apply(lambda s: dataclasses.replace(s, frame=frame), move_controls=True, frame_camera=True)
 
 
 def step_failure(tab: TimelineTab, direction: int) -> None:

@@ -15,7 +15,7 @@ from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, assign, on_user
 
-TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused")
+TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused", "follow")
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 POINTS_HINT = "The ego's and the CAV's LiDAR points (datasets with .pcd files), the CAV's placed like its boxes"
@@ -40,6 +40,7 @@ class ViewControls:
     pinned_lines: viser.GuiCheckboxHandle
     reset_camera: viser.GuiButtonHandle
     view_3d: viser.GuiButtonHandle
+    follow: viser.GuiCheckboxHandle
     presentation: viser.GuiCheckboxHandle
     dark: viser.GuiCheckboxHandle
     points: viser.GuiCheckboxHandle
@@ -81,8 +82,12 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         labels=gui.add_checkbox("label clicked objects", view.labels),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
-        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene: footprints show as compared"),
+        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene, framing the agents and every "
+                                                          "wrong and missed pair: footprints show as compared"),
         view_3d=gui.add_button("3D view", hint="From behind and above the ego (reset camera: back to top-down)"),
+        follow=gui.add_checkbox("camera follows", view.follow,
+                                hint="While stepping or playing, move the camera only when an agent or a wrong or "
+                                     "missed pair would leave the view (a camera you moved stays until reset camera)"),
         presentation=gui.add_checkbox("presentation mode", view.presentation,
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),

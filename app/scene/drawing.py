@@ -105,7 +105,7 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
                    for pose in (*parts.ego_poses, *(p for poses in parts.cav_poses.values() for p in poses)))
     points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
                     (parts.ego_poses, parts.cav_poses[1]), view.points_every, (palette.ego_boxes, palette.cav_boxes))
-    labels = {**parts.labels, **pairs.spread({k: v for shapes in parts.shapes for k, v in shapes.labels.items()})}
+    labels = {**parts.labels, **{k: v for shapes in parts.shapes for k, v in shapes.labels.items()}}
     return Drawing(meshes=_meshes(parts, ego, palette), lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),

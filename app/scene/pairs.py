@@ -15,10 +15,6 @@ from . import colours, geometry, planes
 
 Labels = dict[str, tuple[str, tuple[float, float, float]]]
 """Text and (x, y, z) of each label, by name."""
-LABEL_LINE_M = 1.3
-"""Metres a label's line of text covers up the screen under the default camera (``LABEL_PX`` at its height)."""
-LABEL_CHAR_M = 0.6
-"""Metres a character of a label covers across the screen under the default camera."""
 
 
 @dataclass(frozen=True)
@@ -62,20 +58,6 @@ def unexplained(missed: np.ndarray, wrong: np.ndarray) -> np.ndarray:
     its wrong pairs' labels already, and their outlines stay)."""
     both = np.isin(missed[:, 0], wrong[:, 0]) & np.isin(missed[:, 1], wrong[:, 1])
     return missed[~both]
-
-
-def spread(labels: Labels) -> Labels:
-    """The labels moved down the screen (-x, the top-down camera's down), one line at a time, until
-    none overprints one placed before it (a label's text runs from its point to the screen's right, -y)."""
-    placed: list[tuple[float, float, float]] = []
-    out = {}
-    for name, (text, (x, y, z)) in sorted(labels.items(), key=lambda item: -item[1][1][0]):
-        width = LABEL_CHAR_M * len(text)
-        while any(abs(x - px) < LABEL_LINE_M and y - width < py and py - pw < y for px, py, pw in placed):
-            x -= LABEL_LINE_M
-        placed.append((x, y, width))
-        out[name] = (text, (x, y, z))
-    return out
 
 
 def _segments(ego: Drawn, cav: Drawn, pairs: np.ndarray, dash: float | None) -> np.ndarray:

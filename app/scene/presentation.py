@@ -12,12 +12,9 @@ import viser
 
 from ..session.settings import ViewOptions
 from .captions import caption_html
-from .layouts import move_camera
 
 if TYPE_CHECKING:
     from ..session.explorer import Outcome
-    from .drawing import Drawing
-    from .view import SceneView
 
 THEME = {"show_share_button": False, "control_width": "large", "show_logo": False}
 """The theme of every tab (``app.server``); a tab's own ``configure_theme`` replaces the whole theme,
@@ -46,20 +43,9 @@ def camera_over(agents: Sequence[tuple[float, float]], fov: float) -> tuple[tupl
     return (float(centre[0] - TILT * height), float(centre[1]), height), (float(centre[0]), float(centre[1]), 0.0)
 
 
-def aim(scene: SceneView, view: ViewOptions, drawing: Drawing | None, oblique: bool = False) -> None:
-    """The tab's default camera: over the agents in presentation mode, else the layout's view from
-    straight above (``oblique``: the 3D view, from behind and above)."""
-    if drawing is None:
-        scene.reset_camera(oblique=oblique)
-    elif view.presentation and drawing.agents and not oblique:
-        move_camera(scene.client, *camera_over(drawing.agents, scene.client.camera.fov))
-    else:
-        scene.reset_camera(drawing.centre_y, oblique)
-
-
 def restage(client: viser.ClientHandle, before: ViewOptions | None, after: ViewOptions) -> bool:
     """Switch the tab's colour scheme and control panel from ``before``'s (None: the defaults) to
-    ``after``'s; whether presentation mode changed (then the camera is to be aimed again).
+    ``after``'s; whether presentation mode changed (then the camera is to be framed again).
 
     The panel is minimised (``main_panel.minimize``: the same as its on-screen minimise control,
     which expands it again) when presentation mode starts, and expanded when it ends."""

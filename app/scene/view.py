@@ -12,22 +12,16 @@ import viser
 
 from cbm import se2
 
+from . import framing
 from .captions import LABEL_PX
 from .drawing import Drawing, Lines, Mesh
-from .layouts import move_camera, over_layout, screen_of
+from .labelling import spread
+from .pairs import Labels
 from .points import POINT_SIZE, PointCloud
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
 _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
 _DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
-TOP_DOWN = {"position": (5.0, 0.0, 60.0), "look_at": (8.0, 0.0, 0.0)}
-"""Default camera: straight above the scene ahead of the ego (standing back a twentieth of its height,
-so that x points up the screen): the footprints show as they are compared."""
-OBLIQUE = {"position": (-30.0, 0.0, 35.0), "look_at": (8.0, 0.0, 0.0)}
-"""The 3D view: behind and above the ego, looking forward and down (about 43 degrees)."""
-NEAR = 0.5
-"""Metres to the camera's near clipping plane: depth precision enough to stack the footprints'
-layers (``planes.STEP`` apart) seen from 100 m."""
 VISER_LABEL_PX = 12.0
 """Height in CSS pixels of viser's screen-space label text at ``font_screen_scale`` 1."""
 
@@ -67,6 +61,10 @@ class SceneView:
         """How often each node was created or changed (a redraw that leaves it alone does not count)."""
         self.label_px = LABEL_PX
         """Height of the labels' text in CSS pixels, as the last drawing shown asks."""
+        self.wanted: Labels = {}
+        """Every label to show, where it belongs (``show`` spreads them apart on screen)."""
+        self.scale = 0.0
+        """Metres per pixel the labels were last spread at."""
 
     @property
     def node_names(self) -> set[str]:
@@ -74,16 +72,9 @@ class SceneView:
         return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values(),
                                  *self.clouds.values())}
 
-    def reset_camera(self, centre_y: float = 0.0, oblique: bool = False) -> None:
-        """Look straight down on the scene ahead of the ego (``oblique``: the 3D view, from behind
-        and above), centred sideways on ``centre_y`` (higher when the layout shows two panels side
-        by side), in the part of the page the control panel leaves free."""
-        camera, start = self.client.camera, OBLIQUE if oblique else TOP_DOWN
-        camera.near = NEAR
-        move_camera(self.client, *over_layout(start["position"], start["look_at"], centre_y, screen_of(camera)))
-
-    def show(self, drawing: Drawing) -> None:
-        """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone."""
+    def show(self, drawing: Drawing, scale: float | None = None) -> None:
+        """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone;
+        the labels spread apart at ``scale`` metres per pixel (``lay_out``)."""
         with self.client.atomic():
             self._show_meshes(drawing.meshes)
             self._show_lines(drawing.lines)
@@ -91,7 +82,7 @@ class SceneView:
                 if self._changed(name, fingerprint((cloud.points,), cloud.color)):
                     self._cloud(name, cloud)
             self.label_px = drawing.label_px
-            self._show_labels(drawing.labels)
+            self._show_labels(drawing.labels, scale)
 
     def show_only(self, meshes: dict[str, Mesh], lines: dict[str, Lines],
                   labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
@@ -136,11 +127,22 @@ class SceneView:
             if line_set.pose is not None and self._moved(name, line_set.pose):
                 _place(self.lines[name], line_set.pose)
 
-    def _show_labels(self, labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
-        for name in set(self.labels) - set(labels):
+    def _show_labels(self, labels: Labels, scale: float | None = None) -> None:
+        """Show ``labels`` (hiding the others), spread apart (``lay_out``)."""
+        self.wanted = dict(labels)
+        for name in set(self.labels) - set(self.wanted):
             self.labels[name].visible = False
-        for name, (text, position) in labels.items():
-            self.label(name, text, position)
+        self.lay_out(scale)
+
+    def lay_out(self, scale: float | None = None) -> None:
+        """Write every wanted label where ``labelling.spread`` puts it at ``scale`` metres per pixel
+        (the scale a framing spread them at), or the camera's as it stands when that is coarser:
+        labels spread at a coarser scale than the camera's show apart."""
+        camera = self.client.camera
+        here = framing.metres_per_px(tuple(camera.position), tuple(camera.look_at), framing.canvas_of(camera))
+        self.scale = max(scale or 0.0, here)
+        for name, (text, position) in spread(self.wanted, self.scale, self.label_px).items():
+            self._write(name, text, position)
 
     def _hide(self, handles: dict, name: str) -> None:
         """Hide node ``name``; forget what it showed, so that showing it again redraws it."""
@@ -148,6 +150,11 @@ class SceneView:
         self.shown.pop(name, None)
 
     def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
+        """Show (or move) the label ``name`` at ``position``, or as near below it as keeps it off the others."""
+        self.wanted[name] = (text, position)
+        self.lay_out(self.scale)
+
+    def _write(self, name: str, text: str, position: tuple[float, float, float]) -> None:
         """Show (or move) the label ``name``, its text ``label_px`` high."""
         scale = self.label_px / VISER_LABEL_PX
         handle = self.labels.get(name)
@@ -160,6 +167,8 @@ class SceneView:
             handle.text, handle.position, handle.visible, handle.font_screen_scale = text, position, True, scale
 
     def hide_label(self, name: str) -> None:
+        """Hide the label ``name`` (and forget it: a redraw does not show it again)."""
+        self.wanted.pop(name, None)
         if name in self.labels:
             self.labels[name].visible = False
 

@@ -55,6 +55,9 @@ class ViewOptions:
     """The two agents' LiDAR points, when the dataset ships them (OPV2V ``.pcd``)."""
     points_every: int = 10
     """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
+    follow: bool = True
+    """While stepping or playing, the camera moves only when something that matters (an agent, a
+    wrong or missed pair) would leave the view; off: it stays still."""
     fused: bool = False
     """Late fusion (``evaluation.fusion``): outlines of the fused boxes, green a true positive, red a false
     one (BEV IoU 0.7 against what either agent sees), at each panel's CAV pose."""

@@ -84,6 +84,7 @@ class WalkthroughPanel:
                 self.look_at_object()
             else:
                 self.tab.reset_camera()
+                self.nodes.view.lay_out()
 
     def refresh(self, outcome: Outcome) -> None:
         """Follow a recompute: the current step is redrawn for the new outcome."""
@@ -106,11 +107,13 @@ class WalkthroughPanel:
 
     def look_at_object(self) -> None:
         """Point the camera down on the followed object, left of the control panel, high enough to
-        show what the step draws about it (``Step.span``; reset camera goes back)."""
+        show what the step draws about it (``Step.span``; reset camera goes back); the step's labels
+        spread apart for that camera."""
         if self.step is None or self.step.focus is None:
             return
         client = self.tab.client
         layouts.move_camera(client, *camera_over(self.step.focus, self.step.span, layouts.screen_of(client.camera)))
+        self.nodes.view.lay_out()
 
     def animate(self) -> None:
         """Glide the CAV's boxes along the step's motion over the seconds the slider sets

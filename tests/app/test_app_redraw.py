@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import dataclasses
 from collections.abc import Callable
+from types import SimpleNamespace
 
 import numpy as np
 import pytest
@@ -22,12 +23,20 @@ STILL = ("ego_boxes", "ego_vehicle", "cav_before", "map_lane_boundary", "map_dri
 """Nodes that no edit of the method or its parameters changes."""
 
 
+def _top_down_camera() -> SimpleNamespace:
+    """A browser's camera as reported, looking down from 60 m on a 1280x720 window's canvas."""
+    return SimpleNamespace(position=(5.0, 0.0, 60.0), look_at=(8.0, 0.0, 0.0), fov=np.radians(50.0),
+                           image_width=892, image_height=720, update_timestamp=1.0)
+
+
 @dataclasses.dataclass
 class _Client:
-    """What ``SceneView.show`` uses of a browser tab, backed by a server without one."""
+    """What ``SceneView.show`` uses of a browser tab (the camera spreads the labels apart), backed by
+    a server without one."""
 
     scene: viser.SceneApi
     atomic: Callable
+    camera: SimpleNamespace = dataclasses.field(default_factory=_top_down_camera)
 
 
 @pytest.fixture(scope="module")

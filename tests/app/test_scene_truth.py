@@ -8,7 +8,7 @@ import dataclasses
 import numpy as np
 
 from app.panels.keynumbers import key_numbers_html
-from app.scene import cavs, pairs, picking, planes
+from app.scene import cavs, picking, planes
 from app.scene.drawing import draw
 from app.scene.pairs import unexplained
 from app.session.explorer import Explorer, classified_pairs
@@ -50,14 +50,6 @@ def test_wrong_and_missed_pairs_are_outlined_and_labelled_with_both_ids(explorer
         assert str(outcome.trial.ego_ids[i])[:8] in text and str(outcome.trial.cav_ids[j])[:8] in text
     assert sum(name.startswith("pairs_after_missed_") for name in drawing.labels) == len(unexplained(missed, wrong))
     assert len(unexplained(np.array([[1, 2], [2, 1], [3, 3]]), np.array([[1, 1], [2, 2]]))) == 1
-
-
-def test_labels_that_would_overprint_are_stacked_down_the_screen() -> None:
-    labels = {"a": ("✗ ego 1 ↔ CAV 2", (10.0, 0.0, 0.3)), "b": ("✗ ego 2 ↔ CAV 1", (9.8, -1.0, 0.3)),
-              "c": ("missed 7", (10.0, 40.0, 0.3))}
-    spread = pairs.spread(labels)
-    assert spread["a"][1] == labels["a"][1] and spread["c"][1] == labels["c"][1]
-    assert spread["b"][1][0] <= labels["a"][1][0] - pairs.LABEL_LINE_M and spread["b"][1][1:] == (-1.0, 0.3)
 
 
 def test_a_right_frame_marks_nothing(explorer: Explorer) -> None:

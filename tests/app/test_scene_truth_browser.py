@@ -243,7 +243,8 @@ def test_a_click_on_a_third_cavs_box_names_that_cav(browser, explorer: Explorer,
     sees (no footprint of theirs under it: CAV 3's own node answers the click)."""
     settings = Settings(frame=10)
     settings = dataclasses.replace(settings, cavs=3, scenario=dataclasses.replace(settings.scenario, sensor_range=25.0))
-    with running(explorer, settings, tmp_path) as server:
+    # The camera stays where the first frame put it: the frame to click on is chosen under that camera.
+    with running(explorer, settings.with_view(follow=False), tmp_path) as server:
         page, tab, camera, frame = opened_at(browser, server, lambda settings, camera:
                                              frame_with_cav3_boxes_in_view(explorer, settings, camera))
         ui.close_notifications(page)
