@@ -394,8 +394,7 @@ def png(image: np.ndarray) -> bytes:
 
 
 def render(client: viser.ClientHandle, timeout: float = 20.0) -> np.ndarray:
-    """A render of the tab's current view from its own camera at the view's size, (H, W, 3|4) uint8
-    (blocks until the browser answers; run it off the GUI threads)."""
+    """The tab's view from its own camera, (H, W, 3|4) uint8; blocks until the browser answers."""
     camera = client.camera
     width, height = camera.image_width or 1280, camera.image_height or 720
     return client.get_render(height, width, transport_format="png", timeout=timeout)
