@@ -6,13 +6,15 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import signal
 import sys
 import threading
+import time
 
 import loaders
-from evaluation.stop import Watchdog, force_exit
+from evaluation.stop import FORCE_AFTER_S, Watchdog, force_exit, kill_descendants
 
 from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
@@ -169,7 +171,23 @@ def main(argv: list[str] | None = None) -> int:
     while not stopping.wait(0.1):
         pass
     for number in (signal.SIGTERM, signal.SIGINT):
-        signal.signal(number, signal.SIG_IGN)
+        signal.signal(number, lambda signum, _: force_exit(f"stopped by {signal.Signals(signum).name}", signum))
+    _end_soon()
     server.stop()
     server.kernels.stop()
     return 0
+
+
+def _end_soon(grace: float = FORCE_AFTER_S) -> None:
+    """End the process ``grace`` seconds from now, status 0, if it still runs: a tab's computation
+    inside a compiled kernel cannot be interrupted, and the interpreter would wait for it at exit
+    (issue 40: "Server stopped", then minutes at 200 % CPU, deaf to a second signal)."""
+    def end() -> None:
+        time.sleep(grace)
+        kill_descendants()
+        with contextlib.suppress(OSError, ValueError):
+            sys.stdout.flush()
+            sys.stderr.flush()
+        os._exit(0)
+
+    threading.Thread(target=end, name="stop-deadline", daemon=True).start()

@@ -1,5 +1,6 @@
 """A stop signal while ``serve.py`` starts (issue 27, row 15): it acts while the dataset loads, not
-after, with one line, status 128 + the signal and no process left behind."""
+after, with one line, status 128 + the signal and no process left behind; a stopped server ends
+whatever its workers are doing (issue 40)."""
 from __future__ import annotations
 
 import os
@@ -74,3 +75,16 @@ def test_a_stop_signal_while_serve_py_imports_is_one_line(tmp_path, signum: int)
     lines = stderr.strip().splitlines()
     assert stdout == "" and len(lines) == 1
     assert lines[0].startswith(f"serve.py: stopped by {signal.Signals(signum).name}")
+
+
+def test_a_stopped_server_ends_within_2_s_whatever_its_workers_are_doing() -> None:
+    """After a stop, a tab's worker may be inside a compiled kernel for minutes, where nothing
+    interrupts it, and the interpreter would wait for it at exit (issue 40: "Server stopped", then
+    200 % CPU, deaf to a second signal). Here a worker that never returns stands in for it."""
+    script = ("import threading, time\n"
+              "from app import cli\n"
+              "threading.Thread(target=lambda: time.sleep(600), name='busy-worker').start()\n"
+              "cli._end_soon()\n")
+    done = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True,
+                          timeout=300)  # without the deadline, the worker keeps the process for 600 s
+    assert done.returncode == 0, done.stderr
