@@ -8,32 +8,47 @@ from dataclasses import dataclass, field
 
 import viser
 
+from evaluation.scenario import RANGES
+
 from ..scene.words import SCENARIO_WORDS
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
 
+
+def shown(name: str) -> tuple[float, float]:
+    """A slider's ends: the field's one range (``evaluation.scenario.RANGES``), from 0 (a negative
+    offset is a preset's or the command line's)."""
+    low, high = RANGES[name]
+    return max(low, 0.0), high
+
+
 SLIDERS = {
     # field: (label, min, max, step, hint)
-    "eta": (SCENARIO_WORDS["eta"], 0.0, 1.0, 0.05, "SIND protocol: share of objects both agents see"),
-    "sigma_p": (SCENARIO_WORDS["sigma_p"], 0.0, 2.0, 0.05, "detection position noise, std-dev on x and y"),
-    "sigma_theta": (SCENARIO_WORDS["sigma_theta"], 0.0, 30.0, 0.5, "detection heading noise, std-dev"),
-    "flip_prob": (SCENARIO_WORDS["flip_prob"], 0.0, 1.0, 0.05, "probability a detection faces backwards"),
-    "loc_x": (SCENARIO_WORDS["loc_x"], 0.0, 15.0, 0.25,
+    "eta": (SCENARIO_WORDS["eta"], *shown("eta"), 0.05, "SIND protocol: share of objects both agents see"),
+    "sigma_p": (SCENARIO_WORDS["sigma_p"], *shown("sigma_p"), 0.05, "detection position noise, std-dev on x and y"),
+    "sigma_theta": (SCENARIO_WORDS["sigma_theta"], *shown("sigma_theta"), 0.5, "detection heading noise, std-dev"),
+    "flip_prob": (SCENARIO_WORDS["flip_prob"], *shown("flip_prob"), 0.05, "probability a detection faces backwards"),
+    "loc_x": (SCENARIO_WORDS["loc_x"], *shown("loc_x"), 0.25,
               "CAV pose error in x: offset (fixed) or std-dev (gaussian, drifting); none: how far off a guess of "
               "the pose may be (0: the CAV's frame is taken for the ego's)"),
-    "loc_y": (SCENARIO_WORDS["loc_y"], 0.0, 15.0, 0.25, "CAV pose error in y"),
-    "loc_yaw": (SCENARIO_WORDS["loc_yaw"], 0.0, 30.0, 0.5, "CAV pose error in yaw"),
-    "loc_tau": (SCENARIO_WORDS["loc_tau"], 1.0, 600.0, 1.0, "drifting: frames this many seconds apart share 1/e of "
+    "loc_y": (SCENARIO_WORDS["loc_y"], *shown("loc_y"), 0.25, "CAV pose error in y"),
+    "loc_yaw": (SCENARIO_WORDS["loc_yaw"], *shown("loc_yaw"), 0.5, "CAV pose error in yaw"),
+    "loc_tau": (SCENARIO_WORDS["loc_tau"], *shown("loc_tau"), 1.0,
+                "drifting: frames this many seconds apart share 1/e of "
                 "the bias (GNSS: tens of seconds to minutes)"),
-    "loc_white": (SCENARIO_WORDS["loc_white"], 0.0, 1.0, 0.05, "drifting: noise drawn anew every frame on top of the "
+    "loc_white": (SCENARIO_WORDS["loc_white"], *shown("loc_white"), 0.05,
+                  "drifting: noise drawn anew every frame on top of the "
                   "bias, as a share of each axis's std-dev"),
-    "sensor_range": (SCENARIO_WORDS["sensor_range"], 10.0, 150.0, 5.0, "range protocol: what each agent sees"),
-    "miss_rate": (SCENARIO_WORDS["miss_rate"], 0.0, 1.0, 0.05, "probability that an agent misses a detection it "
+    "sensor_range": (SCENARIO_WORDS["sensor_range"], *shown("sensor_range"), 5.0,
+                     "range protocol: what each agent sees"),
+    "miss_rate": (SCENARIO_WORDS["miss_rate"], *shown("miss_rate"), 0.05,
+                  "probability that an agent misses a detection it "
                   "would make, 0 to 1 (each agent draws its own misses)"),
-    "false_rate": (SCENARIO_WORDS["false_rate"], 0.0, 2.0, 0.05, "false boxes added to each agent's detections, "
+    "false_rate": (SCENARIO_WORDS["false_rate"], *shown("false_rate"), 0.05,
+                   "false boxes added to each agent's detections, "
                    "per real detection (0.3: 3 false boxes for 10 real ones); they match no object"),
-    "min_score": (SCENARIO_WORDS["min_score"], 0.0, 1.0, 0.05, "a detector's boxes (--detections) "
+    "min_score": (SCENARIO_WORDS["min_score"], *shown("min_score"), 0.05, "a detector's boxes (--detections) "
                         "scored below this are dropped; 0 keeps all"),
 }
 PROTOCOLS_READING = {"eta": ("sind",), "sensor_range": ("range", "opv2v")}

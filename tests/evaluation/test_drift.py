@@ -33,7 +33,7 @@ def test_a_frames_error_is_the_same_whatever_order_frames_are_computed_in():
 
 
 def test_drifting_needs_the_frames_times_and_a_positive_time_constant():
-    with pytest.raises(ValueError, match="ScenarioParams.loc_tau must be a finite number of seconds > 0"):
+    with pytest.raises(ValueError, match=r"ScenarioParams.loc_tau must be a number in \[1, 3600\]"):
         ScenarioParams(localization="drifting", loc_tau=0.0)
     from evaluation.scenario import FrameInputs
     boxes = np.zeros((3, 7))

@@ -1,0 +1,47 @@
+"""One range per scenario number, wherever a value enters (issue 40, item 1): the constructor every
+entry goes through refuses values beyond it, naming the field; a preset file, ``--grid`` and the
+app's sliders meet the same range. ``false_rate = 50`` (a preset that locked a tab) is refused."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from app.panels.scenario import SLIDERS
+from app.session.presets import discover
+from evaluation.scenario import RANGES, ScenarioParams
+
+REPO = Path(__file__).resolve().parents[2]
+
+
+@pytest.mark.parametrize("name", list(RANGES))
+def test_a_value_beyond_its_range_is_refused_naming_the_field(name: str) -> None:
+    low, high = RANGES[name]
+    ScenarioParams(**{name: high})
+    with pytest.raises(ValueError, match=rf"ScenarioParams.{name} must be a number in \[{low:g}, {high:g}\]"):
+        ScenarioParams(**{name: high * 1.01 + 0.01})
+
+
+def test_the_sliders_span_the_ranges() -> None:
+    for name, (_, low, high, _, _) in SLIDERS.items():
+        assert (low, high) == (max(RANGES[name][0], 0.0), RANGES[name][1]), name
+
+
+def test_a_preset_beyond_a_range_is_skipped_naming_its_file_and_field(tmp_path) -> None:
+    (tmp_path / "fr50.toml").write_text("[scenario]\nfalse_rate = 50.0\n")
+    presets, problems = discover(users=tmp_path)
+    assert "fr50" not in presets
+    assert any("fr50.toml" in p and "false_rate must be a number in [0, 2]" in p for p in problems), problems
+
+
+@pytest.mark.parametrize("given", [["--grid", "false_rate=50"], ["--preset", "PRESET"]])
+def test_evaluate_refuses_a_value_beyond_its_range_in_one_line(tmp_path, given: list[str]) -> None:
+    preset = tmp_path / "fr50.toml"
+    preset.write_text("[scenario]\nfalse_rate = 50.0\n")
+    argv = [str(preset) if arg == "PRESET" else arg for arg in given]
+    done = subprocess.run([sys.executable, "evaluate.py", "--dataset", "synthetic:40", "--frames", "0:1", *argv,
+                           "--out", str(tmp_path / "out")], cwd=REPO, capture_output=True, text=True, timeout=300)
+    assert done.returncode == 2 and done.stderr.count("\n") == 1, done.stderr
+    assert "false_rate must be a number in [0, 2]" in done.stderr and not (tmp_path / "out").exists()
