@@ -21,6 +21,7 @@ from .scene import picking, planes, presentation
 from .scene.drawing import Drawing, draw
 from .scene.pinned import with_baseline
 from .scene.view import SceneView
+from .scene.words import error_words
 from .session.baseline import Baseline
 from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
@@ -314,7 +315,7 @@ class ClientSession:
         else:
             self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
         self.key_numbers.problem("CBM cannot run on this frame: see the panel")
-        self.notify("Recompute failed", f"{type(error).__name__}: {error}", "red")
+        self.notify("CBM cannot run on this frame", error_words(error), "red")
 
     def _refresh_cav_choices(self, outcome: Outcome) -> None:
         if outcome.frame_index == self._choices_frame:

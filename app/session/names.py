@@ -6,7 +6,9 @@ from evaluation.diagnosis import short_id
 
 def agent_id_shown(role: str, agent_id: object) -> str | None:
     """The agent's short id as labels show it, or None when it only repeats ``role`` (the shipped
-    Argoverse 2 log names its recording car ``ego``)."""
+    Argoverse 2 log names its recording car ``ego``, and abstract agents have no id)."""
+    if agent_id is None:
+        return None
     shown = short_id(agent_id)
     return None if shown.casefold() == role.casefold() else shown
 

@@ -120,7 +120,7 @@ def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server
     page.get_by_role("tab", name="Scenario").click()
     assert "dataset" not in options_of(page, "localization error")
     assert {"fixed", "gaussian"} <= set(options_of(page, "localization error"))
-    page.get_by_text("this dataset reports no CAV poses of its own").first.wait_for(timeout=10_000)
+    page.get_by_text("this dataset reports no noisy CAV poses of its own").first.wait_for(timeout=10_000)
 
     page.get_by_role("tab", name="Method").click()
     assert GRAPH not in options_of(page, "method")
@@ -137,6 +137,6 @@ def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server
     page.get_by_text("is not offered with 1 CAV").first.wait_for(timeout=10_000)
     ui.wait_until(lambda: cavs.input_value() == "3")
     assert tab.settings.cavs == 3 and tab.settings.method == "cbm-graph"
-    assert page.get_by_text("Recompute failed").count() == 0
+    assert page.get_by_text("CBM cannot run on this frame").count() == 0
     page.close()
 
