@@ -410,3 +410,12 @@ def test_v2x_real_infra_flag_must_agree_with_the_folder(corpus, tmp_path, flag, 
     releases.dump_yaml(path, {**releases.yaml.safe_load(path.read_text()), "infra": flag})
     with pytest.raises(loaders.LoaderError, match=r"2/000001.yaml: " + message):
         loaders.open(root)
+
+
+def test_an_adver_city_agent_folder_loads_as_its_one_frame_file_does(corpus):
+    """A folder holding one agent's frames (``<run>/<scenario>/641/000060.yaml``) loads as the file inside it."""
+    folder = corpus["adver_city"] / "2024_07_12_14_13_22" / "unj_cn_d" / "641"
+    from_folder, from_file = loaders.open(folder), loaders.open(folder / "000060.yaml")
+    assert len(from_folder) == len(from_file) == 1
+    assert list(from_folder[0].track_ids) == list(from_file[0].track_ids)
+    np.testing.assert_allclose(from_folder[0].boxes(), from_file[0].boxes())
