@@ -27,8 +27,9 @@ from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
 from evaluation.sweep import run_method
 from evaluation.trials import frame_cav_inputs, frame_inputs
-from loaders import Sequence, is_vehicle
+from loaders import Sequence, is_roadside, is_vehicle
 
+from .names import agent_name
 from .over_time import Runs
 from .settings import MAX_CAVS, Settings
 
@@ -46,7 +47,8 @@ class CavChoice:
 
     @property
     def label(self) -> str:
-        return f"{self.id[:8]} · {self.distance:.0f} m"
+        shown = agent_name("roadside unit", self.id) if is_roadside(self.id) else self.id[:8]
+        return f"{shown} · {self.distance:.0f} m"
 
 
 @dataclass(frozen=True)
