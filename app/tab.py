@@ -82,6 +82,8 @@ class ClientSession:
             self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
         for warning in explorer.sequence.warnings:
             self.notify("Dataset loaded with gaps", warning, "yellow")
+        for note in explorer.sequence.notes:
+            self.notify("How this dataset is read", note, "blue")
         self._playing = threading.Event()
         self._closed = threading.Event()
         self._stop_catching_up = threading.Event()
