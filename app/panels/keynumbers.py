@@ -106,6 +106,9 @@ def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseExcepti
     else:
         missing = f"{error_words(error)}."
         fix = "pick another frame, protocol or dataset."
+    pointers = [warning for warning in sequence.warnings if "Git LFS pointer" in warning]
+    if pointers:
+        fix = f"fetch the data Git LFS left behind, then start the app again: {pointers[0]}."
     return f"**CBM cannot run on this frame.**\n\nWhat is missing: {missing}\n\nWhat to try: {fix}"
 
 

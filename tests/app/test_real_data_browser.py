@@ -1,6 +1,6 @@
 """Real data at first contact (issue 39, item 6), in a real browser: a DAIR-V2X subset names and
 draws its infrastructure as a roadside unit, and its calibration fallback is a note, not a warning
-of gaps."""
+of gaps; INTERACTION starts on the first frame CBM can run on."""
 from __future__ import annotations
 
 import warnings
@@ -11,6 +11,8 @@ import pytest
 import loaders
 from app.scene.geometry import ROADSIDE_SIZE
 from app.session.explorer import Explorer
+from app.session.settings import Settings
+from app.session.start import first_usable, runs_on
 from support import browser as ui
 from support import releases
 
@@ -38,5 +40,38 @@ def test_dair_infrastructure_is_a_roadside_unit_and_the_fallback_a_note(browser,
     page.get_by_text("· ego · roadside unit (auto)").first.wait_for(timeout=10_000)
     assert drawing.labels["cav_after"][0] == "roadside unit"
     mast = drawing.meshes["cav_vehicle"].vertices
-    assert np.ptp(mast[:, 0]) < ROADSIDE_SIZE[0] + 0.5 and np.ptp(mast[:, 2]) == pytest.approx(ROADSIDE_SIZE[2], abs=0.1)
+    assert np.ptp(mast[:, 0]) < ROADSIDE_SIZE[0] + 0.5
+    assert np.ptp(mast[:, 2]) == pytest.approx(ROADSIDE_SIZE[2], abs=0.1)
     page.close()
+
+
+def test_interaction_starts_on_the_first_frame_cbm_can_run_on(browser, tmp_path_factory) -> None:
+    """INTERACTION's frame 0 holds no ego and CAV under the range protocol: the tab starts on the first
+    frame that does, and says so."""
+    explorer = Explorer(loaders.open(releases.FIXTURES / "interaction" / "vehicle_tracks_000.csv"))
+    settings = Settings()
+    first = first_usable(explorer, settings, range(len(explorer)))
+    assert first is not None and first > 0 and not runs_on(explorer, settings, 0)
+    with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
+        page = ui.open_page(browser, running)
+        tab = ui.session(running, 1)
+        assert tab.last.frame_index == first and ui.header(page) == f"Frame {first}"
+        page.get_by_text(f"Starting on frame {first}").first.wait_for(timeout=30_000)
+        assert page.get_by_text("CBM cannot run on this frame").count() == 0
+        page.close()
+
+
+def test_a_sind_clone_without_git_lfs_is_told_to_fetch_the_data(browser, tmp_path_factory) -> None:
+    """Only the pedestrians load from a SinD clone whose vehicle tracks are a Git LFS pointer: the page
+    says to fetch them (not to change the protocol, which cannot help)."""
+    root = releases.sind_without_lfs(tmp_path_factory.mktemp("sind") / "Xian_412_m1")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        explorer = Explorer(loaders.open(root))
+    with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
+        page = browser.new_page()
+        page.goto(ui.address(running))
+        page.get_by_text("CBM cannot run on this frame.").first.wait_for(timeout=60_000)
+        advice = page.get_by_text("What to try").first.inner_text()
+        assert "git lfs pull" in advice and "Veh_smoothed_tracks.csv" in advice and "protocol" not in advice
+        page.close()
