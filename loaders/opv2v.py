@@ -225,7 +225,7 @@ def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
     static = [(p["name"], track, name) for p in parts for track, name in p["static"]]
     if static:
         note = v2x_real.left_out_note(len(static), {name for _, _, name in static})
-        sequence.warnings.append(note)
+        sequence.notes.append(note)
         warnings.warn(note, UserWarning, stacklevel=3)
     return sequence
 

@@ -386,7 +386,8 @@ def test_python_tags_other_than_numpy_values_are_refused(corpus, tmp_path):
 def test_v2x_real_categories_infrastructure_and_static_props(corpus):
     with pytest.warns(UserWarning, match=r"1 static object\(s\) \(trash_can\) are not road users: left out of trials"):
         sequence = loaders.open(corpus["v2x_real"])
-    assert sequence.name == "v2x_real/v2xreal" and len(sequence.warnings) == 1 and sequence.ego == "1"
+    assert sequence.name == "v2x_real/v2xreal" and sequence.warnings == [] and len(sequence.notes) == 1
+    assert sequence.ego == "1"
     frame = sequence[0]
     categories = dict(zip(frame.track_ids, frame.categories))
     assert (categories["700"], categories["702"], categories["704"]) == ("car", "van", "truck")
