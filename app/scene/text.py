@@ -103,7 +103,8 @@ def metrics_markdown(outcome: Outcome) -> str:
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:
         lines.append("")
-        lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")
+        lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where its pose before "
+                     "calibration put it.")
     if outcome.findings:
         lines.append("")
         lines.append(findings_heading(outcome))

@@ -10,6 +10,7 @@ import pytest
 
 from app.scene.words import error_words, times_better
 from app.session.explorer import Explorer
+from app.session.names import agent_name
 from evaluation.trials import NoTrial
 from support import browser as ui
 
@@ -79,6 +80,13 @@ def test_a_huge_likelihood_ratio_is_far_better_and_errors_keep_their_own_words()
     assert times_better(38.0) == times_better(1e6) == "far better"
     assert error_words(NoTrial("frame 3 has one agent")) == "frame 3 has one agent"
     assert "KeyError" in error_words(KeyError("x"))
+
+
+def test_abstract_agents_and_role_ids_are_named_by_their_role() -> None:
+    """SinD's abstract agents have no id ("ego None" was shown); DAIR-V2X's ids repeat the role."""
+    assert agent_name("ego", None) == "ego" and agent_name("CAV", None) == "CAV"
+    assert agent_name("ego", "vehicle") == "ego" and agent_name("CAV", "infrastructure") == "roadside unit"
+    assert agent_name("CAV", "-1", code=True) == "roadside unit `-1`" and agent_name("CAV", "650") == "CAV 650"
 
 
 class _NoTrialHere:
