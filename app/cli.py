@@ -22,6 +22,7 @@ from .session.explorer import Explorer
 from .session.offers import offers_of
 from .session.presets import PresetError, discover
 from .session.settings import Settings
+from .session.start import first_usable
 
 
 class _Parser(argparse.ArgumentParser):
@@ -77,14 +78,7 @@ def sampled_frames(count: int, samples: int = SAMPLED_FRAMES) -> list[int]:
 
 def usable_frame(explorer: Explorer, settings: Settings) -> int | None:
     """The first sampled frame that makes a trial (an ego and a CAV with objects) under ``settings``, or None."""
-    for index in sampled_frames(len(explorer)):
-        try:
-            explorer.trial_inputs(settings, index)
-        except ValueError:
-            continue
-        if len(explorer.sequence[index].track_ids) >= 2:
-            return index
-    return None
+    return first_usable(explorer, settings, sampled_frames(len(explorer)))
 
 
 def _stop_while_starting() -> Watchdog:

@@ -1,5 +1,6 @@
 """The two commands' entry points (``cbm-evaluate``, ``cbm-explorer``; ``evaluate.py`` and
-``serve.py`` call them too): a stop signal from the first line on ends the command with one line.
+``serve.py`` call them too): a stop signal from the first line on ends the command with one line,
+and every warning is one line (``one_line_warnings``).
 
 Importing numpy, polars, viser and the project takes about a second; a Ctrl-C or SIGTERM meanwhile
 would print a ``KeyboardInterrupt`` traceback or end the process without a word. This module
@@ -11,6 +12,7 @@ from __future__ import annotations
 import os
 import signal
 import sys
+import warnings
 from types import FrameType
 
 
@@ -25,11 +27,22 @@ def stop_while_importing(prog: str) -> None:
         signal.signal(signum, handle)
 
 
+def one_line_warnings(prog: str) -> None:
+    """Every warning (a loader's skipped files, a calibration fallback) on the console as one line,
+    ``PROG: warning: message``, in place of Python's category, file and source line."""
+    def formatted(message: Warning | str, category: type[Warning], filename: str, lineno: int,
+                  line: str | None = None) -> str:
+        return f"{prog}: warning: {' '.join(str(message).split())}\n"
+
+    warnings.formatwarning = formatted
+
+
 def evaluate(argv: list[str] | None = None) -> int:
     """``cbm-evaluate``: ``evaluation.cli.main`` once imported; the command's handler only when run as
     the command (``argv`` None), never inside a caller's process."""
     if argv is None:
         stop_while_importing("evaluate.py")
+        one_line_warnings("evaluate.py")
     from evaluation.cli import main
     return main(argv)
 
@@ -38,5 +51,6 @@ def serve(argv: list[str] | None = None) -> int:
     """``cbm-explorer``: ``app.cli.main`` once imported (the handler as for :func:`evaluate`)."""
     if argv is None:
         stop_while_importing(os.path.basename(sys.argv[0]))
+        one_line_warnings(os.path.basename(sys.argv[0]))
     from app.cli import main
     return main(argv)

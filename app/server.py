@@ -16,6 +16,7 @@ from .scene.presentation import THEME
 from .session import kernels
 from .session.explorer import Explorer
 from .session.settings import Settings
+from .session.start import start_of
 from .tab import ClientSession
 
 RESOLVE_SECONDS = 5.0
@@ -106,7 +107,8 @@ def is_loopback(host: str) -> bool:
 
 
 class ExplorerServer:
-    """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``.
+    """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``
+    on the first frame CBM can run on (``start_of``; ``start_note`` says when the frame moved).
 
     The address is checked first (``AddressError``: the host does not resolve, the port is taken);
     viser would otherwise move to the next free port without a word. CBM's compiled kernels are
@@ -115,8 +117,9 @@ class ExplorerServer:
 
     def __init__(self, explorer: Explorer, settings: Settings, host: str = "127.0.0.1", port: int = 8080,
                  verbose: bool = False) -> None:
-        self.explorer, self.settings = explorer, settings
         check_free(host, port)
+        self.explorer = explorer
+        self.settings, self.start_note = start_of(explorer, settings)
         self.kernels = kernels.prepare()
         self.sessions: dict[int, ClientSession] = {}
         self._gone: set[int] = set()
@@ -146,6 +149,8 @@ class ExplorerServer:
     def _connected(self, client: viser.ClientHandle) -> None:
         client.gui.add_html(TITLE_HTML, order=-1.0)
         session = ClientSession(client, self.explorer, self.settings, self.kernels)
+        if self.start_note:
+            session.notify(f"Starting on frame {self.settings.frame}", self.start_note, "blue")
         with self._lock:
             gone = client.client_id in self._gone
             self._gone.discard(client.client_id)

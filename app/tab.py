@@ -23,6 +23,7 @@ from .scene.drawing import Drawing, draw
 from .scene.framing import Area
 from .scene.pinned import with_baseline
 from .scene.view import SceneView
+from .scene.words import error_words
 from .session.baseline import Baseline
 from .session.coalesce import Coalescer, Later
 from .session.explorer import CavChoice, Explorer, Outcome
@@ -87,6 +88,8 @@ class ClientSession:
             self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
         for warning in explorer.sequence.warnings:
             self.notify("Dataset loaded with gaps", warning, "yellow")
+        for note in explorer.sequence.notes:
+            self.notify("How this dataset is read", note, "blue")
         self._playing = threading.Event()
         self._closed = threading.Event()
         self._stop_catching_up = threading.Event()
@@ -348,7 +351,7 @@ class ClientSession:
         else:
             self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
         self.key_numbers.problem("CBM cannot run on this frame: see the panel")
-        self.notify("Recompute failed", f"{type(error).__name__}: {error}", "red")
+        self.notify("CBM cannot run on this frame", error_words(error), "red")
 
     def _refresh_cav_choices(self, outcome: Outcome) -> None:
         if outcome.frame_index == self._choices_frame:

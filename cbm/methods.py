@@ -116,6 +116,10 @@ class Method:
         return self.function(ego_boxes, cav_boxes, init, self.resolved(params), **inputs)
 
 
+ORACLE_WORDS = "least squares on the true pairs"
+"""What the oracle is: a reference that knows the true pairs, not a bound (a robust fit of the same
+pairs, or a pose graph over more agents, can come closer to the true pose)."""
+
 CBM_REQUIRES = {"sigma3": ("consensus", True), "consensus_rule": ("consensus", True), "refine_gate": ("refine", True)}
 """CBM's parameters that act only with the consensus or the re-association on."""
 
@@ -135,7 +139,7 @@ METHODS: dict[str, Method] = {m.name: m for m in (
     Method("vips", "VIPS", VIPSParams, match_vips, takes_labels=True),
     Method("v2xregpp", "V2X-Reg++", V2XRegParams, match_v2xregpp, takes_labels=True),
     Method("freealign", "FreeAlign", FreeAlignParams, match_freealign),
-    Method("oracle", "oracle (true pairs)", NoParams, match_oracle, takes_truth=True),
+    Method("oracle", f"oracle ({ORACLE_WORDS})", NoParams, match_oracle, takes_truth=True),
 )}
 """The methods in the order tables and lists show them: the references bound the others."""
 

@@ -104,11 +104,13 @@ def heading_fold(trial: Trial, inspection: Inspection) -> Finding | None:
 
 def wrong_anchor(result: MatchResult, trial: Trial, inspection: Inspection) -> Finding | None:
     """The winning anchor is not a true pair; how the best true anchor scored against the
-    consensus margin's runner-up (eq. 12: ``result.runner_up_count``)."""
+    consensus margin's runner-up (eq. 12: ``result.runner_up_count``). Nothing when every pair of the
+    answer is right (the re-association left the anchor out): the anchor did no harm."""
     if result.anchor is None:
         return None
     gt = {tuple(p) for p in np.asarray(trial.gt_pairs).reshape(-1, 2).tolist()}
-    if tuple(result.anchor) in gt:
+    answer = {tuple(p) for p in np.asarray(result.pairs).reshape(-1, 2).tolist()}
+    if tuple(result.anchor) in gt or (answer and answer <= gt):
         return None
     winner = f"the winning anchor {pair_name(trial, result.anchor)} was wrong with {result.consensus_count} pairs"
     right = inspection.best_anchor_among(trial.gt_pairs)

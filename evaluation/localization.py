@@ -51,8 +51,8 @@ def reported_cav_pose(params: ScenarioParams, ego_pose: np.ndarray, cav_pose: np
     if params.localization != "dataset":
         return perturbed_pose(cav_pose, localization_error(params, draw))
     if dataset_pose is None:
-        raise ValueError("localization 'dataset' needs the CAV pose the dataset reports (OPV2V "
-                         "predicted_ego_pos); this frame's CAV has none")
+        raise ValueError("localization 'dataset' needs the noisy pose the dataset reports for "
+                         "the CAV (OPV2V-family releases do); this frame's CAV has none")
     return dataset_pose
 
 

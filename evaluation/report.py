@@ -8,6 +8,7 @@ from typing import Any
 
 import polars as pl
 
+from cbm.methods import ORACLE_WORDS
 from evaluation.sweep import SCENARIO_FIELDS, Sweep, summarise
 
 from .aggregates import AP_ROWS, curve_markdown, fused_ap, success_curve
@@ -27,11 +28,14 @@ TABLE_ROWS = (
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
 GNSS = "GNSS (init)"
+ORACLE_COLUMN = f"oracle ({ORACLE_WORDS})"
+"""The oracle's column header and its name in the notes."""
 FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's boxes placed by the method's pose, "
                "merged with the ego's, duplicates removed by NMS at rotated BEV IoU 0.15; fused boxes against the true "
                "boxes of every object either agent sees, matched greedily by score at BEV IoU 0.5 / 0.7, all "
                "detections of the run sorted by score, VOC 2010 all-point interpolation (OpenCOOD's `eval_utils`). "
-               "Scores of simulated detections: the seeded score model of `evaluation.fusion`.")
+               "Scores of simulated detections: the seeded score model of `evaluation.fusion`. The oracle's boxes are "
+               "placed by the true pose.")
 
 
 def variant_names(rows: Sequence[dict[str, Any]], sweep: Sweep) -> list[str]:
@@ -49,6 +53,12 @@ def fmt(value: Any) -> str:
     return f"{value:g}" if isinstance(value, float) else str(value)
 
 
+def column_name(variant: str) -> str:
+    """A method variant's column header: the oracle named for what it is."""
+    method, _, rest = variant.partition(" ")
+    return " ".join([ORACLE_COLUMN, rest]).strip() if method == "oracle" else variant
+
+
 def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> str:
     """Markdown: one row per metric, one column per method variant (the paper's Table I), plus the
     RRE/RTE of the uncalibrated ``init`` unless the method ``none`` (which reports it) is a column."""
@@ -61,7 +71,7 @@ def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> 
         names.append(GNSS)
         columns.append({"rre_median": _median([r["init_rre"] for r in first]),
                         "rte_median": _median([r["init_rte"] for r in first])})
-    lines = [f"| metric | {' | '.join(names)} |", "|---|" + "---:|" * len(names)]
+    lines = [f"| metric | {' | '.join(column_name(n) for n in names)} |", "|---|" + "---:|" * len(names)]
     for label, key, scale in (*TABLE_ROWS, *([RUNTIME_ROW] if timing else [])):
         lines.append(f"| {label} | {' | '.join(_cell(column.get(key, math.nan), scale) for column in columns)} |")
     ap = fused_ap(rows, variants)
@@ -122,7 +132,9 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
               "Success: RTE < 1 m and RRE < 1 deg (at 2 and 3: RTE < 2 m and RRE < 2 deg, 3 and 3). "
               "Abstained: trials where the method said it had not enough evidence (its pose is still scored); "
               "success where not abstained: over the other trials. none / GNSS (init): the error before calibration; "
-              "oracle: least squares on the true pairs, the limit of association-based calibration."]
+              f"{ORACLE_COLUMN}: the objects both agents see, paired by their true ids and fitted by plain least "
+              "squares; a reference, not a bound: a robust fit or a pose graph over more agents can come closer to "
+              "the true pose."]
     if sweep.fusion:
         parts += ["", FUSION_NOTE]
     if len(sweep.grid.get("eta", ())) > 1:

@@ -10,12 +10,12 @@
 See ``loaders/README.md`` for the datasets, the generic table schema and the bad-input policy.
 """
 from . import synthetic
-from .categories import is_vehicle
+from .categories import is_roadside, is_vehicle
 from .dispatch import open, repository_data
 from .errors import LoaderError
 from .scene import AGENT_COLUMNS, BOX_COLUMNS, OBJECT_COLUMNS, Frame, MapGeometry, Sequence
 
 __all__ = [
     "AGENT_COLUMNS", "BOX_COLUMNS", "OBJECT_COLUMNS", "Frame", "LoaderError", "MapGeometry",
-    "Sequence", "is_vehicle", "open", "repository_data", "synthetic",
+    "Sequence", "is_roadside", "is_vehicle", "open", "repository_data", "synthetic",
 ]

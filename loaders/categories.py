@@ -21,3 +21,10 @@ def normalised(name: str) -> str:
 def is_vehicle(categories: Iterable[str] | np.ndarray) -> np.ndarray:
     """Boolean array: which of ``categories`` are motor vehicles that may act as the CAV."""
     return np.array([normalised(c) in VEHICLE_CATEGORIES for c in categories], dtype=bool)
+
+
+def is_roadside(agent_id: object) -> bool:
+    """Whether an agent is a roadside (infrastructure) unit, not a vehicle: DAIR-V2X's, V2X-Seq's and
+    TUMTraf's ``infrastructure``, the OPV2V family's negative ids (V2XSet, Adver-City, V2X-Real)."""
+    name = str(agent_id)
+    return name == "infrastructure" or (name.startswith("-") and name[1:].isdigit())

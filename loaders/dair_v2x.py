@@ -108,7 +108,6 @@ def load(path: str | Path) -> Sequence:
     if not frame_ids:
         raise LoaderError(f"{info_file}: no pair could be loaded; {len(missing)} lack a label or calibration "
                           f"file, first: {missing[0]}")
-    notes = _skipped_notes(info_file, missing, len(pairs)) + _relative_notes(root, relative, len(frame_ids))
     sequence = Sequence(
         name=f"dair-v2x/{root.name}",
         objects=_frame_table(objects, ["track_id", "category"], ["x", "y", "z", "length", "width", "height", "yaw"]),
@@ -117,7 +116,8 @@ def load(path: str | Path) -> Sequence:
         agents=_frame_table(agents, ["agent_id"], ["x", "y", "z", "yaw", "length", "width", "height"]),
         visibility=_frame_table(seen, ["agent_id", "track_id"], []),
         ego="vehicle",
-        warnings=notes,
+        warnings=_skipped_notes(info_file, missing, len(pairs)),
+        notes=_relative_notes(root, relative, len(frame_ids)),
     )
     sequence.point_clouds = clouds
     sequence.agent_views = views
@@ -182,13 +182,13 @@ def system_error_offset(value):
 
 
 def _relative_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
-    """The one warning naming the pairs whose poses come from ``lidar_i2v`` (also a ``UserWarning``)."""
+    """The one note naming the pairs whose poses come from ``lidar_i2v`` (also a ``UserWarning``)."""
     if not vehicle_frames:
         return []
     shown = ", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else "")
-    note = (f"{root / I2V}: {len(vehicle_frames)} of {loaded} pair(s) have no vehicle or infrastructure world "
-            f"calibration and use lidar_i2v (infrastructure LiDAR -> vehicle LiDAR, system_error_offset "
-            f"included): their world frame is the vehicle's LiDAR frame (vehicle frames {shown})")
+    note = (f"{len(vehicle_frames)} of {loaded} pair(s) ship no world calibration, so the roadside unit is placed "
+            f"by the vehicle-to-infrastructure calibration the release ships ({root / I2V}) and the vehicle's "
+            f"LiDAR is the world (vehicle frames {shown})")
     warnings.warn(note, UserWarning, stacklevel=3)
     return [note]
 

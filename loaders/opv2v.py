@@ -86,7 +86,12 @@ PROGRESS_DELAY = 1.0
 def recognises(path: Path) -> bool:
     if path.is_file():
         return path.suffix.lower() in (".yaml", ".yml")
-    return bool(_scenarios(path))
+    return bool(_scenarios(path) or _frame_files(path))
+
+
+def _frame_files(folder: Path) -> dict[str, Path]:
+    """One agent's frames in ``folder`` itself (a CAV folder opened alone): ``<frame>.yaml`` by frame."""
+    return {p.stem: p for p in _yaml_files(folder) if p.stem.isdigit()}
 
 
 def _is_integer(name: str) -> bool:
@@ -126,13 +131,17 @@ def _scenarios(path: Path) -> list[tuple[str, Path]]:
 
 
 def load(path: str | Path) -> Sequence:
-    """Load an OPV2V / V2XSet / V2V4Real / V2X-Real release root, split folder, scenario folder or one file."""
+    """Load an OPV2V / V2XSet / V2V4Real / V2X-Real release root, split folder, scenario folder, one
+    agent's folder of frames or one file."""
     path = Path(path)
     if path.is_file():
         agent = path.parent.name if _is_integer(path.parent.name) else "0"
         parts = [_scenario(path.stem, {agent: {path.stem: path}}, 0)]
         return _sequence(f"{path.stem}", parts, single=True)
     scenarios = _scenarios(path)
+    if not scenarios and _frame_files(path):
+        agent = path.name if _is_integer(path.name) else "0"
+        return _sequence(path.name, [_scenario(path.name, {agent: _frame_files(path)}, 0)], single=True)
     if not scenarios:
         raise LoaderError(f"{path}: no scenario folders (numbered CAV folders of .yaml files), "
                           f"directly or under {', '.join(SPLITS)}")
@@ -214,7 +223,7 @@ def _sequence(name: str, parts: list[dict], single: bool) -> Sequence:
     static = [(p["name"], track, name) for p in parts for track, name in p["static"]]
     if static:
         note = v2x_real.left_out_note(len(static), {name for _, _, name in static})
-        sequence.warnings.append(note)
+        sequence.notes.append(note)
         warnings.warn(note, UserWarning, stacklevel=3)
     return sequence
 

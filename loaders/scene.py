@@ -110,7 +110,8 @@ class Sequence:
     scenario's name to its first frame index (in frame order); ``frame_egos`` the ego of each
     frame when it changes with the scenario; ``predicted_poses`` maps ``(frame index, agent id)``
     to the dataset's own noisy ``(x, y, yaw)`` of that agent (OPV2V ``predicted_ego_pos``).
-    ``warnings`` lists what the loader skipped, for the app and the CLI to show.
+    ``warnings`` lists what the loader skipped (gaps), ``notes`` how it read what the release leaves
+    open (a calibration fallback, an association derived by distance): both for the app and the CLI to show.
     """
 
     def __init__(
@@ -128,6 +129,7 @@ class Sequence:
         frame_egos: list[str] | None = None,
         predicted_poses: dict[tuple[int, str], tuple[float, float, float]] | None = None,
         warnings: list[str] | None = None,
+        notes: list[str] | None = None,
     ) -> None:
         self.name = name
         self.ego = ego
@@ -135,6 +137,7 @@ class Sequence:
         self.frame_egos = list(frame_egos) if frame_egos is not None else None
         self.predicted_poses = dict(predicted_poses or {})
         self.warnings = list(warnings or [])
+        self.notes = list(notes or [])
         self.frame_ids = list(frame_ids)
         self.timestamps = np.asarray(timestamps, dtype=np.float64)
         if len(self.timestamps) != len(self.frame_ids):

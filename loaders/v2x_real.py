@@ -58,5 +58,5 @@ def check_infra(path: Path, record: dict, agent: str) -> None:
 
 
 def left_out_note(count: int, names: set[str]) -> str:
-    """The warning of a V2X-Real load that left static props out of the trials."""
+    """The note of a V2X-Real load that left static props out of the trials (not a gap: how it is read)."""
     return f"{count} static object(s) ({', '.join(sorted(names))}) are not road users: left out of trials"

@@ -113,7 +113,8 @@ def load(path: str | Path) -> Sequence:
         visibility=dair._frame_table(rows["seen"], ["agent_id", "track_id"], []),
         ego="vehicle",
         scenarios=scenarios,
-        warnings=dair._skipped_notes(info_file, missing, len(pairs)) + _derived_notes(root, derived, len(frame_ids)),
+        warnings=dair._skipped_notes(info_file, missing, len(pairs)),
+        notes=_derived_notes(root, derived, len(frame_ids)),
     )
     sequence.point_clouds = clouds
     sequence.agent_views = views
@@ -240,7 +241,7 @@ def _point_files(root: Path, pair: Pair, frame: int) -> dict[tuple[int, str], tu
 
 
 def _derived_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
-    """The one warning naming the pairs without a cooperative label (also a ``UserWarning``)."""
+    """The one note naming the pairs without a cooperative label (also a ``UserWarning``)."""
     if not vehicle_frames:
         return []
     shown = ", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else "")

@@ -18,6 +18,7 @@ from loaders import is_vehicle
 from ..scene import cavs
 from ..scene.colours import Palette, palette
 from ..scene.text import number
+from ..scene.words import error_words, times_better
 from ..session.explorer import Explorer, Outcome
 from ..session.settings import Settings
 
@@ -60,7 +61,7 @@ def evidence_lines(result: object) -> list[str]:
         return []
     if math.isinf(margin):
         return ["confidence: no other pose explains the scene"]
-    return [f"confidence: {margin:.1f} (the pose explains the scene e^{margin:.0f} times better than the runner-up)"]
+    return [f"confidence: {margin:.1f} (the pose explains the scene {times_better(margin)} than the runner-up)"]
 
 
 def per_cav_line(cav: cavs.ShownCav, colours: Palette) -> str:
@@ -103,8 +104,11 @@ def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseExcepti
         fix = ("set the Scenario tab's protocol to `sind` (abstract agents: no vehicles needed), or load a "
                "dataset with vehicles.")
     else:
-        missing = f"{type(error).__name__}: {error}."
+        missing = f"{error_words(error)}."
         fix = "pick another frame, protocol or dataset."
+    pointers = [warning for warning in sequence.warnings if "Git LFS pointer" in warning]
+    if pointers:
+        fix = f"fetch the data Git LFS left behind, then start the app again: {pointers[0]}."
     return f"**CBM cannot run on this frame.**\n\nWhat is missing: {missing}\n\nWhat to try: {fix}"
 
 

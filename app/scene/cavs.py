@@ -13,6 +13,7 @@ from evaluation.metrics import TrialMetrics, is_success
 from evaluation.scenario import Trial
 
 from ..session.explorer import Outcome
+from ..session.names import role_of
 from . import colours
 from .colours import CAV_COLOURS
 from .pairs import Drawn
@@ -86,9 +87,11 @@ def node(kind: str, rank: int) -> str:
     return kind if rank == 1 else f"{kind}_{rank}"
 
 
-def name(rank: int, count: int) -> str:
-    """What labels call CAV ``rank`` of ``count``: ``CAV`` when it is the only one, else ``CAV 2``."""
-    return "CAV" if count == 1 else f"CAV {rank}"
+def name(rank: int, count: int, cav_id: object = None) -> str:
+    """What labels call CAV ``rank`` of ``count``: ``CAV`` when it is the only one, else ``CAV 2``;
+    ``roadside unit`` (``roadside unit 2``) when the agent ``cav_id`` is infrastructure."""
+    role = role_of("CAV", cav_id)
+    return role if count == 1 else f"{role} {rank}"
 
 
 def legend(count: int) -> str:

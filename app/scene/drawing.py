@@ -12,7 +12,7 @@ import numpy as np
 
 from cbm import se2
 from evaluation.clutter import is_false
-from loaders import Frame
+from loaders import Frame, is_roadside
 
 from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS
@@ -85,6 +85,8 @@ class _Parts:
     shapes: list[pairs.PairShapes] = field(default_factory=list)
     labels: dict[str, tuple[str, tuple[float, float, float]]] = field(default_factory=dict)
     map_poses: list[np.ndarray] = field(default_factory=list)
+    roadside: set[int] = field(default_factory=set)
+    """The ranks of the CAVs that are roadside units (drawn as a mast, not a car)."""
     fused_tp: list[np.ndarray] = field(default_factory=list)
     fused_fp: list[np.ndarray] = field(default_factory=list)
 
@@ -148,7 +150,9 @@ def _add_cav(parts: _Parts, cav: cavs.ShownCav, count: int, panel: Panel, ego: p
     its pairs between the boxes drawn (``pairs.pair_shapes``)."""
     drawn = cavs.drawn_cav(cav, panel.placement, panel.offset)
     pose = se2.make(panel.offset[0], panel.offset[1], 0.0) @ cav.placements[panel.placement]
-    name = cavs.name(cav.rank, count)
+    name = cavs.name(cav.rank, count, cav.cav_id)
+    if is_roadside(cav.cav_id):
+        parts.roadside.add(cav.rank)
     parts.tiles[cav.rank].append(drawn.boxes)
     parts.cav_poses[cav.rank].append(pose)
     parts.labels[f"{cavs.node('cav', cav.rank)}_{panel.placement}"] = (name, (*se2.translation_of(pose), planes.LABELS))
@@ -174,15 +178,20 @@ def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[st
     colour; vehicles as small bodies (empty nodes for the CAVs the outcome lacks: hidden)."""
     meshes = {"ego_boxes": Mesh(*_footprint_mesh(ego, planes.EGO), palette.ego_boxes),
               "ego_vehicle": Mesh(*_vehicle_mesh(parts.ego_poses), palette.ego_vehicle),
-              "cav_vehicle_before": Mesh(*_vehicle_mesh(parts.before_poses), palette.cav_vehicle,
+              "cav_vehicle_before": Mesh(*_vehicle_mesh(parts.before_poses, *_body(parts, 1)), palette.cav_vehicle,
                                          opacity=0.3)}
     for rank in range(1, MAX_CAVS + 1):
         tiles = np.concatenate(parts.tiles[rank]) if parts.tiles[rank] else np.zeros((0, 7))
         meshes[cavs.node("cav_boxes", rank)] = Mesh(*_footprint_mesh(tiles, planes.cav(rank)),
                                                     cavs.box_colour(rank, palette))
-        meshes[cavs.node("cav_vehicle", rank)] = Mesh(*_vehicle_mesh(parts.cav_poses[rank]),
+        meshes[cavs.node("cav_vehicle", rank)] = Mesh(*_vehicle_mesh(parts.cav_poses[rank], *_body(parts, rank)),
                                                       cavs.vehicle_colour(rank, palette))
     return meshes
+
+
+def _body(parts: _Parts, rank: int) -> tuple[float, ...]:
+    """The size (length, width, height) of CAV ``rank``'s body: a mast for a roadside unit, else a car's."""
+    return geometry.ROADSIDE_SIZE if rank in parts.roadside else geometry.CAR_SIZE
 
 
 def _lines(parts: _Parts, palette: colours.Palette) -> dict[str, Lines]:

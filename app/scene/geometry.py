@@ -57,8 +57,14 @@ def footprint_mesh(boxes: np.ndarray, z: float | None = None) -> tuple[np.ndarra
     return vertices.astype(np.float32), faces
 
 
-def vehicle_mesh(poses: list[np.ndarray], length: float = 4.8, width: float = 2.0,
-                 height: float = 1.5) -> tuple[np.ndarray, np.ndarray]:
+CAR_SIZE = (4.8, 2.0, 1.5)
+"""Length, width and height of a vehicle as drawn."""
+ROADSIDE_SIZE = (1.5, 1.5, 6.0)
+"""Length, width and height of a roadside unit as drawn: a mast, seen from above as a small square."""
+
+
+def vehicle_mesh(poses: list[np.ndarray], length: float = CAR_SIZE[0], width: float = CAR_SIZE[1],
+                 height: float = CAR_SIZE[2]) -> tuple[np.ndarray, np.ndarray]:
     """A body and an arrow-head on its roof pointing forward, for each (3, 3) pose."""
     if not poses:
         return np.zeros((0, 3), np.float32), np.zeros((0, 3), np.uint32)

@@ -54,7 +54,7 @@ def describe(outcome: Outcome, picture: Drawing, group: str, row: int) -> str:
     truth = trial.gt_pairs[trial.gt_pairs[:, column] == index]
     false = bool(is_false(ids[index:index + 1])[0])
     name = f"false box {str(ids[index]).rsplit(':', 1)[-1]}" if false else short_id(ids[index])
-    whose = "EGO" if group == "ego" else cavs.name(cav.rank, len(shown))
+    whose = "EGO" if group == "ego" else cavs.name(cav.rank, len(shown), cav.cav_id)
     text = f"{whose} {name}"
     if len(partner):
         other = int(partner[0, 1 - column])

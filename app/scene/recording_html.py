@@ -31,7 +31,7 @@ from ..session.settings import Settings
 from . import colours, geometry
 from .cavs import SLIM
 from .text import number
-from .words import label_of, margin_words
+from .words import label_of, margin_words, plural
 
 APP_NAME = "CBM Explorer"
 DATA_ID = "recording-data"
@@ -116,7 +116,7 @@ def recording_data(recording: Recording, dataset: str, presentation: bool) -> di
     """Everything the page shows, as JSON-ready data."""
     settings, records = recording.snapshot()
     palette = colours.palette(dataclasses.replace(settings.view, presentation=presentation, dark=False))
-    return {"app": APP_NAME, "version": app_version(), "dataset": dataset,
+    return {"app": APP_NAME, "version": app_version(), "dataset": dataset, "count": plural(len(records), "frame"),
             "exported": time.strftime("%Y-%m-%d %H:%M UTC", time.gmtime()),
             "settings": settings_lines(settings),
             "legend": re.sub(r"\*\*", "", palette.legend).replace(colours.LABELS_NOTE, "")
@@ -252,7 +252,7 @@ function play() {
   document.getElementById('play').textContent = timer ? '❚❚ pause' : '▶ play';
 }
 document.getElementById('title').textContent =
-  `${data.app} ${data.version} — recording of ${frames.length} frames · dataset ${data.dataset}` +
+  `${data.app} ${data.version} — recording of ${data.count} · dataset ${data.dataset}` +
   ` · exported ${data.exported}`;
 for (const line of data.settings) {
   const div = document.createElement('div'); div.textContent = line; div.title = line;

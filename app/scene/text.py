@@ -6,7 +6,7 @@ import math
 import numpy as np
 
 from cbm import se2
-from cbm.methods import METHODS
+from cbm.methods import METHODS, ORACLE_WORDS, Method
 from cbm.result import MatchResult
 from evaluation.clutter import is_false
 from evaluation.metrics import evaluate, is_success
@@ -15,6 +15,9 @@ from ..session.explorer import Outcome
 from ..session.names import agent_name
 from .cavs import per_cav_rows
 from .words import margin_words, plural
+
+ORACLE_ROW = f"{ORACLE_WORDS} (oracle)"
+"""The row of what least squares on the true pairs reaches: a reference, not a bound (a robust fit can beat it)."""
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -57,12 +60,20 @@ def findings_heading(outcome: Outcome) -> str:
     return "**Warnings** (the frame succeeded)" if is_success(outcome.metrics) else "**Why it failed**"
 
 
+def time_row(method: Method) -> str:
+    """The time row's name: the method's short name (its label before any explanation in brackets)."""
+    if method.name == "none":
+        return "time"
+    short = method.label.split(" (")[0]
+    return f"{short} time of this frame" if short.endswith(" time") else f"{short} time"
+
+
 def metrics_markdown(outcome: Outcome) -> str:
     """The metrics panel's text for one frame."""
     m, result, trial, limit = outcome.metrics, outcome.result, outcome.trial, outcome.limit
     init_rre = abs(math.degrees(se2.wrap_angle(se2.yaw_of(trial.init) - se2.yaw_of(trial.T_true))))
     init_rte = float(np.linalg.norm(se2.translation_of(trial.init) - se2.translation_of(trial.T_true)))
-    method = METHODS[outcome.settings.method].label
+    method = METHODS[outcome.settings.method]
     ego = agent_name("ego", outcome.ego_id, code=True)
     cav = agent_name("CAV 1" if outcome.others else "CAV", outcome.cav_id, code=True)
     agents = f"{ego} · {cav} ({outcome.cav_note})"
@@ -76,24 +87,24 @@ def metrics_markdown(outcome: Outcome) -> str:
         *clutter_rows(outcome),
         f"| co-visible | {m.n_true} |",
         *thresholds(outcome),
-        f"| matches ({method}) | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",
+        f"| matches | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",
         f"| precision / recall | {number(m.precision)} / {number(m.recall)} |",
         f"| AD | {number(m.ad, ' m')} |",
         f"| RRE / RTE | {number(m.rre, '°')} / {number(m.rte, ' m')} |",
         f"| before calibration | {number(init_rre, '°')} / {number(init_rte, ' m')} |",
-        f"| limit (oracle: true pairs) | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
+        f"| {ORACLE_ROW} | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
     ]
-    if result.anchor is not None:
+    if outcome.voted:
         margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
         lines.append(f"| consensus margin | {margin} |")
     lines.extend(evidence_rows(result))
     lines.extend(over_time_rows(outcome))
-    spent = "time of this frame" if method.endswith(" time") else "time"
-    lines.append(f"| {method} {spent} | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
+    lines.append(f"| {time_row(method)} | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
     if not result.estimated:
         lines.append("")
-        lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where `init` put it.")
+        lines.append("No pose estimate: fewer than 2 pairs matched; the CAV stays where its pose before "
+                     "calibration put it.")
     if outcome.findings:
         lines.append("")
         lines.append(findings_heading(outcome))

@@ -2,6 +2,8 @@
 hint in plain words, so that no control, note or export shows a field's raw name."""
 from __future__ import annotations
 
+import math
+
 WORDS = {
     # (parameter set, field): (label, hint in plain words)
     ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 5-6) "
@@ -90,6 +92,28 @@ def label_of(key: str, name: str) -> str:
 def plural(count: int, noun: str, nouns: str | None = None) -> str:
     """``count`` and the noun in the number it takes: "1 pair", "3 pairs" (``nouns``: an irregular plural)."""
     return f"{count} {noun if count == 1 else nouns or noun + 's'}"
+
+
+def error_words(error: BaseException) -> str:
+    """What went wrong in words: the message of an error raised on purpose (a frame that makes no
+    trial, a file that cannot be read: ``ValueError``), the error's kind besides for an unexpected one."""
+    if isinstance(error, ValueError) and str(error):
+        return str(error)
+    return f"an unexpected error in the app ({type(error).__name__}: {error})"
+
+
+FAR_BETTER = 10_000.0
+"""Beyond this likelihood ratio, "far better": a number of times would only impress."""
+
+
+def times_better(log_ratio: float) -> str:
+    """A natural-log likelihood ratio in words: "about 3000 times better", "far better" beyond ``FAR_BETTER``."""
+    ratio = math.exp(min(log_ratio, 700.0))
+    if ratio > FAR_BETTER:
+        return "far better"
+    if ratio < 10:
+        return f"{ratio:.1f} times better"
+    return f"about {float(f'{ratio:.2g}'):g} times better"
 
 
 def margin_words(margin: int, count: int, runner_up: int) -> str:

@@ -10,6 +10,8 @@ from collections.abc import Callable
 from evaluation.calibration_check import DEFAULT_THRESHOLDS, FrameCheck, Thresholds, check_sequence, flagged_markdown
 from loaders import Sequence
 
+from .names import agent_name
+
 INTRO = ("Compares the dataset's own transform between the agents with the one its labels give "
          "(the objects both agents label; CBM on the labels), frame by frame, and lists the frames off by more "
          "than 1 m or 1°: there the two label sets do not line up under the shipped transform.")
@@ -59,4 +61,4 @@ class CalibrationCheck:
 def option(row: FrameCheck) -> str:
     """A flagged frame, with the disagreement it was judged on."""
     metres, degrees = (row.oracle_m, row.oracle_deg) if row.judged_by == "oracle" else (row.cbm_m, row.cbm_deg)
-    return f"frame {row.frame} ({row.frame_id}): CAV {row.cav}, {metres:.2f} m / {degrees:.2f}°"
+    return f"frame {row.frame} ({row.frame_id}): {agent_name('CAV', row.cav)}, {metres:.2f} m / {degrees:.2f}°"

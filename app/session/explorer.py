@@ -27,8 +27,9 @@ from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
 from evaluation.sweep import run_method
 from evaluation.trials import frame_cav_inputs, frame_inputs
-from loaders import Sequence, is_vehicle
+from loaders import Sequence, is_roadside, is_vehicle
 
+from .names import agent_name
 from .over_time import Runs
 from .settings import MAX_CAVS, Settings
 
@@ -46,7 +47,8 @@ class CavChoice:
 
     @property
     def label(self) -> str:
-        return f"{self.id[:8]} · {self.distance:.0f} m"
+        shown = agent_name("roadside unit", self.id) if is_roadside(self.id) else self.id[:8]
+        return f"{shown} · {self.distance:.0f} m"
 
 
 @dataclass(frozen=True)
@@ -87,7 +89,7 @@ class Outcome:
     result: MatchResult
     metrics: TrialMetrics
     limit: TrialMetrics
-    """What least squares on the true pairs reaches on this trial (the oracle): the limit."""
+    """What least squares on the true pairs reaches on this trial (the oracle): a reference, not a bound."""
     findings: list[Finding]
     seconds: float
     """Server time of the whole recompute (trial, method, metrics, diagnosis)."""
@@ -104,6 +106,14 @@ class Outcome:
     def placements(self) -> dict[str, np.ndarray]:
         """CAV->ego transforms: before (``init``), after (the estimate), truth."""
         return {"before": self.result.init, "after": self.result.transform, "truth": self.trial.T_true}
+
+    @property
+    def voted(self) -> bool:
+        """Whether the result has a consensus margin: an anchor won CBM's consensus vote (CBM without
+        consensus and the other methods hold no vote)."""
+        method = METHODS[self.settings.method]
+        return self.result.anchor is not None and (
+            method.params_key != "cbm" or bool(method.resolved(self.settings.cbm).consensus))
 
     def fused(self, placement: str) -> Fused:
         """Late fusion with the CAV's boxes placed as ``placement`` says (a key of ``placements``),

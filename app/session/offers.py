@@ -59,9 +59,9 @@ def offers_of(sequence: Sequence) -> Offers:
     """What ``sequence`` can show and compute."""
     points = None if sequence.point_clouds else "this dataset ships no LiDAR points (OPV2V-family data with .pcd " \
                                                 "sweeps do)"
-    poses = None if sequence.predicted_poses else "this dataset reports no CAV poses of its own (OPV2V's " \
-                                                  "predicted_ego_pos)"
+    poses = None if sequence.predicted_poses else "this dataset reports no noisy CAV poses of its own " \
+                                                  "(OPV2V-family releases do)"
     scored = any(boxes.scores is not None for agents in sequence.detections.values() for boxes in agents.values())
-    scores = None if scored else "no detector's boxes with scores here (--detections with a stage1_boxes.json " \
-                                 "that has pred_score_np_list)"
+    scores = None if scored else "no detector's boxes with scores here (start the app " \
+                                 "with --detections and a detector's output that scores its boxes)"
     return Offers(points, poses, scores)

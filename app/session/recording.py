@@ -82,7 +82,7 @@ def metrics_of(outcome: Outcome) -> dict[str, Any]:
                "success": is_success(m)}
     plain = {name: _plain(value) for name, value in numbers.items()}
     result = outcome.result
-    anchored = result.anchor is not None
+    anchored = outcome.voted
     return {**plain, "consensus_count": int(result.consensus_count) if anchored else None,
             "runner_up_count": int(result.runner_up_count) if anchored else None}
 

@@ -327,11 +327,12 @@ def reassociation(facts: Facts) -> Step:
              "added_boxes": Lines(shapes.outlines(facts.trial.ego_boxes[added[:, 0]], planes.MARKS), ADDED, 3.0),
              "dropped": Lines(shapes.pair_segments(facts.ego_xy, moved, dropped), MISSED, 2.0)}
     if not params.refine:
-        text = "The guided re-association is switched off (`refine`): CBM's own pairs and pose stand, as in the paper."
+        text = ("The guided re-association is switched off (Method tab, *guided re-association*): CBM's own pairs "
+                "and pose stand, as in the paper.")
     elif facts.fit is None:
         text = "There is no estimate to start the re-association from, so nothing is added."
     else:
-        text = (f"Beyond the paper (cbm/reassociate.py): under the estimate, all boxes are paired one-to-one "
+        text = (f"Beyond the paper: under the estimate, all boxes are paired one-to-one "
                 f"within {params.refine_gate:g} σ (σ = {facts.fit.sigma:.2f} m) and the pose is refitted. "
                 f"It added {_tally(len(added), 'pair', 'purple')} and dropped {_tally(len(dropped), 'pair', 'grey')}: "
                 f"{plural(len(result.pairs), 'pair')} now against CBM's {len(own)}.")

@@ -117,7 +117,7 @@ def test_a_failing_recompute_is_notified_and_the_server_lives_on(browser, server
     frames = len(server.explorer)
     session.explorer = _Broken(server.explorer)
     session.apply(lambda s: s.with_params("cbm", sigma1=12.0))
-    page.get_by_text("Recompute failed").wait_for(timeout=15_000)
+    page.get_by_text("CBM cannot run on this frame").first.wait_for(timeout=15_000)
     session.explorer = server.explorer
     other = ui.open_page(browser, server)
     assert ui.header(other).startswith("Frame 0") and len(server.explorer) == frames

@@ -7,6 +7,8 @@ from pathlib import Path
 
 import pytest
 
+from support import releases
+
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -35,3 +37,14 @@ def test_unreadable_dataset_file(tmp_path: Path) -> None:
     bad.write_text("this is not,a table\n1,2,3\n")
     done = _serve("--dataset", str(bad), tmp_path=tmp_path)
     assert done.returncode != 0 and len(done.stderr.strip().splitlines()) == 1 and "Traceback" not in done.stderr
+
+
+def test_a_loader_warning_is_one_line(tmp_path: Path) -> None:
+    """A DAIR-V2X subset without world calibration: the loader's note on the console is one line,
+    not Python's ``UserWarning`` with a file name and a source line."""
+    root = releases.dair_release(tmp_path / "cooperative-vehicle-infrastructure", world_calib=False)
+    done = _serve("--dataset", str(root), "--preset", "no-such-preset", tmp_path=tmp_path)
+    lines = done.stderr.strip().splitlines()
+    assert done.returncode != 0 and len(lines) == 2, done.stderr
+    assert lines[0].startswith("serve.py: warning: 3 of 3 pair(s) ship no world calibration")
+    assert "UserWarning" not in done.stderr and "dispatch.py" not in done.stderr

@@ -37,8 +37,8 @@ def test_v2xregpp_is_run_ranked_pinned_and_compared_with_cbm_without_a_prior(bro
     assert ui.label(page, "anchor tolerance (m)").is_visible()
     ui.pick_option(page, "method", "V2X-Reg++")
     ui.wait_until(lambda: tab.last.settings.method == "v2xregpp", 60)
-    assert ui.label(page, "boxes kept per agent").is_visible()
-    assert not ui.label(page, "anchor tolerance (m)").is_visible()
+    ui.wait_until(lambda: ui.label(page, "boxes kept per agent").is_visible()
+                  and not ui.label(page, "anchor tolerance (m)").is_visible())
 
     run_all_frames(page, tab)
     page.get_by_text("Worst frames by RTE").wait_for(timeout=30_000)

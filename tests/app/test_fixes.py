@@ -81,6 +81,7 @@ def test_a_frame_of_one_object_says_so() -> None:
 
     class Sequence(list):
         name = "one"
+        warnings: list[str] = []
 
     lonely = Explorer.__new__(Explorer)
     lonely.sequence = Sequence([OneObject()])

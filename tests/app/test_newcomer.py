@@ -42,7 +42,7 @@ def test_the_default_preset_is_the_apps_defaults_view_included(tmp_path) -> None
 
 def test_what_the_shipped_scene_cannot_offer_and_why(explorer: Explorer) -> None:
     offers = offers_of(explorer.sequence)
-    assert "no LiDAR points" in offers.points and "no CAV poses" in offers.reported_poses
+    assert "no LiDAR points" in offers.points and "no noisy CAV poses" in offers.reported_poses
     own_pose = Settings().with_scenario(localization="dataset")
     assert "localization 'dataset' is not offered" in offers.refusal(own_pose)
     graph = dataclasses.replace(Settings(), method="cbm-graph")

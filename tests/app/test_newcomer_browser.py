@@ -121,7 +121,7 @@ def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server
     page.get_by_role("tab", name="Scenario").click()
     assert "dataset" not in options_of(page, "localization error")
     assert {"fixed", "gaussian"} <= set(options_of(page, "localization error"))
-    page.get_by_text("this dataset reports no CAV poses of its own").first.wait_for(timeout=10_000)
+    page.get_by_text("this dataset reports no noisy CAV poses of its own").first.wait_for(timeout=10_000)
 
     page.get_by_role("tab", name="Method").click()
     assert GRAPH not in options_of(page, "method")
@@ -142,6 +142,6 @@ def test_what_this_dataset_cannot_do_is_disabled_with_the_reason(browser, server
     ui.wait_until(lambda: page.locator(f'[id="{ui.label(page, "method").get_attribute("for")}"]').input_value()
                   == METHODS["cbm"].label)
     assert cavs.input_value() == "1"
-    assert page.get_by_text("Recompute failed").count() == 0 and page.get_by_text("Setting refused").count() == 0
+    assert page.get_by_text("CBM cannot run on this frame").count() == 0 and page.get_by_text("Setting refused").count() == 0
     page.close()
 

@@ -32,7 +32,7 @@ def scored(tmp_path_factory: pytest.TempPathFactory) -> Explorer:
 
 def test_without_scores_the_threshold_is_not_offered() -> None:
     plain = loaders.open(FIXTURES / "opv2v" / "scenario", detections=FIXTURES / "stage1" / "stage1_boxes.json")
-    assert "pred_score_np_list" in offers_of(plain).scores
+    assert "--detections" in offers_of(plain).scores
     assert offers_of(loaders.open("synthetic:10")).scores is not None
 
 

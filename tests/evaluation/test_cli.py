@@ -132,7 +132,7 @@ def test_reference_methods_bound_the_default_table(tmp_path):
                               "--out", str(tmp_path)]) == 0
     summary = (tmp_path / "summary.md").read_text()
     assert ("| metric | none | cbm | cbm-no-consensus | cbm-no-prior | icp | ricp | vips | v2xregpp | freealign | "
-            "oracle |") in summary
+            "oracle (least squares on the true pairs) |") in summary
     assert "GNSS (init) |" not in summary
     table = pl.read_csv(tmp_path / "trials.csv")
     oracle, none = table.filter(pl.col("method") == "oracle"), table.filter(pl.col("method") == "none")

@@ -88,6 +88,18 @@ def test_wrong_anchor_reports_both_counts():
     assert message.endswith(rank_against_runner_up(right.size, result.runner_up_count))
 
 
+def test_a_wrong_anchor_whose_answer_is_all_right_is_no_finding():
+    """The re-association can leave a wrong anchor out of the answer: every pair right, nothing to warn of."""
+    world = street_scene(40, np.random.default_rng(0))
+    trial = trial_of(world, eta=0.15, sigma_p=0.8, sigma_theta=10.0, seed=0)
+    params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    right = dataclasses.replace(result, pairs=np.asarray(trial.gt_pairs)[:5])
+    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    assert "wrong_anchor" in {f.code for f in diagnose(result, trial, inspection)}
+    assert "wrong_anchor" not in {f.code for f in diagnose(right, trial, inspection)}
+
+
 def test_messages_name_objects_by_their_ids_not_rows():
     """The ids are made to differ from the rows, so a row index in a message would show."""
     world = street_scene(40, np.random.default_rng(0))

@@ -161,10 +161,10 @@ def test_dair_compressed_sweeps_load_and_lie_in_their_boxes(corpus):
 
 def test_dair_subset_uses_lidar_i2v_without_adding_the_offset_twice(corpus):
     full = loaders.open(corpus["dair_v2x_c"])
-    with pytest.warns(UserWarning, match=r"3 of 3 pair\(s\) have no vehicle or infrastructure world calibration "
-                                         r"and use lidar_i2v.*vehicle frames 000010, 000011, 000012"):
+    with pytest.warns(UserWarning, match=r"3 of 3 pair\(s\) ship no world calibration, so the roadside unit is "
+                                         r"placed by .*lidar_i2v.*vehicle frames 000010, 000011, 000012"):
         subset = loaders.open(corpus["dair_v2x_c_subset"])
-    assert len(subset.warnings) == 1
+    assert subset.warnings == [] and len(subset.notes) == 1
     for k in range(3):
         relative = se2.inverse(full[k].agent_pose("vehicle")) @ full[k].agent_pose("infrastructure")
         np.testing.assert_allclose(subset[k].agent_pose("infrastructure"), relative, atol=1e-9)
@@ -232,7 +232,7 @@ def test_spd_pair_without_cooperative_label_is_associated_by_distance_and_said(c
     vehicle_707, infra_707 = (f"v{releases_v2i.spd_track('641', 707)}", f"i{releases_v2i.spd_track('-1', 707)}")
     assert vehicle_707 in seen["vehicle"] and infra_707 in seen["infrastructure"]      # beyond 2 m: not matched
     assert f"v{releases_v2i.spd_track('641', 700)}" in seen["infrastructure"]               # within 2 m: matched
-    assert len(sequence.warnings) == 1 and releases_v2i.spd_track("cooperative", 700) in set(sequence[1].track_ids)
+    assert len(sequence.notes) == 1 and releases_v2i.spd_track("cooperative", 700) in set(sequence[1].track_ids)
 
 
 def test_spd_pair_naming_a_frame_the_side_lacks_names_the_field(corpus, tmp_path):
@@ -386,7 +386,8 @@ def test_python_tags_other_than_numpy_values_are_refused(corpus, tmp_path):
 def test_v2x_real_categories_infrastructure_and_static_props(corpus):
     with pytest.warns(UserWarning, match=r"1 static object\(s\) \(trash_can\) are not road users: left out of trials"):
         sequence = loaders.open(corpus["v2x_real"])
-    assert sequence.name == "v2x_real/v2xreal" and len(sequence.warnings) == 1 and sequence.ego == "1"
+    assert sequence.name == "v2x_real/v2xreal" and sequence.warnings == [] and len(sequence.notes) == 1
+    assert sequence.ego == "1"
     frame = sequence[0]
     categories = dict(zip(frame.track_ids, frame.categories))
     assert (categories["700"], categories["702"], categories["704"]) == ("car", "van", "truck")
@@ -410,3 +411,12 @@ def test_v2x_real_infra_flag_must_agree_with_the_folder(corpus, tmp_path, flag, 
     releases.dump_yaml(path, {**releases.yaml.safe_load(path.read_text()), "infra": flag})
     with pytest.raises(loaders.LoaderError, match=r"2/000001.yaml: " + message):
         loaders.open(root)
+
+
+def test_an_adver_city_agent_folder_loads_as_its_one_frame_file_does(corpus):
+    """A folder holding one agent's frames (``<run>/<scenario>/641/000060.yaml``) loads as the file inside it."""
+    folder = corpus["adver_city"] / "2024_07_12_14_13_22" / "unj_cn_d" / "641"
+    from_folder, from_file = loaders.open(folder), loaders.open(folder / "000060.yaml")
+    assert len(from_folder) == len(from_file) == 1
+    assert list(from_folder[0].track_ids) == list(from_file[0].track_ids)
+    np.testing.assert_allclose(from_folder[0].boxes(), from_file[0].boxes())

@@ -141,7 +141,7 @@ def test_dataset_localization_without_a_predicted_pose_says_so(tmp_path, fixture
     _scenario(tmp_path / "s", fixtures / "opv2v" / "scenario", predicted=None)
     frame = loaders.open(tmp_path / "s")[0]
     assert frame.predicted_pose("650") is None
-    with pytest.raises(ValueError, match="predicted_ego_pos"):
+    with pytest.raises(ValueError, match="noisy pose the dataset reports for the CAV"):
         build_trial(frame, ScenarioParams(protocol="opv2v", localization="dataset"), seed=0, cav="650")
 
 
