@@ -135,7 +135,8 @@ def nesting_depth(text: str) -> int:
 
 def read_toml(path: Path, shown: str | None = None) -> dict[str, Any]:
     """The whole preset document at ``path``, read the one way the app and the command line read a
-    preset: a regular file only (never blocking on a FIFO), of at most ``MAX_BYTES``, UTF-8, nested
+    preset: a regular file only (never blocking on a FIFO), of at most ``MAX_BYTES``, UTF-8 (a byte
+    order mark, as some editors save, is passed over), nested
     at most ``MAX_DEPTH`` deep, TOML; else ``PresetError`` naming the file as ``shown`` (its path)."""
     shown = str(path) if shown is None else shown
     try:
@@ -147,7 +148,7 @@ def read_toml(path: Path, shown: str | None = None) -> dict[str, Any]:
     if len(data) > MAX_BYTES:
         raise PresetError(f"{shown}: larger than {MAX_BYTES // 1024} KB; not read")
     try:
-        text = data.decode("utf-8")
+        text = data.decode("utf-8-sig")
     except UnicodeDecodeError as error:
         raise PresetError(f"{shown}: not UTF-8 text (UnicodeDecodeError at byte {error.start})") from None
     if nesting_depth(text) > MAX_DEPTH:

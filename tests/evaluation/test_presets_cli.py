@@ -114,3 +114,11 @@ def test_an_unknown_preset_name_lists_the_shipped_ones(tmp_path: Path, capsys: p
     assert stop.value.code == 2 and "no-such-preset" in err and "paper-sind" in err
     with pytest.raises(PresetError, match="not a regular file"):
         read_preset_file(tmp_path)
+
+
+def test_a_preset_saved_with_a_byte_order_mark_is_read(tmp_path: Path) -> None:
+    """Some editors (Notepad) save UTF-8 with a byte order mark; before, such a preset was refused as
+    "Invalid statement (at line 1, column 1)" (issue 40, item 7)."""
+    path = tmp_path / "bom.toml"
+    path.write_bytes("\ufeff[scenario]\nsigma_p = 0.4\n".encode())
+    assert read_preset_file(path).scenario.sigma_p == 0.4
