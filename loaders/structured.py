@@ -270,6 +270,8 @@ class _ObjectStream:
                 if self._fill():
                     continue
                 self._invalid(exc.msg)
+            except ValueError as exc:  # an integer of more digits than Python converts
+                self._invalid(_first_line(exc).split(":")[0])
             if end < len(self.text) or not self._fill():
                 self.at = end
                 return value

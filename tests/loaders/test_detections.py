@@ -204,3 +204,13 @@ def test_bad_scores_name_the_sample_and_field(tmp_path, fixtures, scores, messag
 def test_min_score_outside_0_1_is_refused(threshold):
     with pytest.raises(ValueError, match="min_score"):
         ScenarioParams(min_score=threshold)
+
+
+def test_an_integer_of_5001_digits_names_the_file(tmp_path, fixtures):
+    """Python converts at most 4300 digits to an integer; the message named neither the file nor
+    where (issue 40, item 5)."""
+    path = tmp_path / "stage1_boxes.json"
+    path.write_text((fixtures / STAGE1).read_text().replace("[", "[" + "7" * 5001 + ", ", 1))
+    with pytest.raises(loaders.LoaderError, match=r"stage1_boxes.json: not valid JSON \(Exceeds the limit \(4300 "
+                                                  r"digits\) for integer string conversion near character \d+\)"):
+        loaders.open(fixtures / SCENARIO, detections=path)
