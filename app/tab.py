@@ -217,7 +217,8 @@ class ClientSession:
         """The timeline at ``frame``, drawn ``TIMELINE_DELAY`` after the latest result."""
         data, failures, pinned = self._timeline(frame), self.history.failures(), self.baseline.pinned
         over_time = self._over_time()
-        self._timeline_later.call(lambda: self.controls.metrics.show_timeline(data, failures, pinned, frame, over_time))
+        self._timeline_later.call(lambda: self._closed.is_set()  # a closed tab's client takes no update
+                                  or self.controls.metrics.show_timeline(data, failures, pinned, frame, over_time))
 
     def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
         rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
@@ -311,7 +312,9 @@ class ClientSession:
 
     def _deliver(self, computed: tuple[Outcome, Drawing], generation: int) -> None:
         """Show a result: the scene's changed nodes and the panels, in one batch sent at once; then
-        keep its row and record (the timeline, drawn later, and the recording read them)."""
+        keep its row and record (the timeline, drawn later, and the recording read them); not once closed."""
+        if self._closed.is_set():
+            return
         outcome, picture = computed
         first = not self.view.meshes
         relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
