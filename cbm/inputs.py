@@ -32,6 +32,15 @@ def checked_transform(name: str, T: np.ndarray) -> np.ndarray:
     return array
 
 
+def check_at_most(owner: object, most: dict[str, float]) -> None:
+    """ValueError unless each field of ``owner`` named in ``most`` is at most its bound: a parameter's
+    one range, wherever it is given (a slider, a preset, ``--grid``, a search), ends there."""
+    for name, bound in most.items():
+        value = getattr(owner, name)
+        if isinstance(value, (int, float)) and not isinstance(value, bool) and value > bound:
+            raise ValueError(f"{type(owner).__name__}.{name} must be at most {bound:g}, got {value!r}")
+
+
 def check_positive(owner: object, *names: str) -> None:
     """ValueError unless each named field of ``owner`` is a positive finite number."""
     for name in names:

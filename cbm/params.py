@@ -5,11 +5,17 @@ import math
 from dataclasses import dataclass
 from typing import Literal
 
-from .inputs import check_positive
+from .inputs import check_at_most, check_positive
 
 HeadingMode = Literal["fold", "align"]
 ConsensusRule = Literal["paper", "released"]
 Estimator = Literal["welsch", "least_squares"]
+
+
+MOST = {"sigma1": 45.0, "sigma2": 10.0, "sigma3": 10.0, "distance_limit": 60.0, "welsch_floor": 5.0,
+        "refine_gate": 8.0}
+"""Each threshold's largest value, wherever it is given (the app's sliders end there): beyond them
+every pair of objects matches and a frame takes minutes (``distance_limit`` may also be ``math.inf``)."""
 
 
 @dataclass(frozen=True)
@@ -62,8 +68,8 @@ class CBMParams:
         check_positive(self, "sigma1", "sigma2", "sigma3", "welsch_floor", "refine_gate")
         if self.distance_limit != math.inf:
             check_positive(self, "distance_limit")
-        if self.sigma1 > 90:
-            raise ValueError(f"CBMParams.sigma1 is in degrees and must be at most 90, got {self.sigma1!r}")
+        check_at_most(self, {name: most for name, most in MOST.items()
+                             if not (name == "distance_limit" and self.distance_limit == math.inf)})
         if self.consensus_rule not in ("paper", "released"):
             raise ValueError(f"CBMParams.consensus_rule must be 'paper' or 'released', got {self.consensus_rule!r}")
         if self.heading not in ("fold", "align"):

@@ -13,6 +13,7 @@ from typing import Any
 import viser
 
 from cbm.methods import METHODS
+from cbm.params import MOST
 
 from ..scene.words import WORDS, label_of
 from ..session.offers import Offers
@@ -20,12 +21,12 @@ from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
 
 SLIDERS = {
-    # (parameter set, field): (min, max, step)
-    ("cbm", "sigma1"): (1.0, 45.0, 0.5),
-    ("cbm", "sigma2"): (0.25, 10.0, 0.25),
-    ("cbm", "sigma3"): (0.25, 10.0, 0.25),
-    ("cbm", "distance_limit"): (1.0, 60.0, 1.0),
-    ("cbm", "refine_gate"): (1.0, 8.0, 0.25),
+    # (parameter set, field): (min, max, step); the max is the parameter's own (``cbm.params.MOST``)
+    ("cbm", "sigma1"): (1.0, MOST["sigma1"], 0.5),
+    ("cbm", "sigma2"): (0.25, MOST["sigma2"], 0.25),
+    ("cbm", "sigma3"): (0.25, MOST["sigma3"], 0.25),
+    ("cbm", "distance_limit"): (1.0, MOST["distance_limit"], 1.0),
+    ("cbm", "refine_gate"): (1.0, MOST["refine_gate"], 0.25),
 }
 LABELS = {m.label: m.name for m in METHODS.values()}
 ABOUT = {"cbm": "*σ1 and σ2: how alike two objects' neighbourhoods must be to match (angle, distance). σ3: how "

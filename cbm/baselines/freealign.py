@@ -21,7 +21,7 @@ import numpy as np
 from scipy.spatial.distance import cdist
 
 from ..estimate import weighted_procrustes
-from ..inputs import check_positive, checked_boxes, checked_transform
+from ..inputs import check_at_most, check_positive, checked_boxes, checked_transform
 from ..result import MatchResult
 from ._common import check_count, check_params, make_result
 
@@ -51,6 +51,7 @@ class FreeAlignParams:
         check_positive(self, "anchor_error", "box_error")
         check_count(self, "min_anchors", 2)
         check_count(self, "max_boxes", 3)
+        check_at_most(self, {"anchor_error": 5.0, "box_error": 5.0, "min_anchors": 50, "max_boxes": 200})
 
 
 def match_freealign(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,

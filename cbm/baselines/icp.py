@@ -8,7 +8,7 @@ from scipy.spatial import cKDTree
 
 from .. import se2
 from ..estimate import weighted_procrustes
-from ..inputs import check_positive
+from ..inputs import check_at_most, check_positive
 from ..result import MatchResult
 from ._common import check_count, check_params, closest_point_match
 
@@ -32,6 +32,7 @@ class ICPParams:
     def __post_init__(self) -> None:
         check_count(self, "max_iterations", 1)
         check_positive(self, "tolerance", "max_correspondence_distance")
+        check_at_most(self, {"max_iterations": 10_000, "max_correspondence_distance": 100.0})
 
 
 def match_icp(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,

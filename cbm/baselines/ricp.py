@@ -10,7 +10,7 @@ from scipy.spatial import cKDTree
 
 from .. import se2
 from ..estimate import weighted_procrustes
-from ..inputs import check_positive
+from ..inputs import check_at_most, check_positive
 from ..result import MatchResult
 from ._common import check_count, check_params, closest_point_match
 
@@ -47,6 +47,7 @@ class RICPParams:
         check_count(self, "max_iterations", 1)
         check_count(self, "anderson_m", 1)
         check_positive(self, "tolerance", "nu_begin_k", "nu_end_k", "max_correspondence_distance")
+        check_at_most(self, {"max_iterations": 10_000, "anderson_m": 20, "max_correspondence_distance": 100.0})
         if not isinstance(self.nu_alpha, (int, float)) or not 0.0 < self.nu_alpha < 1.0:
             raise ValueError(f"RICPParams.nu_alpha must lie strictly between 0 and 1, got {self.nu_alpha!r}")
         if not isinstance(self.anderson, bool):

@@ -25,7 +25,7 @@ from scipy.optimize import linear_sum_assignment
 
 from .. import se2
 from ..estimate import weighted_procrustes
-from ..inputs import check_positive, checked_boxes, checked_transform
+from ..inputs import check_at_most, check_positive, checked_boxes, checked_transform
 from ..result import MatchResult
 from ._common import as_labels, check_count, check_params, make_result
 
@@ -51,7 +51,8 @@ class V2XRegParams:
     """Parameters of V2X-Reg++; defaults are the public code's ``configs/pipeline.yaml``."""
 
     top_k: int = 10
-    """Boxes kept per agent: the first ``top_k`` by kind (bus, truck, car, then others), then volume."""
+    """Boxes kept per agent: the first ``top_k`` by kind (bus, truck, car, then others), then volume;
+    at most 100 (every pair is a hypothesis scored against all: top_k^4 work)."""
     max_range: float = 120.0
     """Metres. Boxes farther than this from their own agent are left out first (``distance_m``)."""
     affinity: Affinity = "distance"
@@ -67,6 +68,7 @@ class V2XRegParams:
         check_count(self, "top_k", 1)
         check_count(self, "filter_threshold", 0)
         check_positive(self, "max_range", "distance_scale")
+        check_at_most(self, {"top_k": 100, "filter_threshold": 100, "max_range": 500.0, "distance_scale": 10.0})
         if self.affinity not in ("distance", "oiou"):
             raise ValueError(f"V2XRegParams.affinity must be 'distance' or 'oiou', got {self.affinity!r}")
 

@@ -14,7 +14,7 @@ from scipy.spatial.distance import cdist
 
 from .. import se2
 from ..estimate import weighted_procrustes
-from ..inputs import check_positive, checked_boxes, checked_transform
+from ..inputs import check_at_most, check_positive, checked_boxes, checked_transform
 from ..result import MatchResult
 from ._common import as_labels, check_count, check_params, make_result, sort_pairs
 
@@ -46,10 +46,11 @@ class VIPSParams:
     mu_heading: float = 0.5
     """mu4: weight of the relative-heading term in the edge affinity."""
     candidate_radius: float = 10.0
-    """Metres. An assignment (i, i') is a candidate only when the CAV centre lies this close to the ego
-    centre under ``init``."""
+    """Metres, at most 200. An assignment (i, i') is a candidate only when the CAV centre lies this
+    close to the ego centre under ``init``."""
     top_k: int = 10
-    """Each ego object keeps its ``top_k`` candidates of largest node affinity."""
+    """Each ego object keeps its ``top_k`` candidates of largest node affinity, at most 100 (the
+    affinity matrix grows with its square: 1,000,000 ran out of memory)."""
     edge_gate: float = 3.0
     """Metres. Two assignments whose centre distances differ by more than this have zero affinity
     (their distance term is then below exp(-lambda3 edge_gate^2) = 0.011 at the defaults)."""
@@ -60,6 +61,7 @@ class VIPSParams:
         check_positive(self, "lambda_size", "lambda_position", "lambda_distance", "lambda_heading",
                        "mu_size", "mu_position", "mu_distance", "mu_heading", "candidate_radius", "edge_gate")
         check_count(self, "top_k", 1)
+        check_at_most(self, {"top_k": 100, "candidate_radius": 200.0, "edge_gate": 50.0})
         if not isinstance(self.score_threshold, (int, float)) or not 0.0 < self.score_threshold <= 1.0:
             raise ValueError(f"VIPSParams.score_threshold must lie in (0, 1], got {self.score_threshold!r}")
 
