@@ -16,6 +16,7 @@ from cbm.methods import METHODS
 from cbm.params import MOST
 
 from ..scene.words import WORDS, label_of
+from ..session.coalesce import Later
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
@@ -29,6 +30,8 @@ SLIDERS = {
     ("cbm", "refine_gate"): (1.0, MOST["refine_gate"], 0.25),
 }
 LABELS = {m.label: m.name for m in METHODS.values()}
+TYPING_PAUSE = 0.8
+"""Seconds without a keystroke after which a typed number applies."""
 ABOUT = {"cbm": "*σ1 and σ2: how alike two objects' neighbourhoods must be to match (angle, distance). σ3: how "
                 "closely matched pairs must agree to back each other in the consensus vote. Hover a control for "
                 "more.*"}
@@ -49,11 +52,17 @@ class MethodControls:
     unoffered: viser.GuiMarkdownHandle
     """Under the method list: the methods not offered here, and why."""
     offers: Offers = field(default_factory=Offers)
+    typed: dict[str, viser.GuiMarkdownHandle] = field(default_factory=dict)
+    """A folder's note on a number typed that is not one: the value in use stays."""
+    pause: Later = field(default_factory=lambda: Later(TYPING_PAUSE))
+    """A typed number applies once typing pauses: a text box reports every keystroke, and "1e5"
+    passes through "1" and "1e" on the way."""
 
     def show(self, settings: Settings) -> None:
         self.method.value = METHODS[settings.method].label
         for (key, name), control in self.params.items():
-            control.value = getattr(settings.method_params[key], name)
+            value = getattr(settings.method_params[key], name)
+            control.value = f"{value:g}" if isinstance(control.value, str) and not isinstance(value, str) else value
 
     def reflect(self, settings: Settings) -> None:
         """Offer the methods that can run; show the chosen method's folder and CBM's; disable, with a
@@ -103,7 +112,7 @@ def _worded(value: Any) -> str:
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> MethodControls:
     method = gui.add_dropdown("method", tuple(LABELS), initial_value=METHODS[settings.method].label)
     unoffered = gui.add_markdown("", visible=False)
-    folders, params, notes = {}, {}, {}
+    folders, params, notes, typed = {}, {}, {}, {}
     for key, values in settings.method_params.items():
         if not dataclasses.fields(values):
             continue
@@ -114,12 +123,15 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> MethodContro
             notes[key] = gui.add_markdown("", visible=False)
             for f in dataclasses.fields(values):
                 params[(key, f.name)] = _control(gui, key, f.name, getattr(values, f.name))
+            typed[key] = gui.add_markdown("", visible=False)
     return MethodControls(method, folders, params, notes, {k: c.hint or "" for k, c in params.items()}, unoffered,
-                          offers)
+                          offers, typed)
 
 
 def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
-    """A slider for the listed thresholds, a checkbox for a switch, a list for a choice, else a number."""
+    """A slider for the listed thresholds, a checkbox for a switch, a list for a choice, else a number
+    typed as text (``typed_number``): viser's number box drops an ``e``, so "1e5" became 15 and
+    "1e-07" became -107, silently."""
     label, hint = WORDS[(key, name)]
     if (key, name) in SLIDERS:
         low, high, step = SLIDERS[(key, name)]
@@ -129,10 +141,48 @@ def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
     options = typing.get_args(typing.get_type_hints(METHODS[key].params)[name])
     if isinstance(value, str) and options:
         return gui.add_dropdown(label, options, initial_value=value, hint=hint)
-    return gui.add_number(label, value, step=1 if isinstance(value, int) else 0.01, hint=hint)
+    return gui.add_text(label, f"{value:g}", hint=hint)
 
 
 def bind(c: MethodControls, tab: TabActions) -> None:
     on_user(c.method, lambda: tab.apply(lambda s: dataclasses.replace(s, method=LABELS[c.method.value])))
     for (key, name), control in c.params.items():
-        on_user(control, lambda k=key, n=name, h=control: tab.apply(lambda s: s.with_params(k, **{n: h.value})))
+        on_user(control, lambda k=key, n=name, h=control: _edited(c, tab, k, n, h.value))
+
+
+def _edited(c: MethodControls, tab: TabActions, key: str, name: str, value: Any) -> None:
+    """Apply a control's new value; a typed number once typing pauses (``MethodControls.pause``)."""
+    if isinstance(value, str) and not isinstance(getattr(tab.settings.method_params[key], name), str):
+        c.pause.call(lambda: _typed(c, tab, key, name, value))
+    else:
+        tab.apply(lambda s: s.with_params(key, **{name: value}))
+
+
+def _typed(c: MethodControls, tab: TabActions, key: str, name: str, value: str) -> None:
+    """Apply a typed number; text that is not a number is said under the folder, the value in use stays."""
+    current = getattr(tab.settings.method_params[key], name)
+    try:
+        number = typed_number(value, current, key, name)
+    except ValueError as error:
+        assign(c.typed[key], content=f"*{error}; the value in use is {current:g}.*", visible=True)
+        return
+    if key in c.typed:
+        assign(c.typed[key], visible=False)
+    tab.apply(lambda s: s.with_params(key, **{name: number}))
+
+
+def typed_number(value: Any, current: Any, key: str, name: str) -> Any:
+    """The number typed in a text box, as the parameter's type (``1e5``, ``2.5e-1`` accepted), or a
+    ``ValueError`` naming the control and what was typed: the tab then says so and shows the value in
+    use again. Any other control's value is passed through."""
+    if not isinstance(value, str) or isinstance(current, str):
+        return value
+    try:
+        number = float(value.strip())
+    except ValueError:
+        raise ValueError(f"{label_of(key, name)}: {value!r} is not a number") from None
+    if isinstance(current, int) and not isinstance(current, bool):
+        if not number.is_integer():
+            raise ValueError(f"{label_of(key, name)}: {value!r} is not a whole number")
+        return int(number)
+    return number
