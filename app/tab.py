@@ -353,8 +353,9 @@ class ClientSession:
             self.controls.metrics.text.content = message
         else:
             self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
-        self.key_numbers.problem("CBM cannot run on this frame: see the panel")
-        self.notify("CBM cannot run on this frame", error_words(error), "red")
+        method = METHODS[self._settings.method].label
+        self.key_numbers.problem(f"{method} cannot run on this frame: see the panel")
+        self.notify(f"{method} cannot run on this frame", error_words(error), "red")
 
     def _refresh_cav_choices(self, outcome: Outcome) -> None:
         if outcome.frame_index == self._choices_frame:

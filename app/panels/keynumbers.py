@@ -12,6 +12,7 @@ import math
 import numpy as np
 import viser
 
+from cbm.methods import METHODS
 from evaluation.metrics import TrialMetrics, is_success
 from loaders import is_vehicle
 
@@ -109,7 +110,8 @@ def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseExcepti
     pointers = [warning for warning in sequence.warnings if "Git LFS pointer" in warning]
     if pointers:
         fix = f"fetch the data Git LFS left behind, then start the app again: {pointers[0]}."
-    return f"**CBM cannot run on this frame.**\n\nWhat is missing: {missing}\n\nWhat to try: {fix}"
+    method = METHODS[settings.method].label
+    return f"**{method} cannot run on this frame.**\n\nWhat is missing: {missing}\n\nWhat to try: {fix}"
 
 
 class KeyNumbers:
