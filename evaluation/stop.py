@@ -112,6 +112,25 @@ def kill_descendants(rounds: int = 50) -> None:
     for pid in stopped:
         with contextlib.suppress(OSError):
             os.kill(pid, signal.SIGKILL)
+    reap(stopped)
+
+
+def reap(pids: set[int], timeout: float = 1.0) -> None:
+    """Collect the exit status of those of ``pids`` that are this process's children, so that none is
+    left listed as ``<defunct>`` (killed children stay so until their parent waits for them)."""
+    deadline = time.monotonic() + timeout
+    waiting = set(pids)
+    while waiting and time.monotonic() < deadline:
+        for pid in list(waiting):
+            try:
+                done, _ = os.waitpid(pid, os.WNOHANG)
+            except ChildProcessError:  # not our child (its parent reaps it), or already reaped
+                waiting.discard(pid)
+                continue
+            if done:
+                waiting.discard(pid)
+        if waiting:
+            time.sleep(0.01)
 
 
 def force_exit(line: str, signum: int) -> NoReturn:

@@ -11,6 +11,7 @@ large one waits for ``ready``; the time spent compiling is reported on its own, 
 from __future__ import annotations
 
 import atexit
+import contextlib
 import subprocess
 import threading
 import time
@@ -84,10 +85,14 @@ class Kernels:
         return f"CBM's kernels compiled in {spent:.1f} s at start (cached from now on); not part of CBM's time."
 
     def stop(self) -> None:
-        """End the compiling subprocesses, if they still run (at exit: they are no use to anyone then)."""
+        """End the compiling subprocesses, if they still run (at exit: they are no use to anyone then),
+        and reap them: none is left listed as ``<defunct>``."""
         for process in self._processes:
             if process.poll() is None:
                 process.kill()
+        for process in self._processes:
+            with contextlib.suppress(subprocess.TimeoutExpired):
+                process.wait(timeout=1.0)
 
     def _compile_in_subprocess(self) -> float | None:
         """Compile the kernels' two halves in two processes at once; the seconds they took, None
