@@ -10,6 +10,7 @@ import numpy as np
 import viser
 
 from cbm.engine.interpreted import SMALL
+from cbm.engine.threads import Cancelled, stoppable
 from cbm.methods import METHODS
 
 from . import panels
@@ -257,7 +258,8 @@ class ClientSession:
                 self.kernels.wait()
         self._stop_catching_up.clear()
         try:
-            with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting:
+            with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting, \
+                    stoppable(lambda: self.worker.superseded):
                 outcome = self.explorer.compute(settings, self._catching_up(), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
         except Stopped as stopped:
@@ -345,7 +347,7 @@ class ClientSession:
     def _failed(self, error: BaseException) -> None:
         """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
         (or above the last frame's, marked as such), and in the key numbers."""
-        if isinstance(error, Stopped):
+        if isinstance(error, (Stopped, Cancelled)):
             return
         message = unusable_markdown(self.explorer, self._settings, error)
         if self.last is None:

@@ -33,6 +33,7 @@ import numpy as np
 
 from . import se2
 from .engine import Visit, anchor_sets
+from .engine.threads import check_stop
 from .estimate import Fit, residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
 from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
@@ -229,6 +230,7 @@ def verify(sets, winner: int, winner_fit: Fit, refit: Refit, floor: float, wides
     poses: list[np.ndarray] = []
     for anchor, pairs in anchor_sets(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy,
                                      sets.params.distance_limit, winner, HYPOTHESES, POOL, visit):
+        check_stop()
         if len(pairs) < 2:
             continue
         fit = winner_fit if anchor == winner else refit(cav[pairs[:, 1], :2], ego[pairs[:, 0], :2])

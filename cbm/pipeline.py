@@ -25,6 +25,7 @@ from .engine import (
     runner_up_beside,
     select,
 )
+from .engine.threads import check_stop
 from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
@@ -93,6 +94,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     ready = prepare(ego, cav, init, params.heading) if cache is None else cache.prepared
     t = time.perf_counter()
     timings["context"] = t - started
+    check_stop()
 
     sigma1, sigma3 = params.sigma1_rad, params.sigma3 if params.consensus else None
     if cache is None:
@@ -102,6 +104,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
         count2, voted_by = cache.local_matching(sigma1, params.sigma2, sigma3)
         candidates = cache.candidate_sets(sigma1, params.sigma2, count2)
     timings["local_matching"] = time.perf_counter() - t
+    check_stop()
     return Sets(params, ego, ready, candidates, voted_by)
 
 
@@ -148,6 +151,7 @@ def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] |
     t = time.perf_counter()
     chosen = select(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
     timings["consensus_selection"] = time.perf_counter() - t
+    check_stop()
 
     t = time.perf_counter()
     context_pairs = chosen.pairs.astype(np.intp)

@@ -24,6 +24,7 @@ import numpy as np
 from scipy.optimize import linear_sum_assignment
 
 from . import se2
+from .engine.threads import check_stop
 from .estimate import Fit
 
 MAX_ROUNDS = 5
@@ -185,6 +186,7 @@ def gated_assignment(ego: np.ndarray, cav: np.ndarray, gate: float, sigma: float
     partner, left, row_ids, row_at, col_ids, col_at, blocks, block_at = assignment_blocks(
         candidates, cost, len(ego), len(cav), DENSE_BLOCK, _UNPAIRED)
     for g in range(left):
+        check_stop()
         block = blocks[block_at[g]:block_at[g + 1]].reshape(row_at[g + 1] - row_at[g], col_at[g + 1] - col_at[g])
         _assign(partner, block, *linear_sum_assignment(block), row_ids[row_at[g]:], col_ids[col_at[g]:], _UNPAIRED)
     return _paired(partner)
@@ -376,6 +378,7 @@ def reassociate(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, fit: Fit, g
     current, current_fit, rounds = pairs, fit, 0
     while rounds < MAX_ROUNDS:
         rounds += 1
+        check_stop()
         moved = se2.apply_boxes(current_fit.transform, cav)
         found = gated_assignment(ego, moved, gate * current_fit.sigma, current_fit.sigma)
         if len(found) < 2 or np.array_equal(found, current):

@@ -96,3 +96,30 @@ def test_later_runs_only_the_latest_of_a_burst_survives_a_failure_and_close_drop
     later.call(lambda: done.set())
     assert done.wait(10)
     later.close()
+
+
+def test_a_computation_superseded_by_a_newer_edit_stops_early_and_is_not_shown() -> None:
+    """A tab computes under ``stoppable(worker.superseded)`` (``ClientSession._compute``): a newer
+    edit makes the engine raise ``Cancelled`` at its next check, and the result is never shown."""
+    from cbm.engine.threads import Cancelled, check_stop, stoppable
+
+    delivered, failed, started, checks = [], [], threading.Event(), []
+    worker: Coalescer | None = None
+
+    def compute(value: int) -> int:
+        with stoppable(lambda: worker.superseded):
+            started.set()
+            for _ in range(10_000 if value == 1 else 1):
+                checks.append(value)
+                check_stop()
+                time.sleep(0.01)
+        return value
+
+    worker = Coalescer(compute, lambda result, generation: delivered.append(result), failed.append)
+    worker.submit(1)
+    assert started.wait(60)
+    worker.submit(2)
+    assert worker.wait_idle(120)
+    assert delivered == [2] and len(failed) == 1 and isinstance(failed[0], Cancelled)
+    assert checks.count(1) < 10_000
+    worker.close()
