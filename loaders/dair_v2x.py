@@ -48,6 +48,7 @@ vehicle's track id and box; track ids are ``v<i>`` / ``i<j>`` (label index in th
 from __future__ import annotations
 
 import warnings
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -182,14 +183,19 @@ def system_error_offset(value):
 
 
 def _relative_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
-    """The one note naming the pairs whose poses come from ``lidar_i2v`` (also a ``UserWarning``)."""
+    """The one note naming the pairs whose poses come from ``lidar_i2v``."""
+    return pairs_note(vehicle_frames, lambda shown: (
+        f"{len(vehicle_frames)} of {loaded} pair(s) ship no world calibration, so the roadside unit is placed "
+        f"by the vehicle-to-infrastructure calibration the release ships ({root / I2V}) and the vehicle's "
+        f"LiDAR is the world (vehicle frames {shown})"))
+
+
+def pairs_note(vehicle_frames: list[str], words: Callable[[str], str]) -> list[str]:
+    """``[words(the first frames)]`` about some pairs, also a ``UserWarning``; none without pairs."""
     if not vehicle_frames:
         return []
-    shown = ", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else "")
-    note = (f"{len(vehicle_frames)} of {loaded} pair(s) ship no world calibration, so the roadside unit is placed "
-            f"by the vehicle-to-infrastructure calibration the release ships ({root / I2V}) and the vehicle's "
-            f"LiDAR is the world (vehicle frames {shown})")
-    warnings.warn(note, UserWarning, stacklevel=3)
+    note = words(", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else ""))
+    warnings.warn(note, UserWarning, stacklevel=4)
     return [note]
 
 

@@ -63,7 +63,7 @@ from . import v2x_real
 from .categories import normalised
 from .errors import LoaderError
 from .scene import Sequence
-from .structured import field, is_rotation, matrix, number, numbers, read_yaml
+from .structured import field, number, numbers, read_yaml, rigid
 
 FRAME_RATE = 10.0
 CAV_SIZE = (4.9, 2.0, 1.6)
@@ -248,20 +248,12 @@ def _pose(path: Path, record, right_handed: bool, key: str = "lidar_pose") -> tu
     numbers ``[x, y, z, roll, yaw, pitch]`` (degrees), or a 4x4 sensor-to-world matrix (V2V4Real)."""
     value = field(path, record, key)
     if isinstance(value, list) and value and all(isinstance(row, list) for row in value):
-        x, y, z, yaw = _matrix_pose(path, value, key)
+        m = rigid(path, value, key)
+        x, y, z, yaw = float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), math.atan2(m[1, 0], m[0, 0])
     else:
         x, y, z, _roll, yaw, _pitch = numbers(path, value, key, 6)
         yaw = math.radians(yaw)
     return (x, y, z, yaw) if right_handed else (x, -y, z, -yaw)
-
-
-def _matrix_pose(path: Path, value: list, key: str) -> tuple[float, float, float, float]:
-    """``x, y, z, yaw`` of a 4x4 rigid transform, or a ``LoaderError`` when it is not one."""
-    m = np.array(matrix(path, value, key, 4, 4))
-    if not is_rotation(m[:3, :3]):
-        raise LoaderError(f"{path}: {key}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
-                          f"got {m.round(3).tolist()}")
-    return float(m[0, 3]), float(m[1, 3]), float(m[2, 3]), math.atan2(m[1, 0], m[0, 0])
 
 
 def _reported_lidar_pose(path: Path, record, lidar: tuple[float, float, float, float],

@@ -162,6 +162,15 @@ def rotation(path: Path, value, where: str) -> np.ndarray:
     return R
 
 
+def rigid(path: Path, value, where: str) -> np.ndarray:
+    """A 4x4 rigid transform (a rotation in its upper-left 3x3), or a ``LoaderError`` naming ``where``."""
+    m = np.array(matrix(path, value, where, 4, 4))
+    if not is_rotation(m[:3, :3]):
+        raise LoaderError(f"{path}: {where}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
+                          f"got {m.round(3).tolist()}")
+    return m
+
+
 def is_rotation(R: np.ndarray) -> bool:
     """Whether ``R`` is a rotation within :data:`ROTATION_TOLERANCE`."""
     return bool(np.abs(R @ R.T - np.eye(3)).max() <= ROTATION_TOLERANCE

@@ -33,7 +33,7 @@ import numpy as np
 from . import dair_v2x as dair
 from .errors import LoaderError
 from .scene import AGENT_COLUMNS, BOX_COLUMNS, Sequence
-from .structured import field, is_rotation, matrix, numbers, read_json
+from .structured import field, numbers, read_json, rigid
 
 REGISTERED = "s110_lidar_ouster_south_and_vehicle_lidar_robosense_registered"
 LABELS = Path("labels_point_clouds") / REGISTERED
@@ -107,18 +107,9 @@ def _frames(path: Path) -> list[dict]:
             raise LoaderError(f"{path}: {where}.objects: expected a mapping of object uuids to objects")
         out.append({"timestamp": dair._number(path, field(path, properties, "timestamp", f"{where}.frame_properties"),
                                               f"{where}.frame_properties.timestamp"),
-                    "vehicle": _pose(path, matrix4x4, f"{TRANSFORM}.transform_src_to_dst.matrix4x4"),
+                    "vehicle": rigid(path, matrix4x4, f"{TRANSFORM}.transform_src_to_dst.matrix4x4"),
                     "objects": [_object(path, f"{where}.objects.{uuid}", uuid, item) for uuid, item in items.items()]})
     return out
-
-
-def _pose(path: Path, value, where: str) -> np.ndarray:
-    """A 4x4 rigid transform (a rotation in its upper-left 3x3), or a ``LoaderError`` naming ``where``."""
-    m = np.array(matrix(path, value, where, 4, 4))
-    if not is_rotation(m[:3, :3]):
-        raise LoaderError(f"{path}: {where}: expected a rigid 4x4 transform (a rotation in its upper-left 3x3), "
-                          f"got {m.round(3).tolist()}")
-    return m
 
 
 def _object(path: Path, where: str, uuid: str, item) -> tuple[str, dict, list[str]]:

@@ -31,7 +31,6 @@ a side label or calibration file are skipped and counted, as in DAIR-V2X-C.
 """
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -241,12 +240,8 @@ def _point_files(root: Path, pair: Pair, frame: int) -> dict[tuple[int, str], tu
 
 
 def _derived_notes(root: Path, vehicle_frames: list[str], loaded: int) -> list[str]:
-    """The one note naming the pairs without a cooperative label (also a ``UserWarning``)."""
-    if not vehicle_frames:
-        return []
-    shown = ", ".join(vehicle_frames[:5]) + (", ..." if len(vehicle_frames) > 5 else "")
-    note = (f"{root / COOPERATIVE_LABELS}: {len(vehicle_frames)} of {loaded} pair(s) have no cooperative label: "
-            f"their vehicle and infrastructure labels are associated by world centres within "
-            f"{dair.ASSOCIATION_RADIUS:g} m, derived, not ground truth (vehicle frames {shown})")
-    warnings.warn(note, UserWarning, stacklevel=3)
-    return [note]
+    """The one note naming the pairs without a cooperative label."""
+    return dair.pairs_note(vehicle_frames, lambda shown: (
+        f"{root / COOPERATIVE_LABELS}: {len(vehicle_frames)} of {loaded} pair(s) have no cooperative label: "
+        f"their vehicle and infrastructure labels are associated by world centres within "
+        f"{dair.ASSOCIATION_RADIUS:g} m, derived, not ground truth (vehicle frames {shown})"))

@@ -166,17 +166,13 @@ def _typed(c: MethodControls, tab: TabActions, key: str, name: str, value: str) 
     except ValueError as error:
         assign(c.typed[key], content=f"*{error}; the value in use is {current:g}.*", visible=True)
         return
-    if key in c.typed:
-        assign(c.typed[key], visible=False)
+    assign(c.typed[key], visible=False)
     tab.apply(lambda s: s.with_params(key, **{name: number}))
 
 
-def typed_number(value: Any, current: Any, key: str, name: str) -> Any:
+def typed_number(value: str, current: float, key: str, name: str) -> float:
     """The number typed in a text box, as the parameter's type (``1e5``, ``2.5e-1`` accepted), or a
-    ``ValueError`` naming the control and what was typed: the tab then says so and shows the value in
-    use again. Any other control's value is passed through."""
-    if not isinstance(value, str) or isinstance(current, str):
-        return value
+    ``ValueError`` naming the control and what was typed."""
     try:
         number = float(value.strip())
     except ValueError:

@@ -143,10 +143,9 @@ def footprint_corners(boxes: np.ndarray) -> np.ndarray:
 
 def hypothesis(ego_box: np.ndarray, cav_box: np.ndarray) -> np.ndarray:
     """T_ij: the CAV->ego pose that lays CAV box j's corners onto ego box i's (the corner SVD's answer)."""
-    yaw = ego_box[6] - cav_box[6]
-    R = se2.make(0.0, 0.0, yaw)
-    t = ego_box[:2] - R[:2, :2] @ cav_box[:2]
-    return se2.make(t[0], t[1], yaw)
+    T = se2.make(0.0, 0.0, ego_box[6] - cav_box[6])
+    T[:2, 2] = ego_box[:2] - T[:2, :2] @ cav_box[:2]
+    return T
 
 
 def affinities(ego: np.ndarray, cav: np.ndarray, ego_kinds: np.ndarray, cav_kinds: np.ndarray,
@@ -184,15 +183,12 @@ def one_to_one_count(distance: np.ndarray) -> int:
 def overlapping(ego: np.ndarray, cav: np.ndarray) -> np.ndarray:
     """(Ne, Nc) whether two footprints overlap (separating-axis test on the rectangles' four axes)."""
     a, b = footprint_corners(ego)[:, None], footprint_corners(cav)[None]
-    axes = [np.stack([np.cos(yaw + q), np.sin(yaw + q)], -1) for yaw in (ego[:, 6][:, None], cav[:, 6][None])
-            for q in (0.0, np.pi / 2)]
     apart = np.zeros((len(ego), len(cav)), dtype=bool)
-    for axis in axes:
-        pa = np.einsum("abkd,abd->abk", np.broadcast_to(a, (len(ego), len(cav), 4, 2)), np.broadcast_to(
-            axis, (len(ego), len(cav), 2)))
-        pb = np.einsum("abkd,abd->abk", np.broadcast_to(b, (len(ego), len(cav), 4, 2)), np.broadcast_to(
-            axis, (len(ego), len(cav), 2)))
-        apart |= (pa.max(-1) < pb.min(-1)) | (pb.max(-1) < pa.min(-1))
+    for yaw in (ego[:, 6][:, None], cav[:, 6][None]):
+        for turn in (0.0, np.pi / 2):
+            axis = np.stack([np.cos(yaw + turn), np.sin(yaw + turn)], -1)[:, :, None, :]
+            pa, pb = (a * axis).sum(-1), (b * axis).sum(-1)
+            apart |= (pa.max(-1) < pb.min(-1)) | (pb.max(-1) < pa.min(-1))
     return ~apart
 
 
