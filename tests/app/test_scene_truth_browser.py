@@ -24,8 +24,9 @@ from support import browser as ui
 from support import pixels
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
-FREE = (320.0, 100.0, 1280.0 - 440.0, 660.0)
-"""(left, top, right, bottom) page pixels of the scene clear of the panel, the key numbers and notifications."""
+FREE = (320.0, 200.0, 1280.0 - 440.0, 660.0)
+"""(left, top, right, bottom) page pixels of the scene clear of the panel, the key numbers (floating at
+the canvas's top, at most 190 px tall with three CAVs) and notifications."""
 
 
 @contextlib.contextmanager
@@ -44,10 +45,12 @@ def teaching(frame: int) -> Settings:
 
 
 def settled_camera(tab):
-    """The tab's camera once the browser has reported it, at the size of the canvas left of the panel."""
+    """The tab's camera once the browser has reported it, at the size of the canvas left of the panel,
+    where the app last put it (a move still on its way would aim a click computed from it wrong)."""
     camera = tab.client.camera
     canvas = (1280 - PANEL_PX, 720)
-    ui.wait_until(lambda: camera.update_timestamp and (camera.image_width, camera.image_height) == canvas, 60)
+    ui.wait_until(lambda: camera.update_timestamp and (camera.image_width, camera.image_height) == canvas
+                  and tab.last is not None and tab.camera.arrived, 60)
     return camera
 
 
@@ -252,6 +255,7 @@ def test_a_click_on_a_third_cavs_box_names_that_cav(browser, explorer: Explorer,
         boxes, rows = drawing.objects["cav_3"]
         picked = lambda: tab.view.labels.get("picked")  # noqa: E731
         for alone in (False, True):
+            settled_camera(tab)
             row = largest(boxes, clickable(outcome, drawing, camera, alone))
             x, y = pixels.project(camera, np.array([[*boxes[row, :2], planes.cav(3)]]))[0]
             page.mouse.click(x, y)
