@@ -27,23 +27,27 @@ class Context(NamedTuple):
     (+inf, -inf without any): the extent of any grid of them (``local_matching.grid``) in O(N)."""
 
 
-def build_context(xy: np.ndarray, heading: np.ndarray) -> Context:
+def build_context(xy: np.ndarray, heading: np.ndarray, stop: np.ndarray | None = None) -> Context:
     """Context matrices P_i of eq. 6 for every object, stacked: one row per ordered pair i != i',
-    anchor by anchor."""
+    anchor by anchor. Once ``stop[0]`` is set (``cbm.engine.threads.stop_flag``) the rows left are
+    not filled: the caller then raises ``Cancelled``."""
     rows = len(xy) * (len(xy) - 1)
     anchor, member, vectors = np.empty(rows, np.int64), np.empty(rows, np.int64), np.empty((rows, 2))
     bounds = np.empty((len(xy), 4))
     _fill_context(np.ascontiguousarray(xy, dtype=float), np.cos(heading), np.sin(heading), anchor, member, vectors,
-                  bounds)
+                  bounds, np.zeros(1, np.uint8) if stop is None else stop)
     return Context(anchor=anchor, member=member, vectors=vectors, bounds=bounds)
 
 
 @numba.njit(cache=True, nogil=True)
-def _fill_context(xy, c, s, anchor, member, vectors, bounds):
+def _fill_context(xy, c, s, anchor, member, vectors, bounds, stop):
     """``vectors[k] = R(theta_i)^T (p_i' - p_i)`` for every ordered pair (i, i'), i != i', and each
-    anchor's ``bounds`` of u = x + y and v = x - y over its vectors."""
+    anchor's ``bounds`` of u = x + y and v = x - y over its vectors; anchor by anchor until
+    ``stop[0]`` is set."""
     k = 0
     for i in range(len(xy)):
+        if stop[0]:
+            return
         u0, u1, v0, v1 = np.inf, -np.inf, np.inf, -np.inf
         for m in range(len(xy)):
             if m == i:
@@ -73,14 +77,16 @@ class Prepared:
     cav_context: Context
 
 
-def prepare(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str) -> Prepared:
-    """Steps 1-3: the CAV boxes in the ego frame, folded headings, signs and context vectors."""
+def prepare(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, heading: str,
+            stop: np.ndarray | None = None) -> Prepared:
+    """Steps 1-3: the CAV boxes in the ego frame, folded headings, signs and context vectors (their
+    building abandoned once ``stop[0]`` is set: ``build_context``)."""
     cav_in_ego = se2.apply_boxes(init, cav)
     ego_heading, cav_heading = fold_heading(ego[:, 6]), fold_heading(cav_in_ego[:, 6])
     signs = aligned_signs(ego_heading, cav_heading) if heading == "align" else pair_signs(ego_heading, cav_heading,
                                                                                              heading)
-    return Prepared(cav_in_ego, ego_heading, cav_heading, signs, build_context(ego[:, :2], ego_heading),
-                    build_context(cav_in_ego[:, :2], cav_heading))
+    return Prepared(cav_in_ego, ego_heading, cav_heading, signs, build_context(ego[:, :2], ego_heading, stop),
+                    build_context(cav_in_ego[:, :2], cav_heading, stop))
 
 
 def aligned_signs(ego_heading: np.ndarray, cav_heading: np.ndarray) -> np.ndarray:

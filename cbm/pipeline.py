@@ -25,7 +25,7 @@ from .engine import (
     runner_up_beside,
     select,
 )
-from .engine.threads import check_stop
+from .engine.threads import check_stop, stop_flag
 from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
@@ -91,7 +91,7 @@ def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMPa
     timings = {} if timings is None else timings
     started = time.perf_counter()
     cache = None if reuse is None else reuse.cache(ego, cav, init, params.heading)
-    ready = prepare(ego, cav, init, params.heading) if cache is None else cache.prepared
+    ready = prepare(ego, cav, init, params.heading, stop_flag()) if cache is None else cache.prepared
     t = time.perf_counter()
     timings["context"] = t - started
     check_stop()

@@ -28,7 +28,7 @@ from .counting import counts_and_votes
 from .distances import HEADROOM, Distances, counted, distances_within
 from .join import Grids
 from .listing import CandidateSets, Listing, both_blocks, candidate_sets, new_listing
-from .threads import TRIM_FROM, trim_freed
+from .threads import TRIM_FROM, check_stop, stop_flag, trim_freed
 from .voting import PairSets, voted_by_member
 
 T = TypeVar("T")
@@ -145,7 +145,8 @@ class Reuse:
                 self._trim()
                 return found
             self.misses += 1
-        made = EditCache(prepare(ego, cav, init, heading))
+        made = EditCache(prepare(ego, cav, init, heading, stop_flag()))
+        check_stop()
         with self._lock:
             self._entries[key] = made
             self._trim()

@@ -12,6 +12,10 @@ import numpy as np
 
 from ..context import Context
 from .grid import MARGIN, accepts
+from .threads import check_stop
+
+SORTED_AT_ONCE = 256
+"""Anchors whose blocks ``sorted_blocks`` sorts between two ``check_stop``: tens of milliseconds."""
 
 
 class SortedBlocks(NamedTuple):
@@ -29,26 +33,30 @@ class SortedBlocks(NamedTuple):
 def sorted_blocks(context: Context, n_objects: int) -> SortedBlocks:
     """Each anchor's context vectors sorted by ``x + y`` (for the sliding windows of ``members_into``),
     equal keys in their order in the context (a stable sort): numpy's quicksort orders the keys,
-    ``_gathered`` puts the equal ones back in order as it gathers the rows."""
+    ``_gathered`` puts the equal ones back in order as it gathers the rows; ``SORTED_AT_ONCE``
+    anchors at a time, each time asking whether the computation was abandoned."""
     per_anchor = max(n_objects - 1, 0)
     rows = len(context.vectors)
     key = context.vectors[:, 0] + context.vectors[:, 1]
     blocks = SortedBlocks(np.empty(rows), np.empty(rows), np.empty(rows), np.empty(rows, context.member.dtype),
                           per_anchor)
-    if rows:
-        order = np.argsort(key.reshape(rows // per_anchor, per_anchor), axis=1)
-        _gathered(key, context.vectors, context.member, order, blocks)
+    n_blocks = rows // per_anchor if rows else 0
+    for first in range(0, n_blocks, SORTED_AT_ONCE):
+        check_stop()
+        last = min(first + SORTED_AT_ONCE, n_blocks)
+        order = np.argsort(key[first * per_anchor:last * per_anchor].reshape(last - first, per_anchor), axis=1)
+        _gathered(key, context.vectors, context.member, order, first, blocks)
     return blocks
 
 
 @numba.njit(cache=True, nogil=True)
-def _gathered(key, vectors, member, order, out):
-    """Block by block (row ``b`` of ``order``, the order of the keys of rows ``b * per_anchor`` on),
+def _gathered(key, vectors, member, order, first, out):
+    """Block by block (row ``b`` of ``order``, the order of the keys of block ``first + b``'s rows),
     the rows in order of their keys into the blocks ``out``; each run of equal keys in increasing
     row order (``order`` is changed), as a stable sort leaves them."""
     sorted_key, x, y, sorted_member, per_anchor = out
     for b in range(order.shape[0]):
-        lo, block = b * per_anchor, order[b]
+        lo, block = (first + b) * per_anchor, order[b]
         run, last = 0, np.nan
         for q in range(per_anchor):
             row = lo + block[q]

@@ -19,7 +19,7 @@ from ..context import Prepared
 from . import tuning
 from .grid import group_signs, heading_groups, l1_and_angle, window
 from .join import ANCHORS_PER_CHUNK, EgoVectors, Grids, by_column, grown, widest_column
-from .threads import parts, shared_out
+from .threads import check_stop, parts, shared_out, stop_flag
 
 HEADROOM = 1.5
 """The radius kept, as a factor of the sigma2 that asked for it: room for the next edits upward."""
@@ -47,15 +47,16 @@ def distances_within(prepared: Prepared, sigma1_rad: float, radius: float, grids
     groups = heading_groups(prepared.ego_heading, prepared.signs)
     grids.for_radius(radius)
     n_parts = parts(len(ego.vectors), tuning.DISTANCES_APART_FROM)
-    cos2_sigma1 = math.cos(sigma1_rad) ** 2
+    cos2_sigma1, stop = math.cos(sigma1_rad) ** 2, stop_flag()
 
     def accepted(k: int, part: np.ndarray) -> tuple:
         grid = grids.grid(k, prepared.cav_context, group_signs(prepared.signs, groups[k]))
-        return _accepted(part, vectors, prepared.signs, grid, cos2_sigma1, radius, MOST_QUADRUPLES)
+        return _accepted(part, vectors, prepared.signs, grid, cos2_sigma1, radius, MOST_QUADRUPLES, stop)
 
     tasks = [lambda k=k, part=part: accepted(k, part) for k, group in enumerate(groups)
              for part in np.array_split(group, n_parts) if len(part)]
     found = shared_out(tasks) if n_parts > 1 else [task() for task in tasks]
+    check_stop()
     if not all(whole for _, _, whole in found) or sum(len(anchor) for anchor, _, _ in found) > MOST_QUADRUPLES:
         return Distances(radius, None, None)
     return Distances(radius, np.concatenate([anchor for anchor, _, _ in found]),
@@ -63,9 +64,10 @@ def distances_within(prepared: Prepared, sigma1_rad: float, radius: float, grids
 
 
 @numba.njit(cache=True, nogil=True)
-def _accepted(ego_ids, ego, signs, grid, cos2_sigma1, radius, most):
+def _accepted(ego_ids, ego, signs, grid, cos2_sigma1, radius, most, stop):
     """The anchor pairs and L1 distances of the quadruples of the ego objects ``ego_ids`` that eq. 7
-    accepts within ``radius`` against a grid, and True; none and False past ``most``. A row whose
+    accepts within ``radius`` against a grid, and True; none and False past ``most`` or once
+    ``stop[0]`` is set (``threads.stop_flag``: the caller then raises ``Cancelled``). A row whose
     sign varies counts where it is the pair's, as the join counts it. Like the join, the ego vectors
     of ``ANCHORS_PER_CHUNK`` objects go column by column of the grid, and every row of a window is
     written and kept or overwritten without a branch."""
@@ -85,7 +87,7 @@ def _accepted(ego_ids, ego, signs, grid, cos2_sigma1, radius, most):
             zx, zy = vectors[u, 0], vectors[u, 1]
             k0, k1, c0, c1 = window(zx + zy, zx - zy, radius, cells)
             room = n + (k1 - k0 + 1) * widest
-            if room > most:
+            if room > most or stop[0]:
                 return anchor[:0].copy(), distance[:0].copy(), False
             while room > len(anchor):
                 anchor, distance = grown(anchor, n), grown(distance, n)

@@ -19,7 +19,7 @@ import numpy as np
 from ..context import Context, Prepared
 from . import tuning
 from .grid import VectorGrid, build_grid, column, group_signs, heading_groups, l1_and_angle, window
-from .threads import TRIM_FROM, shared_out, trim_freed
+from .threads import TRIM_FROM, check_stop, shared_out, stop_flag, trim_freed
 
 ANCHORS_PER_CHUNK = 64
 """Ego objects whose context vectors are joined together, column by column of the grid (their
@@ -119,7 +119,7 @@ def by_column(ego_ids, chunk, ego, cells, column_start, order):
 
 
 @numba.njit(cache=True, nogil=True)
-def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits):
+def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits, stop):
     """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within ``test.sigma2`` to ``count2[a]``;
@@ -129,7 +129,8 @@ def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits):
     listing the votes, a sigma3 edit lists them without counting. The ego vectors of
     ``ANCHORS_PER_CHUNK`` objects at a time are visited column by column of the grid, so
     consecutive queries read the same few columns (from the cache) and the chunk's counters stay
-    in it too.
+    in it too. Once ``stop[0]`` is set (``threads.stop_flag``) it returns at the next query, what it
+    counted and listed incomplete.
 
     Per query (an ego vector z of anchor i) each grid row within sigma2 adds 1 to its slot among
     its anchor's three counters (``slot``: the row's anchor and sign, ``_slots``), without a branch:
@@ -157,6 +158,8 @@ def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits):
         for n in range(chunk, last):
             slot_row[ego_ids[n]] = (n - chunk) * 3 * n_cav
         for q in range(by_column(ego_ids, chunk, ego, cells, column_start, order)):
+            if stop[0]:
+                return rows[:0].copy()
             u = order[q]
             i = u // per_anchor
             zx, zy = vectors[u, 0], vectors[u, 1]
@@ -255,6 +258,7 @@ def run_join(prepared: Prepared, sigma1_rad: float, radius: float, sigma2: float
         tasks = [lambda k=k: group_joined(k) for k in range(len(groups))]
     apart = len(groups) == 1 or len(ego.vectors) >= tuning.GROUPS_APART_FROM
     votes = [rows for part in (shared_out(tasks) if apart else [task() for task in tasks]) for rows in part]
+    check_stop()
     if sum(part.rows.nbytes for part in votes) >= TRIM_FROM:
         trim_freed()
     return votes
@@ -267,5 +271,6 @@ def joined(ego_ids: np.ndarray, grid: VectorGrid, ego: EgoVectors, signs: np.nda
     n_ego, n_cav = signs.shape
     dtype, bits = packing(n_ego, n_cav)
     slot = _slots(grid.anchor, grid.check)
-    return [VoteRows(_join(part, ego, signs, grid, slot, test, count2, np.empty(1024, dtype), bits), n_cav, bits)
+    stop = stop_flag()
+    return [VoteRows(_join(part, ego, signs, grid, slot, test, count2, np.empty(1024, dtype), bits, stop), n_cav, bits)
             for part in np.array_split(ego_ids, n_parts) if len(part)]

@@ -21,7 +21,7 @@ import numpy as np
 from . import tuning
 from .filtered import PAPER, Filtering, listing_held, rival_free_size, work_room
 from .listing import CandidateSets, in_parts
-from .threads import parts, shared_out
+from .threads import check_stop, parts, shared_out, stop_flag
 
 T = TypeVar("T")
 
@@ -41,7 +41,7 @@ class RivalSearch:
 
 
 @numba.njit(cache=True, nogil=True)
-def _largest_rival(anchors, span, count, best, shared, width, excluded, f, listing):
+def _largest_rival(anchors, span, count, best, shared, width, excluded, f, listing, stop):
     """The largest of ``best`` and the filtered sizes of ``anchors[part::parts]`` (``span``: part,
     parts; by decreasing card(L_ij) ``count``) whose sets hold no ``excluded`` pair
     (``rival_free_size``), visiting them in order and stopping at the first whose count is at most
@@ -49,13 +49,14 @@ def _largest_rival(anchors, span, count, best, shared, width, excluded, f, listi
     each anchor, raised when this part finds a larger one. Same answer as the maximum over every
     anchor: every value read there is a size some anchor reaches, an anchor whose count is at most it
     cannot raise the maximum (filtering never grows a set), and every later anchor's count is no
-    larger."""
+    larger. Stops before the next anchor once ``stop[0]`` is set (``threads.stop_flag``: the caller
+    then raises ``Cancelled``)."""
     part, parts = span
     lister, _, judge, n_ego = f
     work = work_room(width, n_ego, lister.lookup.n_cav, len(excluded))
     for n in range(part, len(anchors), parts):
         best = max(best, shared[0])
-        if count[anchors[n]] <= best:
+        if count[anchors[n]] <= best or stop[0]:
             break
         size = rival_free_size(anchors[n], best, excluded, lister, listing, judge, work)
         if size > best:
@@ -72,7 +73,7 @@ def runner_up(search: RivalSearch | None) -> int:
     (``in_parts``)."""
     if search is None:
         return 0
-    L, f, best = search.L, search.filtering, search.found
+    L, f, best, stop = search.L, search.filtering, search.found, stop_flag()
     ends = range(search.first + tuning.RIVAL_FIRST, len(search.order) + tuning.RIVAL_CHUNK, tuning.RIVAL_CHUNK)
     with listing_held(L):
         for chunk, end in zip([search.first, *ends], ends):
@@ -86,10 +87,11 @@ def runner_up(search: RivalSearch | None) -> int:
             n_parts = parts(int(L.count[anchors].sum()), tuning.RIVAL_PAIRS_FROM)
             if n_parts == 1:
                 best = int(_largest_rival(anchors, (0, 1), L.count, best, shared, L.width, search.in_winner, f,
-                                          f.listing))
+                                          f.listing, stop))
+                check_stop()
                 continue
             found = in_parts(L.listing, lambda k, n, listing, anchors=anchors, shared=shared, best=best: _largest_rival(
-                anchors, (k, n), L.count, best, shared, L.width, search.in_winner, f, listing), n_parts)
+                anchors, (k, n), L.count, best, shared, L.width, search.in_winner, f, listing, stop), n_parts)
             best = int(max(found))
     return best
 

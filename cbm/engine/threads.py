@@ -14,7 +14,10 @@ import threading
 from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from dataclasses import dataclass
 from typing import TypeVar
+
+import numpy as np
 
 from . import tuning
 from .interpreted import LOCK
@@ -30,19 +33,58 @@ class Cancelled(Exception):
     """The caller abandoned the computation (``stoppable``): nothing it would return is wanted."""
 
 
+WATCH_EVERY = 0.05
+"""Seconds between two questions of a stoppable computation's watcher (``stoppable``)."""
+NEVER = np.zeros(1, np.uint8)
+"""The stop flag of a computation nobody can stop: never set."""
+
+
+@dataclass(frozen=True)
+class _Abandon:
+    """How one stoppable computation learns it was abandoned: Python code asks ``should_stop``; the
+    compiled kernels read ``flag[0]``, which a watcher thread sets once ``should_stop`` says so."""
+
+    should_stop: Callable[[], bool]
+    flag: np.ndarray
+
+    def asked(self) -> bool:
+        return bool(self.flag[0]) or self.should_stop()
+
+
 @contextmanager
 def stoppable(should_stop: Callable[[], bool]) -> Iterator[None]:
     """Within the block, on this thread, the engine asks ``should_stop()`` before each part of its
     work (each task of ``shared_out``, and between CBM's steps: ``check_stop``) and raises
-    ``Cancelled`` once it says so. A part already running ends first: a compiled kernel cannot be
-    interrupted, so a computation stops within the longest part (tenths of a second on a frame of
-    1000 objects per agent)."""
+    ``Cancelled`` once it says so. Inside a compiled kernel the question is the flag
+    ``stop_flag()``, read between chunks of a few milliseconds of work: a watcher thread asks
+    ``should_stop()`` every ``WATCH_EVERY`` seconds while the block runs and sets the flag when
+    it says so; a kernel then returns early, and its caller raises ``Cancelled`` before anything
+    reads what it returned (``check_stop``)."""
     outer = getattr(_inside, "stop", None)
-    _inside.stop = should_stop
+    abandon, done = _Abandon(should_stop, np.zeros(1, np.uint8)), threading.Event()
+    _inside.stop = abandon
+    watcher = threading.Thread(target=_watch, args=(abandon, done), name="cbm-stop-watcher", daemon=True)
+    watcher.start()
     try:
         yield
     finally:
+        done.set()
         _inside.stop = outer
+
+
+def _watch(abandon: _Abandon, done: threading.Event) -> None:
+    """Sets ``abandon.flag`` once ``abandon.should_stop()`` says so, until ``done``."""
+    while not done.wait(WATCH_EVERY):
+        if abandon.should_stop():
+            abandon.flag[0] = 1
+            return
+
+
+def stop_flag() -> np.ndarray:
+    """The flag the kernels of this thread's computation read: set once it was abandoned
+    (``stoppable``; ``NEVER`` outside one)."""
+    abandon = getattr(_inside, "stop", None)
+    return NEVER if abandon is None else abandon.flag
 
 
 def check_stop() -> None:
@@ -50,8 +92,8 @@ def check_stop() -> None:
     _raise_if(getattr(_inside, "stop", None))
 
 
-def _raise_if(should_stop: Callable[[], bool] | None) -> None:
-    if should_stop is not None and should_stop():
+def _raise_if(abandon: _Abandon | None) -> None:
+    if abandon is not None and abandon.asked():
         raise Cancelled("the computation was abandoned")
 
 
@@ -69,23 +111,23 @@ def shared_out(tasks: Sequence[Callable[[], T]]) -> list[T]:
     kernel) runs them all on the calling thread. An exception of a task is raised here once every
     thread has stopped."""
     workers = min(tuning.THREADS, len(tasks))
-    should_stop = getattr(_inside, "stop", None)
+    abandon = getattr(_inside, "stop", None)
     if workers <= 1 or getattr(_inside, "task", False) or LOCK._is_owned():
-        return [_checked(task, should_stop) for task in tasks]
+        return [_checked(task, abandon) for task in tasks]
     results: list = [None] * len(tasks)
     indices = iter(range(len(tasks)))
     taking = threading.Lock()
 
     def work() -> None:
         _inside.task, outer = True, getattr(_inside, "stop", None)
-        _inside.stop = should_stop
+        _inside.stop = abandon
         try:
             while True:
                 with taking:
                     k = next(indices, None)
                 if k is None:
                     return
-                results[k] = _checked(tasks[k], should_stop)
+                results[k] = _checked(tasks[k], abandon)
         finally:
             _inside.task, _inside.stop = False, outer
 
@@ -108,10 +150,13 @@ def shared_out(tasks: Sequence[Callable[[], T]]) -> list[T]:
     return results
 
 
-def _checked(task: Callable[[], T], should_stop: Callable[[], bool] | None) -> T:
-    """``task()``, unless the computation was abandoned before it started."""
-    _raise_if(should_stop)
-    return task()
+def _checked(task: Callable[[], T], abandon: _Abandon | None) -> T:
+    """``task()``, unless the computation was abandoned before it started or while it ran (a
+    kernel it ran may then have returned early: its result must not be read)."""
+    _raise_if(abandon)
+    result = task()
+    _raise_if(abandon)
+    return result
 
 
 def _the_pool() -> ThreadPoolExecutor:

@@ -18,7 +18,7 @@ import numpy as np
 from . import tuning
 from .filtered import Filtering, final_size, list_set, listing_held, work_room
 from .listing import CandidateSets, in_parts
-from .threads import parts
+from .threads import NEVER, check_stop, parts, stop_flag
 
 
 @dataclass(frozen=True)
@@ -45,11 +45,12 @@ class Visit:
 
 
 @numba.njit(cache=True, nogil=True)
-def _visited_part(order, span, count, best, shared, width, f, listing):
+def _visited_part(order, span, count, best, shared, width, f, listing, stop):
     """Eq. 13's visit of ``order``'s positions ``begin + part``, ``begin + part + parts``, ... below
     ``end`` (``span``), while an anchor's card(L_ij) (``count``) is not 0 and at least the largest
     size found: ``best``, this part's, and ``shared[0]``, the other parts' (read before each anchor,
-    raised on a larger one). Lists with ``listing`` (this thread's part of it).
+    raised on a larger one). Lists with ``listing`` (this thread's part of it). Stops before the next
+    anchor once ``stop[0]`` is set (``threads.stop_flag``: the caller then raises ``Cancelled``).
 
     Returns the visited positions' filtered sizes and members (flat, with offsets), in order. Every
     position the visit of all of ``order`` in one pass reaches is visited: a size read is one some
@@ -66,7 +67,7 @@ def _visited_part(order, span, count, best, shared, width, f, listing):
     for position in range(begin + part, end, parts):
         anchor = order[position]
         best = max(best, shared[0])
-        if count[anchor] == 0 or count[anchor] < best:
+        if count[anchor] == 0 or count[anchor] < best or stop[0]:
             break
         size = final_size(list_set(anchor, lister, listing, work.listed), judge, work)
         if offsets[n] + size > len(members):
@@ -89,18 +90,20 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, f: Filtering) -> tuple[np.nd
     visited on the calling thread; on a scene and a visit large enough (``VISIT_APART_FROM``,
     ``VISIT_AHEAD_FROM``) the rest are shared out between the threads, in interleaved parts that
     list into parts of the listing of their own (``in_parts``), else it visits them too."""
-    shared, first = np.zeros(1, np.int64), min(tuning.VISIT_FIRST, len(order))
-    pieces = [_visited_part(order, (0, first, 0, 1), L.count, 0, shared, L.width, f, f.listing)]
+    shared, first, stop = np.zeros(1, np.int64), min(tuning.VISIT_FIRST, len(order)), stop_flag()
+    pieces = [_visited_part(order, (0, first, 0, 1), L.count, 0, shared, L.width, f, f.listing, stop)]
+    check_stop()
     if len(pieces[0][0]) == first < len(order):
         best = int(pieces[0][0].max(initial=0))
         n_parts = parts(f.n_ego * f.lister.lookup.n_cav, tuning.VISIT_APART_FROM)
         if (n_parts == 1
                 or _work_ahead(order, first, best, L.count, tuning.VISIT_AHEAD_FROM) < tuning.VISIT_AHEAD_FROM):
             pieces.append(_visited_part(order, (first, len(order), 0, 1), L.count, best, shared, L.width, f,
-                                        f.listing))
+                                        f.listing, stop))
+            check_stop()
         else:
             visited = in_parts(L.listing, lambda k, n, listing: _visited_part(
-                order, (first, len(order), k, n), L.count, best, shared, L.width, f, listing), n_parts)
+                order, (first, len(order), k, n), L.count, best, shared, L.width, f, listing, stop), n_parts)
             pieces.append(_interleaved(order[first:], L.count, best, visited))
     sizes = np.concatenate([piece[0] for piece in pieces])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
@@ -143,5 +146,5 @@ def filtered_members(anchor: int, L: CandidateSets, f: Filtering) -> np.ndarray:
     one-to-one set: in increasing ego index too)."""
     with listing_held(L):
         members = _visited_part(np.array([anchor], np.int64), (0, 1, 0, 1), L.count, 0, np.zeros(1, np.int64),
-                                L.width, f, f.listing)[2]
+                                L.width, f, f.listing, NEVER)[2]
     return np.sort(members)

@@ -10,7 +10,7 @@ import numba
 import numpy as np
 
 from . import tuning
-from .threads import TRIM_FROM, parts, shared_out, trim_freed
+from .threads import TRIM_FROM, parts, shared_out, stop_flag, trim_freed
 
 
 class PairSets(NamedTuple):
@@ -43,23 +43,27 @@ def _decoded(code, bits, n_cav, anchor_row, member_row):
 
 
 @numba.njit(cache=True, nogil=True)
-def _count_by_member(rows, bits, n_cav, has_set, start):
+def _count_by_member(rows, bits, n_cav, has_set, start, stop):
     """Adds the quadruples of ``rows`` (``VoteRows``) to ``start[member + 1]`` and marks their
     anchors in ``has_set``; a head adds to ``start[0]`` and marks ``has_set[-1]``, the caller's
-    spare entries."""
+    spare entries. Returns early once ``stop[0]`` is set (``threads.stop_flag``)."""
     anchor_row = member_row = 0
     for r in range(len(rows)):
+        if stop[0]:
+            return
         anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
         has_set[anchor] = True
         start[member + 1] += 1
 
 
 @numba.njit(cache=True, nogil=True)
-def _place_by_member(rows, bits, n_cav, fill, values):
+def _place_by_member(rows, bits, n_cav, fill, values, stop):
     """Writes each quadruple's anchor of ``rows`` (``VoteRows``) at ``values[fill[member]]`` and moves
-    that member's ``fill`` on."""
+    that member's ``fill`` on; returns early once ``stop[0]`` is set (``threads.stop_flag``)."""
     anchor_row = member_row = 0
     for r in range(len(rows)):
+        if stop[0]:
+            return
         anchor_row, member_row, anchor, member = _decoded(rows[r], bits, n_cav, anchor_row, member_row)
         if member >= 0:
             values[fill[member]] = anchor
@@ -93,9 +97,9 @@ def voted_by_member(votes: list, n_pairs: int) -> PairSets:
     large votes' memory, freed, goes back to the system (``trim_freed``)."""
     nbytes = sum(part.rows.nbytes for part in votes)
     n_runs = min(parts(sum(len(part.rows) for part in votes), tuning.VOTES_APART_FROM), max(len(votes), 1))
-    runs = _runs(votes, n_runs)
+    runs, stop = _runs(votes, n_runs), stop_flag()
     votes.clear()
-    counts = shared_out([lambda run=run: _counted(run, n_pairs) for run in runs])
+    counts = shared_out([lambda run=run: _counted(run, n_pairs, stop) for run in runs])
     has_set = counts[0][0][:-1]
     for spare, _ in counts[1:]:
         has_set |= spare[:-1]
@@ -112,7 +116,7 @@ def voted_by_member(votes: list, n_pairs: int) -> PairSets:
         _after(fills[-1], count)
         fills.append(count)
     values = np.empty(start[n_pairs], np.int32)
-    shared_out([lambda run=run, fill=fill: _placed(run, fill, values) for run, fill in zip(runs, fills)])
+    shared_out([lambda run=run, fill=fill: _placed(run, fill, values, stop) for run, fill in zip(runs, fills)])
     _place_own(has_set, fills[-1], values)
     if nbytes >= TRIM_FROM:
         trim_freed()
@@ -138,19 +142,19 @@ def _after(fill, counts):
     counts[-1] = fill[-1]
 
 
-def _counted(parts_: list, n_pairs: int) -> tuple[np.ndarray, np.ndarray]:
+def _counted(parts_: list, n_pairs: int, stop: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The anchors that have a quadruple in ``parts_`` (with a spare entry last) and the count of
     each member's quadruples at ``[member + 1]``, ``_count_by_member`` of every part."""
     spare, count = np.zeros(n_pairs + 1, np.bool_), np.zeros(n_pairs + 1, np.int64)
     for part in parts_:
-        _count_by_member(part.rows, part.bits, part.n_cav, spare, count)
+        _count_by_member(part.rows, part.bits, part.n_cav, spare, count, stop)
     return spare, count
 
 
-def _placed(parts: list, fill: np.ndarray, values: np.ndarray) -> None:
+def _placed(parts: list, fill: np.ndarray, values: np.ndarray, stop: np.ndarray) -> None:
     """``_place_by_member`` of every part, in order, each part dropped from ``parts`` once placed."""
     while parts:
         part = parts.pop(0)
-        _place_by_member(part.rows, part.bits, part.n_cav, fill, values)
+        _place_by_member(part.rows, part.bits, part.n_cav, fill, values, stop)
 
 
