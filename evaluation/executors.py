@@ -22,6 +22,8 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
+from cbm.engine.threads import Cancelled
+
 from .stop import Stopped
 
 MAX_RETRIES = 2
@@ -109,6 +111,8 @@ def _call(fn: Callable[..., Any], task: tuple, name: Callable[[tuple], str]) -> 
 def _result(get: Callable[[], Any], task: tuple, name: Callable[[tuple], str]) -> Any:
     try:
         return get()
+    except Cancelled:
+        raise
     except Exception as error:
         raise TaskError(f"task {name(task)} failed: {type(error).__name__}: {error}") from error
 

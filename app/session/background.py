@@ -1,8 +1,10 @@
 """One long task of a tab at a time (a sequence run, a search, a screenshot), off the GUI threads.
 
 viser runs GUI callbacks on a shared thread pool and each tab recomputes on its own worker; a task
-that takes seconds runs here instead, reports its progress, and stops at its next checkpoint when
-cancelled. A failure goes to ``failed`` (the tab's notification), never up into viser.
+that takes seconds runs here instead, reports its progress, and stops when cancelled: at its next
+checkpoint, and inside CBM's engine too (it runs under ``cbm.engine.threads.stoppable``, so a frame
+of thousands of boxes stops within a second, not after its minutes). A failure goes to ``failed``
+(the tab's notification), never up into viser.
 
 Long tasks of all tabs share one bounded ``Slots`` (``LONG_JOBS``): at most ``LONG_JOB_SLOTS`` run
 at once, the others wait in turn (first come, first served) and say so, so that one tab's run over
@@ -17,14 +19,12 @@ from collections import deque
 from collections.abc import Callable
 from typing import TypeVar
 
+from cbm.engine.threads import Cancelled, stoppable
+
 R = TypeVar("R")
 
 LONG_JOB_SLOTS = max(1, (os.cpu_count() or 2) // 2)
 """Long tasks running at once across all tabs: half the cores (1 on 2 cores), the rest for edits."""
-
-
-class Cancelled(Exception):
-    """Raised at a checkpoint of a task whose cancel was asked for."""
 
 
 class Task:
@@ -154,7 +154,9 @@ class Runner:
             self._finished()
             return
         try:
-            done(work(task), task.cancelled)
+            with stoppable(lambda: task.cancelled):
+                result = work(task)
+            done(result, task.cancelled)
         except Cancelled:
             pass
         except Exception as error:  # reported to the tab; the server lives on

@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 
+from cbm.engine.threads import Cancelled
 from cbm.methods import METHODS
 from evaluation.ap import pooled_ap
 from evaluation.fusion import decoded
@@ -83,7 +84,9 @@ class SequenceRun:
 def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = None,
                  frames: Sequence[int] | None = None, chunk: int = CHUNK) -> SequenceRun:
     """``settings`` over ``frames`` (default: all), in chunks, reporting progress to ``task`` and
-    stopping early (``cancelled=True``, the rows so far) when it is cancelled."""
+    stopping early (``cancelled=True``, the rows of the chunks done) when it is cancelled: between
+    chunks, or within one when the engine raises ``Cancelled`` (``background.Runner`` runs it under
+    ``stoppable``)."""
     frames = list(range(len(explorer)) if frames is None else frames)
     sweep = sweep_for(settings)
     rows: list[dict[str, Any]] = []
@@ -92,7 +95,10 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
         if task is not None and task.cancelled:
             break
         inputs, missing = frame_inputs(explorer, settings, frames[start:start + chunk])
-        rows.extend(run(sweep, inputs))
+        try:
+            rows.extend(run(sweep, inputs))
+        except Cancelled:
+            break
         skipped.extend(missing)
         if task is not None:
             task.report((start + chunk) / len(frames))

@@ -71,3 +71,29 @@ def test_summary_table_and_plot(small_explorer: Explorer) -> None:
     assert frames.tolist() == [0, 1, 2, 3] and [len(v) for v in values] == [4, 4, 4, 4]
     with pytest.raises(KeyError):
         run.row(40)
+
+
+def test_a_cancel_inside_a_chunk_stops_in_the_engine_and_keeps_the_chunks_done(small_explorer: Explorer,
+                                                                              monkeypatch) -> None:
+    """A long job runs under ``stoppable`` (``background.Runner``): cancelled while a chunk computes,
+    CBM's engine stops at its next check instead of finishing the chunk, and the chunks done are kept."""
+    import threading
+
+    from app.session import sequence
+    from app.session.background import Runner, Slots
+
+    chunks, original, ended, results = [], sequence.run, threading.Event(), []
+
+    def cancelled_in_the_second_chunk(sweep, inputs):
+        chunks.append(len(inputs))
+        if len(chunks) == 2:
+            runner.cancel()
+        return original(sweep, inputs)
+
+    monkeypatch.setattr(sequence, "run", cancelled_in_the_second_chunk)
+    runner = Runner(lambda fraction: None, lambda title, error: results.append(error), ended.set, slots=Slots(1))
+    runner.start("Sequence run", lambda task: run_sequence(small_explorer, sind(), task, frames=range(3 * CHUNK)),
+                 lambda run, cancelled: results.append((run, cancelled)))
+    assert ended.wait(300)
+    (run, cancelled), = results
+    assert cancelled and run.cancelled and len(run.rows) == CHUNK and len(chunks) == 2
