@@ -15,6 +15,7 @@ import numba
 import numpy as np
 
 from ..context import Context
+from .threads import check_stop, stop_flag
 
 CELLS_PER_RADIUS = 3
 """Grid cells per L1 radius: smaller cells cut the vectors a query scans, at more cells to visit."""
@@ -62,7 +63,7 @@ def build_grid(cav: Context, cav_sign: np.ndarray, radius: float) -> VectorGrid:
     """The grid of the CAV vectors turned by ``cav_sign`` (per CAV object: +1, -1, or 0 when the
     sign varies within the group), cells ``radius / CELLS_PER_RADIUS`` wide (wider past ``MAX_CELLS``).
     A counting sort that turns the vectors as it places them (their extent comes from
-    ``Context.bounds``)."""
+    ``Context.bounds``). Raises ``Cancelled`` once the computation is abandoned (``threads.stoppable``)."""
     if 2 * len(cav.vectors) > MOST_ROWS:
         raise ValueError(f"cbm.match: {len(cav.vectors)} CAV context vectors make more grid rows than {MOST_ROWS}")
     sign = cav_sign.astype(np.int64)
@@ -95,8 +96,7 @@ def _extent(bounds, cav_sign, per_anchor):
     return n, u0, v0, u1, v1
 
 
-@numba.njit(cache=True, nogil=True)
-def _place(cav, cav_sign, n, cells):
+def _place(cav: Context, cav_sign: np.ndarray, n: int, cells: Cells) -> tuple[np.ndarray, ...]:
     """Counting sort of the turned rows by cell of (x + y, x - y) (column-major), keeping the order
     of the vectors (sign +1 before -1) inside a cell; ``check`` is 0 for a fixed sign, else the
     row's sign. The vectors come anchor by anchor, ``len(vectors) // len(cav_sign)`` each (as
@@ -105,9 +105,22 @@ def _place(cav, cav_sign, n, cells):
     for the turn by -1 of a varying sign) goes to its cell's next free place (``start`` shifted by
     one, so that it ends unshifted); then ``_written`` writes the rows in order from their sources,
     one random write a row instead of five. Returns (start, x, y, anchor, member, check). Offsets and
-    sources fit int32 (``MOST_ROWS``)."""
-    per_anchor = len(cav.vectors) // len(cav_sign)
-    key = _cell_of_rows(cav.vectors, cav_sign, per_anchor, n, cells)
+    sources fit int32 (``MOST_ROWS``). Each pass stops early once the computation is abandoned
+    (``threads.stop_flag``); ``check_stop`` then raises before the next reads what it left."""
+    per_anchor, stop = len(cav.vectors) // len(cav_sign), stop_flag()
+    key = _cell_of_rows(cav.vectors, cav_sign, per_anchor, n, cells, stop)
+    check_stop()
+    start, source = _sources(key, cav_sign, per_anchor, n, cells, stop)
+    check_stop()
+    written = _written(source, cav, cav_sign, stop)
+    check_stop()
+    return (start,) + written
+
+
+@numba.njit(cache=True, nogil=True)
+def _sources(key, cav_sign, per_anchor, n, cells, stop):
+    """``_place``'s count of the rows per cell and each row's source at its cell's place:
+    (start, source)."""
     start = np.zeros(cells.nx * cells.ny + 2, np.int32)
     for r in range(n):
         start[key[r] + 2] += 1
@@ -118,26 +131,30 @@ def _place(cav, cav_sign, n, cells):
     source = np.empty(n, np.int32)
     r = 0
     for a in range(len(cav_sign)):
+        if stop[0]:
+            break
         for v in range(a * per_anchor, (a + 1) * per_anchor):
             for turn in range(1 if cav_sign[a] != 0 else 2):
                 source[start[key[r] + 1]] = 2 * v + turn
                 start[key[r] + 1] += 1
                 r += 1
-    return (start[:-1],) + _written(source, cav, cav_sign)
+    return start[:-1], source
 
 
 @numba.njit(cache=True, nogil=True)
-def _written(source, cav, cav_sign):
+def _written(source, cav, cav_sign, stop):
     """The grid's rows (x, y, anchor, member, check) in the order of their sources (``_place``): the
     vector turned by its anchor's sign, or where the sign varies by +1 (even source) or -1 (odd),
     ``check`` then that sign. ``anchor`` and ``member`` are CAV objects, fewer than 2^31
     (``local_matching.MOST_PAIRS`` bounds Ne x Nc), so int32 holds them; ``check`` is -1, 0 or 1
-    (int8): 25 bytes a row instead of 40."""
+    (int8): 25 bytes a row instead of 40. Stops early once ``stop[0]`` is set."""
     vectors, anchor, member = cav.vectors, cav.anchor, cav.member
     n = len(source)
     gx, gy = np.empty(n), np.empty(n)
     g_anchor, g_member, g_check = np.empty(n, np.int32), np.empty(n, np.int32), np.empty(n, np.int8)
     for row in range(n):
+        if stop[0]:
+            break
         v, turn = source[row] >> 1, source[row] & 1
         b = anchor[v]
         fixed = cav_sign[b]
@@ -148,13 +165,16 @@ def _written(source, cav, cav_sign):
 
 
 @numba.njit(cache=True, nogil=True)
-def _cell_of_rows(vectors, cav_sign, per_anchor, n, cells):
+def _cell_of_rows(vectors, cav_sign, per_anchor, n, cells, stop):
     """The cell of each of the ``n`` turned rows, in their order: a fixed sign's rows in one loop per
-    anchor (which the compiler vectorises), a varying sign's as +1 then -1."""
+    anchor (which the compiler vectorises), a varying sign's as +1 then -1; anchor by anchor until
+    ``stop[0]`` is set."""
     u0, v0, cell, nx, ny = cells
     key = np.empty(n, np.int32)
     r = 0
     for a in range(len(cav_sign)):
+        if stop[0]:
+            break
         lo, s = a * per_anchor, cav_sign[a]
         if s != 0:
             for v in range(lo, lo + per_anchor):
