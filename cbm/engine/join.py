@@ -24,6 +24,8 @@ from .threads import TRIM_FROM, check_stop, shared_out, stop_flag, trim_freed
 ANCHORS_PER_CHUNK = 64
 """Ego objects whose context vectors are joined together, column by column of the grid (their
 counters, 64 rows of Nc, stay in a core's cache)."""
+QUERIES_BETWEEN_CHECKS = 1024
+"""Queries the join runs between two reads of the stop flag (milliseconds on the densest frames)."""
 REUSE_RADII = 2.0
 """A kept grid serves radii up to this factor from the one it was built for; beyond it, the cells
 would make a window scan many more vectors (or visit many more cells) than a new grid's."""
@@ -129,8 +131,8 @@ def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits, stop):
     listing the votes, a sigma3 edit lists them without counting. The ego vectors of
     ``ANCHORS_PER_CHUNK`` objects at a time are visited column by column of the grid, so
     consecutive queries read the same few columns (from the cache) and the chunk's counters stay
-    in it too. Once ``stop[0]`` is set (``threads.stop_flag``) it returns at the next query, what it
-    counted and listed incomplete.
+    in it too. Once ``stop[0]`` is set (``threads.stop_flag``) it returns within
+    ``QUERIES_BETWEEN_CHECKS`` queries, what it counted and listed incomplete.
 
     Per query (an ego vector z of anchor i) each grid row within sigma2 adds 1 to its slot among
     its anchor's three counters (``slot``: the row's anchor and sign, ``_slots``), without a branch:
@@ -158,7 +160,7 @@ def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits, stop):
         for n in range(chunk, last):
             slot_row[ego_ids[n]] = (n - chunk) * 3 * n_cav
         for q in range(by_column(ego_ids, chunk, ego, cells, column_start, order)):
-            if stop[0]:
+            if q % QUERIES_BETWEEN_CHECKS == 0 and stop[0]:
                 return rows[:0].copy()
             u = order[q]
             i = u // per_anchor
