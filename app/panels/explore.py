@@ -50,8 +50,10 @@ class ExplorePanel:
 
     def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, tab: TabActions) -> None:
         self.gui, self.tab = gui, tab
-        self.runner = Runner(self._progress, self._failed, self._finished, name=f"explore-{tab.client.client_id}",
-                             waiting=self._waiting)
+        self._closed = threading.Event()
+        self.runner = Runner(self._while_open(self._progress), self._while_open(self._failed),
+                             self._while_open(self._finished), name=f"explore-{tab.client.client_id}",
+                             waiting=self._while_open(self._waiting))
         self.run: SequenceRun | None = None
         self.findings: dict[int, list[Finding]] = {}
         self.searched: SearchResult | None = None
@@ -347,10 +349,16 @@ class ExplorePanel:
     # plumbing
 
     def close(self) -> None:
+        self._closed.set()
         self.runner.cancel()
 
+    def _while_open(self, update: Callable[..., None]) -> Callable[..., None]:
+        """``update``, skipped once the tab closed: a job's last reports come after it, and viser
+        warns of every update queued on a closed connection."""
+        return lambda *args: None if self._closed.is_set() else update(*args)
+
     def _start(self, title: str, work, done) -> bool:
-        started = self.runner.start(title, work, done)
+        started = self.runner.start(title, work, self._while_open(done))
         if not started:
             self.tab.notify("Busy", "another sequence run or search is running; cancel it first", "yellow")
             return False
