@@ -3,8 +3,8 @@
 ran on before ``Cancelled`` reached the caller (the issue asks for at most one).
 
 A run is stopped once per entry of ``--after``, each a new run of the same frame (the kernels
-compiled first, by ``cbm.warmup``). Where each stop fell is said by the step the unstopped run
-was in at that time (its ``timings``, measured once at the end with ``--whole``).
+compiled first, by ``cbm.warmup``). With ``--whole``, one run left alone first gives the steps'
+times, and each stop is said to fall in the step that run was in at that time.
 
     python bench/bench_stop.py [--dataset synthetic:2000] [--sensor-range 300] [--false-rate 2]
                                [--after 1 5 20 45 60 90] [--whole]
@@ -12,6 +12,7 @@ was in at that time (its ``timings``, measured once at the end with ``--whole``)
 from __future__ import annotations
 
 import argparse
+import contextlib
 import sys
 import time
 from pathlib import Path
@@ -31,13 +32,9 @@ STEPS = ("context", "local_matching", "consensus_selection", "estimate", "reasso
 def stopped_after(trial, after: float) -> float:
     """Seconds from the moment ``after`` seconds into CBM's run when it was told to stop, to the
     moment ``Cancelled`` reached this caller (negative: it finished before the stop)."""
-    started = time.perf_counter()
-    told = started + after
-    try:
-        with stoppable(lambda: time.perf_counter() >= told):
-            match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
-    except Cancelled:
-        return time.perf_counter() - told
+    told = time.perf_counter() + after
+    with contextlib.suppress(Cancelled), stoppable(lambda: time.perf_counter() >= told):
+        match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams())
     return time.perf_counter() - told
 
 

@@ -92,7 +92,6 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, f: Filtering) -> tuple[np.nd
     list into parts of the listing of their own (``in_parts``), else it visits them too."""
     shared, first, stop = np.zeros(1, np.int64), min(tuning.VISIT_FIRST, len(order)), stop_flag()
     pieces = [_visited_part(order, (0, first, 0, 1), L.count, 0, shared, L.width, f, f.listing, stop)]
-    check_stop()
     if len(pieces[0][0]) == first < len(order):
         best = int(pieces[0][0].max(initial=0))
         n_parts = parts(f.n_ego * f.lister.lookup.n_cav, tuning.VISIT_APART_FROM)
@@ -100,11 +99,11 @@ def eq13_visit(order: np.ndarray, L: CandidateSets, f: Filtering) -> tuple[np.nd
                 or _work_ahead(order, first, best, L.count, tuning.VISIT_AHEAD_FROM) < tuning.VISIT_AHEAD_FROM):
             pieces.append(_visited_part(order, (first, len(order), 0, 1), L.count, best, shared, L.width, f,
                                         f.listing, stop))
-            check_stop()
         else:
             visited = in_parts(L.listing, lambda k, n, listing: _visited_part(
                 order, (first, len(order), k, n), L.count, best, shared, L.width, f, listing, stop), n_parts)
             pieces.append(_interleaved(order[first:], L.count, best, visited))
+    check_stop()
     sizes = np.concatenate([piece[0] for piece in pieces])
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     return order[:len(sizes)], sizes, offsets, np.concatenate([piece[-1] for piece in pieces]), len(sizes)
