@@ -9,14 +9,12 @@ setting them, and the per-frame export runs the current settings first.
 from __future__ import annotations
 
 import dataclasses
-import io
 import re
 import threading
 from collections.abc import Callable
 
 import numpy as np
 import viser
-from PIL import Image
 
 from evaluation.diagnosis import Finding
 
@@ -322,7 +320,7 @@ class ExplorePanel:
                             "is done.", "blue")
 
     def _export(self, run: SequenceRun, suffix: str, encode: Callable[[list[dict]], bytes]) -> None:
-        name = _slug(self.tab.explorer.sequence.name)
+        name = export.slug(self.tab.explorer.sequence.name)
         self._download(f"cbm-{name}-seed{run.settings.scenario.seed}.{suffix}", encode(list(run.rows)))
 
     def download_recording(self) -> None:
@@ -333,15 +331,15 @@ class ExplorePanel:
             return
         dataset = self.tab.explorer.sequence.name
         page = recording_html(recording, dataset, self.tab.settings.view.presentation)
-        self._download(f"cbm-explorer-{_slug(dataset)}-{len(recording)}frames.html", page)
+        self._download(f"cbm-explorer-{export.slug(dataset)}-{len(recording)}frames.html", page)
 
     def screenshot_png(self) -> bytes:
         """The view as PNG bytes, with the metrics panel beside it when "include the control panel" is on."""
         _, picture = self.tab.current()
         dark = self.tab.settings.view.dark
         if not self.with_panel.value or picture is None:
-            return png(export.opaque(render(self.tab.client), dark))
-        return png(export.with_panel(render(self.tab.client), picture.metrics_markdown, dark=dark))
+            return export.png(export.opaque(render(self.tab.client), dark))
+        return export.png(export.with_panel(render(self.tab.client), picture.metrics_markdown, dark=dark))
 
     def _download(self, filename: str, content: bytes) -> None:
         self.tab.client.send_file_download(filename, content, save_immediately=True)
@@ -387,18 +385,6 @@ class ExplorePanel:
                 self._failed(title, error)
 
         threading.Thread(target=guarded, name=f"{title}-{self.tab.client.client_id}", daemon=True).start()
-
-
-def _slug(name: str) -> str:
-    """A dataset's name as a file name part."""
-    return re.sub(r"[^A-Za-z0-9]+", "-", name).strip("-")[:40]
-
-
-def png(image: np.ndarray) -> bytes:
-    """An (H, W, 3 or 4) uint8 image as PNG bytes."""
-    out = io.BytesIO()
-    Image.fromarray(np.ascontiguousarray(image)).save(out, format="PNG")
-    return out.getvalue()
 
 
 def render(client: viser.ClientHandle, timeout: float = 20.0) -> np.ndarray:

@@ -20,6 +20,18 @@ from PIL import Image, ImageDraw, ImageFont
 from .settings import Settings, to_preset
 
 
+def slug(name: str) -> str:
+    """A dataset's name as a file name part."""
+    return re.sub(r"[^A-Za-z0-9]+", "-", name).strip("-")[:40]
+
+
+def png(image: np.ndarray) -> bytes:
+    """An (H, W, 3 or 4) uint8 image as PNG bytes."""
+    out = io.BytesIO()
+    Image.fromarray(np.ascontiguousarray(image)).save(out, format="PNG")
+    return out.getvalue()
+
+
 def rows_frame(rows: Sequence[dict[str, Any]]) -> pl.DataFrame:
     """The rows as a table, columns in the sweep's order, every row read for the schema."""
     return pl.DataFrame(list(rows), infer_schema_length=None)

@@ -7,7 +7,6 @@ import io
 import numpy as np
 import polars as pl
 
-from app.panels.explore import png
 from app.session import export
 from app.session.explorer import Explorer
 from app.session.presets import read
@@ -40,5 +39,5 @@ def test_png_encodes_an_image() -> None:
 
     image = np.zeros((4, 6, 3), np.uint8)
     image[1, 2] = (255, 0, 0)
-    decoded = np.asarray(Image.open(io.BytesIO(png(image))))
+    decoded = np.asarray(Image.open(io.BytesIO(export.png(image))))
     assert decoded.shape == (4, 6, 3) and tuple(decoded[1, 2]) == (255, 0, 0)
