@@ -37,17 +37,6 @@ class OutError(ValueError):
     """``--out`` cannot take a run's files: the message says why, in one line."""
 
 
-def write_atomic(path: Path, write: Callable[[Path], None]) -> None:
-    """Call ``write(temporary path)`` beside ``path``, then move the result onto ``path``."""
-    tmp = path.with_name(f".{path.name}.{os.getpid()}.tmp")
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        tmp.unlink(missing_ok=True)
-        raise
-
-
 def write_together(out: Path, files: dict[str, Callable[[Path], None]]) -> None:
     """Write every file of ``files`` (name -> ``write(temporary path)``) into ``out``: all of them, or
     none. Each is written beside its place first; only when all are complete are they moved into

@@ -13,7 +13,7 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 from evaluation.sweep import Sweep, summarise  # noqa: E402
 
-from .report import _ranges, fmt, levels  # noqa: E402
+from .report import _ranges, fmt, init_name, levels  # noqa: E402
 
 LOG_FLOOR = 1e-3
 """RRE (deg) and RTE (m) below this are drawn at it on the log-scale plot."""
@@ -66,7 +66,7 @@ def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep
 
 def plot_rre_rte(rows: list[dict[str, Any]], variants: list[str]) -> plt.Figure:
     """The paper's OPV2V figure: RRE and RTE distributions per method (trials with an estimate) and
-    of the uncalibrated ``init`` (GNSS, unless the method ``none`` shows it), on a log scale."""
+    of the uncalibrated ``init`` (``report.init_name``, unless the method ``none`` shows it), on a log scale."""
     names = list(dict.fromkeys(variants))
     first = [row for row, v in zip(rows, variants) if v == names[0]]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.8))
@@ -75,7 +75,7 @@ def plot_rre_rte(rows: list[dict[str, Any]], variants: list[str]) -> plt.Figure:
         ticks = list(names)
         if "none" not in names:
             data.append([row[f"init_{metric}"] for row in first])
-            ticks.append("GNSS")
+            ticks.append(init_name(rows))
         ax.boxplot([[max(x, LOG_FLOOR) for x in d] or [math.nan] for d in data], showfliers=True)
         ax.set_xticks(range(1, len(data) + 1), ticks, rotation=30, ha="right", fontsize=8)
         ax.set_yscale("log")

@@ -27,7 +27,12 @@ TABLE_ROWS = (
     ("success where not abstained (%)", "returned_success", 100.0),
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
-GNSS = "GNSS (init)"
+def init_name(rows: list[dict[str, Any]]) -> str:
+    """The column of the pose before calibration: GNSS's error, unless a trial had no prior
+    (``localization="none"``: the identity or a guess)."""
+    return "GNSS (init)" if all(row.get("localization") != "none" for row in rows) else "init (no prior)"
+
+
 ORACLE_COLUMN = f"oracle ({ORACLE_WORDS})"
 """The oracle's column header and its name in the notes."""
 FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's boxes placed by the method's pose, "
@@ -68,7 +73,7 @@ def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> 
     columns = [stats[(n,)] for n in names]
     if "none" not in names:
         first = [row for row in keyed if row["variant"] == names[0]]
-        names.append(GNSS)
+        names.append(init_name(rows))
         columns.append({"rre_median": _median([r["init_rre"] for r in first]),
                         "rte_median": _median([r["init_rte"] for r in first])})
     lines = [f"| metric | {' | '.join(column_name(n) for n in names)} |", "|---|" + "---:|" * len(names)]
@@ -131,7 +136,8 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
               "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
               "Success: RTE < 1 m and RRE < 1 deg (at 2 and 3: RTE < 2 m and RRE < 2 deg, 3 and 3). "
               "Abstained: trials where the method said it had not enough evidence (its pose is still scored); "
-              "success where not abstained: over the other trials. none / GNSS (init): the error before calibration; "
+              "success where not abstained: over the other trials. none / GNSS (init) / init (no prior): the error "
+              "before calibration; "
               f"{ORACLE_COLUMN}: the objects both agents see, paired by their true ids and fitted by plain least "
               "squares; a reference, not a bound: a robust fit or a pose graph over more agents can come closer to "
               "the true pose."]

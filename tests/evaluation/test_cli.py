@@ -9,7 +9,6 @@ import polars as pl
 import pytest
 
 import evaluation
-from evaluation.outputs import write_atomic
 from evaluation.presets import default_preset
 
 REPO = Path(__file__).resolve().parents[2]
@@ -112,17 +111,13 @@ def test_bad_input_is_one_line_on_stderr_and_exit_status_2(args, message, capsys
     assert not (tmp_path / "out").exists()
 
 
-def test_a_failed_write_leaves_the_old_file_and_no_temporary(tmp_path):
-    target = tmp_path / "trials.csv"
-    target.write_text("old")
-
-    def crash(path):
-        path.write_text("half")
-        raise OSError("disk full")
-
-    with pytest.raises(OSError):
-        write_atomic(target, crash)
-    assert target.read_text() == "old" and [p.name for p in tmp_path.iterdir()] == ["trials.csv"]
+def test_the_pose_before_calibration_is_not_called_gnss_where_there_was_no_prior(tmp_path):
+    """Under ``no-prior`` the pose before calibration is the identity, not a GNSS fix."""
+    for condition, column in (("mild", "GNSS (init)"), ("no-prior", "init (no prior)")):
+        out = tmp_path / condition
+        assert evaluate_cli.main(["--dataset", "synthetic:20", "--frames", "0:1", "--no-timing", "--methods", "cbm",
+                                  "--condition", condition, "--out", str(out)]) == 0
+        assert f"| metric | cbm | {column} |" in (out / "summary.md").read_text()
 
 
 def test_reference_methods_bound_the_default_table(tmp_path):
