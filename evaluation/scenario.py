@@ -105,12 +105,12 @@ class ScenarioParams:
             raise ValueError("ScenarioParams.localization must be 'fixed', 'gaussian', 'drifting', 'dataset' or "
                              f"'none', got {self.localization!r}")
         for name, (low, high) in RANGES.items():
-            _require(name, low <= _finite(self, name) <= high, f"a number in [{low:g}, {high:g}]")
+            _require(self, name, low <= _finite(self, name) <= high, f"a number in [{low:g}, {high:g}]")
         for name in ("loc_x", "loc_y", "loc_yaw"):
             is_valid = getattr(self, name) >= 0.0 or self.localization == "fixed"
-            _require(name, is_valid, f"a number >= 0 (a std-dev, as localization={self.localization!r})")
+            _require(self, name, is_valid, f"a number >= 0 (a std-dev, as localization={self.localization!r})")
         is_seed = isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool) and self.seed >= 0
-        _require("seed", is_seed, "an integer >= 0")
+        _require(self, "seed", is_seed, "an integer >= 0")
 
     @property
     def sigma_theta_rad(self) -> float:
@@ -123,14 +123,14 @@ class ScenarioParams:
 
 def _finite(params: ScenarioParams, name: str) -> float:
     value = getattr(params, name)
-    _require(name, isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
+    _require(params, name, isinstance(value, (int, float, np.floating, np.integer)) and not isinstance(value, bool)
              and math.isfinite(value), "a finite number")
     return float(value)
 
 
-def _require(name: str, ok: bool, expected: str) -> None:
+def _require(params: ScenarioParams, name: str, ok: bool, expected: str) -> None:
     if not ok:
-        raise ValueError(f"ScenarioParams.{name} must be {expected}")
+        raise ValueError(f"ScenarioParams.{name} must be {expected}, got {getattr(params, name)!r}")
 
 
 @dataclass(frozen=True)
