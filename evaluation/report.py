@@ -27,12 +27,6 @@ TABLE_ROWS = (
     ("success where not abstained (%)", "returned_success", 100.0),
 )
 RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
-def init_name(rows: list[dict[str, Any]]) -> str:
-    """The column of the pose before calibration: GNSS's error, unless a trial had no prior
-    (``localization="none"``: the identity or a guess)."""
-    return "GNSS (init)" if all(row.get("localization") != "none" for row in rows) else "init (no prior)"
-
-
 ORACLE_COLUMN = f"oracle ({ORACLE_WORDS})"
 """The oracle's column header and its name in the notes."""
 FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's boxes placed by the method's pose, "
@@ -41,6 +35,12 @@ FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's bo
                "detections of the run sorted by score, VOC 2010 all-point interpolation (OpenCOOD's `eval_utils`). "
                "Scores of simulated detections: the seeded score model of `evaluation.fusion`. The oracle's boxes are "
                "placed by the true pose.")
+
+
+def init_name(rows: list[dict[str, Any]]) -> str:
+    """The column of the pose before calibration: GNSS's error, unless a trial had no prior
+    (``localization="none"``: the identity or a guess)."""
+    return "GNSS (init)" if all(row.get("localization") != "none" for row in rows) else "init (no prior)"
 
 
 def variant_names(rows: Sequence[dict[str, Any]], sweep: Sweep) -> list[str]:
