@@ -10,7 +10,7 @@ import threading
 
 import viser
 
-from cbm.engine.threads import trim_freed
+from cbm import return_memory
 
 from .scene.presentation import THEME
 from .session import kernels
@@ -178,7 +178,7 @@ class ExplorerServer:
         if last:
             self.explorer.forget()
         else:
-            trim_freed()
+            return_memory()
 
     def stop(self) -> None:
         """Close every tab's session (waiting at most ``CLOSE_SECONDS`` for their workers) and the server."""

@@ -9,8 +9,7 @@ import time
 import numpy as np
 import viser
 
-from cbm.engine.interpreted import SMALL
-from cbm.engine.threads import Cancelled, stoppable
+from cbm import INTERPRETED_UP_TO, Cancelled, stoppable
 from cbm.methods import METHODS
 
 from . import panels
@@ -251,7 +250,7 @@ class ClientSession:
         large frame waits for them, as does any frame when they are only loaded from the cache. The
         status line says what it waits for when that takes a moment."""
         say = self.controls.metrics.say
-        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > SMALL):
+        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO):
             self._compiled_note_due = True
             with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):

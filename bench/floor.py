@@ -15,8 +15,8 @@ import numba
 import numpy as np
 
 from cbm import CBMParams, se2
-from cbm.context import build_context
 from cbm.engine import tuning
+from cbm.engine.context import build_context
 from cbm.engine.grid import build_grid, group_signs, heading_groups
 from cbm.engine.threads import shared_out
 from cbm.reference import fold_heading, pair_signs

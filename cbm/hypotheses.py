@@ -28,15 +28,17 @@ import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
-import numba
 import numpy as np
 
 from . import se2
 from .engine import Visit, anchor_sets
+from .engine.assignment import gated_assignment
+from .engine.gaps import pair_gaps, pose_gap
 from .engine.threads import check_stop
-from .estimate import Fit, residuals, weighted_procrustes
+from .estimate import residuals, weighted_procrustes
 from .gates import clutter_density, heading_log_ratio, heading_sigma, pair_log_ratio, scene_sigma
-from .reassociate import MAX_ROUNDS, gated_assignment, reassociate
+from .reassociate import MAX_ROUNDS, reassociate
+from .result import Fit
 
 HYPOTHESES = 6
 """Anchors refined and verified (the eq. 13 winner and the next best distinct sets)."""
@@ -48,7 +50,7 @@ SAME_POSE_DEG = 1.0
 MIN_SHARED = 3
 """Fewest pairs of a pose CBM stands by: with two, any pose fits them exactly."""
 ROUNDING = 1e-9
-"""Times ``_gap``'s scale within which a pose's distance or turn is compared as numpy computes it:
+"""Times ``pose_gap``'s scale within which a pose's distance or turn is compared as numpy computes it:
 the two computations differ by less than 1e-14 times it."""
 EVIDENCE_MARGIN = 8.0
 """Least log-likelihood-ratio margin (natural log) of the answer over a different answer to stand
@@ -152,30 +154,16 @@ def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float
     (``pair_log_ratio``) plus its heading axes' (``heading_log_ratio``, the heading noise read from
     the ``reference`` pairs). ``moved``: the CAV boxes under the pose."""
     ego = np.ascontiguousarray(ego)
-    d, turn = _gaps(ego, moved, pairs)
-    heading = heading_sigma(_gaps(ego, moved, reference)[1])
+    d, turn = pair_gaps(ego, moved, pairs)
+    heading = heading_sigma(pair_gaps(ego, moved, reference)[1])
     return pair_log_ratio(d, sigma, density) + heading_log_ratio(turn, heading)
-
-
-@numba.njit(cache=True, nogil=True)
-def _gaps(ego, moved, pairs):
-    """Each pair's centre distance and the angle between its heading axes (``axis_difference``),
-    each as numpy computes it elementwise."""
-    d, turn = np.empty(len(pairs)), np.empty(len(pairs))
-    for k in range(len(pairs)):
-        e, c = pairs[k, 0], pairs[k, 1]
-        dx, dy = moved[c, 0] - ego[e, 0], moved[c, 1] - ego[e, 1]
-        d[k] = math.sqrt(dx * dx + dy * dy)
-        angle = abs((moved[c, 6] - ego[e, 6] + math.pi) % (2.0 * math.pi) - math.pi)
-        turn[k] = min(angle, math.pi - angle)
-    return d, turn
 
 
 def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
     """Whether two corrections differ by less than ``SAME_POSE_M`` and ``SAME_POSE_DEG``: the
-    transform between them (``_gap``), or where it lies within rounding of either bound, the
+    transform between them (``pose_gap``), or where it lies within rounding of either bound, the
     transform ``inverse(a) @ b`` as numpy computes it (``_small``)."""
-    metres, degrees, scale = _gap(a, b)
+    metres, degrees, scale = pose_gap(a, b)
     if min(abs(metres - SAME_POSE_M), abs(degrees - SAME_POSE_DEG)) <= ROUNDING * scale:
         return _small(se2.inverse(a) @ b)
     return bool(metres < SAME_POSE_M and degrees < SAME_POSE_DEG)
@@ -184,19 +172,6 @@ def same_pose(a: np.ndarray, b: np.ndarray) -> bool:
 def near_any(a: np.ndarray, poses: list[np.ndarray]) -> bool:
     """Whether ``a`` is the same pose as one of ``poses`` (``same_pose``)."""
     return any(same_pose(a, pose) for pose in poses)
-
-
-@numba.njit(cache=True, nogil=True)
-def _gap(a, b):
-    """(metres, degrees, scale): how far and by how many degrees (absolute) the correction ``b``
-    moves and turns away from ``a`` (the transform ``inverse(a) @ b``), summed in plain order, and
-    1 plus the corrections' translations, to which its rounding is proportional."""
-    dx, dy = b[0, 2] - a[0, 2], b[1, 2] - a[1, 2]
-    x, y = a[0, 0] * dx + a[1, 0] * dy, a[0, 1] * dx + a[1, 1] * dy
-    cos_part = a[0, 0] * b[0, 0] + a[1, 0] * b[1, 0]
-    sin_part = a[0, 1] * b[0, 0] + a[1, 1] * b[1, 0]
-    scale = 1.0 + abs(a[0, 2]) + abs(a[1, 2]) + abs(b[0, 2]) + abs(b[1, 2])
-    return math.hypot(x, y), abs(math.degrees(math.atan2(sin_part, cos_part))), scale
 
 
 def _small(d: np.ndarray) -> bool:

@@ -1,111 +1,31 @@
-"""CBM, steps 1-7 of the paper's section III, from two box lists and a wrong relative pose, and the
-hypotheses verified beyond it (steps 7b-7c, ``cbm.hypotheses``).
+"""``cbm.match``: CBM, the steps of the paper's section III, from two box lists and a wrong relative
+pose, and the hypotheses verified beyond it (steps 7b-7c, ``cbm.hypotheses``).
 
-Steps 1-3 (``cbm.context.prepare``), then eq. 7-13 by the engine (``cbm.engine``: the same answer as
-``cbm.reference``, fast), the pose estimate (eq. 14-15, ``cbm.estimate``) and the verification.
+Steps 1-4 build the sets (``cbm.sets``: the CAV boxes in the ego frame, eq. 5; context, eq. 6-7;
+local matching, eq. 8-9), steps 5-6 keep the global consensus and select (eq. 10-14), both by the
+engine (``cbm.engine``: the same answer as ``cbm.reference``, fast); step 7 fits the pose (eq. 15-16,
+``cbm.estimate``); then the verification. The one way to run CBM: the app, the evaluation and CBM
+over time all call ``match``.
 """
 from __future__ import annotations
 
+import contextlib
 import math
 import time
-from dataclasses import dataclass
+from collections.abc import Callable
 from typing import Any
 
 import numpy as np
 
-from .context import Prepared, prepare
-from .engine import (
-    CandidateSets,
-    PairSets,
-    Reuse,
-    Selection,
-    Visit,
-    candidate_sets,
-    local_matching,
-    runner_up_beside,
-    select,
-)
-from .engine.threads import check_stop, stop_flag
-from .estimate import WELSCH_EFFICIENT_SCALE, Fit, least_squares_fit, residuals, robust_fit
+from .engine import Reuse, Selection, runner_up_beside, select
+from .engine.threads import check_stop, stoppable
+from .estimate import WELSCH_EFFICIENT_SCALE, least_squares_fit, residuals, robust_fit
+from .explain import Explanation
 from .hypotheses import MIN_SHARED, Verdict, verify
 from .inputs import checked_boxes, checked_transform
 from .params import CBMParams
-from .result import MatchResult
-
-
-@dataclass(frozen=True)
-class Sets:
-    """Everything CBM knows before it picks an anchor (steps 1-4 and the sets of step 5)."""
-
-    params: CBMParams
-    ego_boxes: np.ndarray
-    """(Ne, 7) ego boxes."""
-    prepared: Prepared
-    """Steps 1-3 of this input (``cbm.context.prepare``)."""
-    candidates: CandidateSets
-    """L_ij of every anchor (eq. 8) by pair id ``i * Nc + j``: sizes, and members on demand."""
-    voted_by: PairSets
-    """Row m: the pairs whose voting set holds pair m (empty when consensus is off)."""
-
-    @property
-    def cav_boxes(self) -> np.ndarray:
-        """(Nc, 7) CAV boxes pre-transformed into the ego frame by ``init`` (step 1)."""
-        return self.prepared.cav_boxes
-
-    @property
-    def ego_heading(self) -> np.ndarray:
-        """(Ne,) folded ego headings (step 2)."""
-        return self.prepared.ego_heading
-
-    @property
-    def cav_heading(self) -> np.ndarray:
-        """(Nc,) folded CAV headings after ``init`` (step 2)."""
-        return self.prepared.cav_heading
-
-    @property
-    def signs(self) -> np.ndarray:
-        """(Ne, Nc) +1 or -1: how the CAV frame is turned against each ego frame (step 2)."""
-        return self.prepared.signs
-
-    @property
-    def ego_xy(self) -> np.ndarray:
-        """(Ne, 2) ego centres."""
-        return self.ego_boxes[:, :2]
-
-    @property
-    def cav_xy(self) -> np.ndarray:
-        """(Nc, 2) CAV centres in the ego frame after ``init``."""
-        return self.cav_boxes[:, :2]
-
-    @property
-    def rule(self) -> str | None:
-        return self.params.consensus_rule if self.params.consensus else None
-
-
-def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
-               timings: dict[str, float] | None = None, reuse: Reuse | None = None) -> Sets:
-    """Steps 1-3, then card(L_ij) of every anchor (eq. 7-8) and the voting sets (eq. 9) grouped by
-    member, for checked inputs (timed together as ``local_matching``). With ``reuse``, what an
-    earlier call on the same input built and no threshold changes is taken from its
-    ``cbm.engine.EditCache``, which runs only what the edit changed."""
-    timings = {} if timings is None else timings
-    started = time.perf_counter()
-    cache = None if reuse is None else reuse.cache(ego, cav, init, params.heading)
-    ready = prepare(ego, cav, init, params.heading, stop_flag()) if cache is None else cache.prepared
-    t = time.perf_counter()
-    timings["context"] = t - started
-    check_stop()
-
-    sigma1, sigma3 = params.sigma1_rad, params.sigma3 if params.consensus else None
-    if cache is None:
-        count2, voted_by = local_matching(ready, sigma1, params.sigma2, sigma3)
-        candidates = candidate_sets(ready, sigma1, params.sigma2, count2)
-    else:
-        count2, voted_by = cache.local_matching(sigma1, params.sigma2, sigma3)
-        candidates = cache.candidate_sets(sigma1, params.sigma2, count2)
-    timings["local_matching"] = time.perf_counter() - t
-    check_stop()
-    return Sets(params, ego, ready, candidates, voted_by)
+from .result import Fit, MatchResult
+from .sets import Sets, build_sets
 
 
 def checked_inputs(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None,
@@ -119,34 +39,34 @@ def checked_inputs(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarra
 
 
 def match(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
-          params: CBMParams | None = None) -> MatchResult:
+          params: CBMParams | None = None, *, reuse: Reuse | None = None, explain: bool = False,
+          stop: Callable[[], bool] | None = None) -> MatchResult:
     """Match ego and CAV boxes by their context and refine the CAV->ego transform.
 
     ``ego_boxes`` (Ne, 7) are in the ego frame, ``cav_boxes`` (Nc, 7) in the CAV frame, rows
     ``x, y, z, length, width, height, yaw``; ``init`` is the (wrong) CAV->ego transform from
-    localization (identity when None).
+    localization (identity when None). Keyword options:
+
+    - ``reuse``: a ``cbm.Reuse`` kept between calls; a call on the same boxes and ``init`` with
+      other thresholds reuses what they do not change (steps 1-3, the join, the sorted blocks);
+    - ``explain``: the result carries ``explanation`` (``cbm.Explanation``), the sets and fit of
+      this very run, to explain any anchor;
+    - ``stop``: asked while CBM runs; once it says True, ``cbm.Cancelled`` is raised (``cbm.stoppable``).
     """
-    started = time.perf_counter()
-    ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
-    timings: dict[str, float] = {}
-    return match_sets(build_sets(ego, cav, init, params, timings), init, timings, started)
+    with stoppable(stop) if stop is not None else contextlib.nullcontext():
+        started = time.perf_counter()
+        ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
+        timings: dict[str, float] = {}
+        sets = build_sets(ego, cav, init, params, timings, reuse)
+        return selected_and_fitted(sets, init, timings, started, explain)
 
 
-def match_sets(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
-               started: float | None = None) -> MatchResult:
-    """Steps 5-7b on sets already built (``build_sets``): consensus, selection, pose estimate,
-    guided re-association. ``timings`` and ``started`` carry the earlier stages' timings into the result."""
-    return match_sets_visited(sets, init, timings, started)[0]
-
-
-def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] | None = None,
-                       started: float | None = None) -> tuple[MatchResult, Visit | None]:
-    """``match_sets``, and what the selection's visit filtered (``cbm.engine.Visit``; None when every
-    set is empty): the filtered sizes it computed, for ``cbm.inspect`` to reuse. The runner-up search
-    may run beside the verification of the winner (``cbm.engine.runner_up_beside``): their time is
-    then the verification's."""
-    started = time.perf_counter() if started is None else started
-    timings = {} if timings is None else timings
+def selected_and_fitted(sets: Sets, init: np.ndarray, timings: dict[str, float], started: float,
+                        explain: bool = False) -> MatchResult:
+    """Steps 5-7 on the sets of steps 1-4 (``build_sets``): consensus and selection (eq. 10-14),
+    the pose estimate (eq. 15-16), and beyond the paper the guided re-association and the
+    verification of hypotheses (steps 7b-7c). The runner-up search may run beside the verification
+    of the winner (``cbm.engine.runner_up_beside``): their time is then the verification's."""
     params, n_cav = sets.params, len(sets.cav_xy)
     t = time.perf_counter()
     chosen = select(sets.candidates, sets.voted_by, sets.rule, sets.ego_xy, sets.cav_xy, params.distance_limit)
@@ -182,8 +102,9 @@ def match_sets_visited(sets: Sets, init: np.ndarray, timings: dict[str, float] |
         residuals=residuals(correction, sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]]),
         timings=timings,
         context_pairs=context_pairs,
+        explanation=Explanation(sets, init, fit, chosen.visit) if explain else None,
         **verdict_fields(verdict, len(pairs), n_cav, init),
-    ), chosen.visit
+    )
 
 
 def verified(sets: Sets, chosen: Selection, fit: Fit | None) -> Verdict | None:
@@ -212,7 +133,7 @@ def verdict_fields(verdict: Verdict | None, n_pairs: int, n_cav: int, init: np.n
 
 
 def estimate(src: np.ndarray, dst: np.ndarray, params: CBMParams) -> Fit:
-    """Step 7 (eq. 14): the correction fitted to matched centres by the chosen estimator."""
+    """Step 7 (eq. 15): the correction fitted to matched centres by the chosen estimator."""
     if params.estimator == "least_squares":
         return least_squares_fit(src, dst, params.welsch_floor)
     return robust_fit(src, dst, params.welsch_floor)

@@ -1,12 +1,28 @@
-"""What ``cbm.match`` returns."""
+"""What ``cbm.match`` returns, and the rigid fit it is made of."""
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
 from . import se2
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A rigid fit of matched centres and the noise it assumes (``cbm.estimate``)."""
+
+    transform: np.ndarray
+    """(3, 3) T minimising eq. 14 (``dst ~ T src``)."""
+    weights: np.ndarray
+    """(K,) final weight of each pair in [0, 1] (all 1 for least squares)."""
+    scale: float
+    """Metres. The final Welsch scale nu (infinite for least squares)."""
+    sigma: float
+    """Metres. Per-axis std-dev of a pair's residual read from the inliers (``cbm.engine.fitting.inlier_sigma``),
+    at least ``nu_floor / WELSCH_EFFICIENT_SCALE``: the noise the detections are assumed to carry."""
 
 
 @dataclass(frozen=True)
@@ -79,6 +95,9 @@ class MatchResult:
     unless another anchor's hypothesis won the verification."""
     track: TrackNote | None = None
     """How CBM over time reached this answer (``cbm.SequenceCalibrator``); None for a single frame."""
+    explanation: Any = field(default=None, repr=False, compare=False)
+    """``cbm.Explanation`` of this very run (its sets, fit and selection: why each anchor scored as
+    it did), when ``cbm.match`` was asked to ``explain``; None otherwise."""
 
     @property
     def margin(self) -> int:

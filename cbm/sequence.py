@@ -33,11 +33,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from . import se2
-from .estimate import WELSCH_EFFICIENT_SCALE
+from .engine.assignment import gated_assignment
+from .engine.fitting import WELSCH_EFFICIENT_SCALE
 from .inputs import check_positive
 from .params import CBMParams
 from .pipeline import checked_inputs, match
-from .reassociate import gated_assignment
 from .result import MatchResult, TrackNote
 from .track import Measurement, Persistence, Track, agree, as_matrix, measurement
 

@@ -25,8 +25,9 @@ from pathlib import Path
 import numpy as np
 
 from . import se2
-from .context import prepare
 from .engine import PairSets, Reuse, candidate_sets, filtered_sizes, select, tuning
+from .engine.assignment import gated_assignment
+from .engine.context import prepare
 from .engine.counting import counts_and_votes
 from .engine.filtered import filtering
 from .engine.interpreted import kernels
@@ -37,8 +38,8 @@ from .engine.voting import voted_by_member
 from .estimate import robust_fit
 from .hypotheses import evidence, same_pose
 from .params import CBMParams
-from .pipeline import build_sets, checked_inputs, match
-from .reassociate import gated_assignment
+from .pipeline import checked_inputs, match
+from .sets import build_sets
 
 VARIANTS: tuple[CBMParams, ...] = (
     CBMParams(),
@@ -65,7 +66,13 @@ def scene(n: int = 30, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return boxes, cav, se2.make(1.0, 1.0, np.radians(2.0)) @ truth
 
 
-def in_cache() -> bool:
+def load_kernels() -> float:
+    """Load the kernels numba's cache holds into this process (compiling what it lacks) with one
+    small match at the defaults; the seconds it took."""
+    return warm_up(VARIANTS[:1])
+
+
+def kernels_cached() -> bool:
     """Whether numba's on-disk cache holds kernels of every module that has some, compiled by this
     numba from these sources (a stale entry reads as none): then loading them takes a fraction of
     a second. (A module's inlined kernels, or the ones only a variant calls, may be missing.)"""
@@ -138,6 +145,8 @@ def compile_selection() -> None:
 
 
 PARTS = {"matching": compile_matching, "selection": compile_selection}
+RUN_PART = "import sys, cbm.warmup; sys.exit(cbm.warmup.main())"
+"""What a compiling process runs (``main`` with ``--part``)."""
 
 
 class CompileFailed(RuntimeError):
@@ -145,13 +154,13 @@ class CompileFailed(RuntimeError):
 
 
 def compile_side_by_side(processes: list[subprocess.Popen] | None = None, timeout: float | None = None) -> float:
-    """Both halves of the kernels at once, each in a process of its own (``python -m cbm.warmup
-    --part NAME``; ``processes`` receives them, to be stopped by the caller if need be). Returns the
+    """Both halves of the kernels at once, each in a process of its own (``main`` with ``--part
+    NAME``; ``processes`` receives them, to be stopped by the caller if need be). Returns the
     seconds the slower half spent compiling (or loading from the cache), without the processes'
     start-up; raises ``CompileFailed`` when one fails, ``subprocess.TimeoutExpired`` past ``timeout``
     seconds."""
     root = Path(__file__).resolve().parents[1]
-    started = [subprocess.Popen([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=root, text=True,
+    started = [subprocess.Popen([sys.executable, "-c", RUN_PART, "--part", part], cwd=root, text=True,
                                 stdout=subprocess.PIPE, stderr=subprocess.DEVNULL) for part in PARTS]
     if processes is not None:
         processes += started

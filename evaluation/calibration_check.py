@@ -31,8 +31,7 @@ from pathlib import Path
 
 import numpy as np
 
-from cbm import CBMParams, match, se2
-from cbm.estimate import robust_fit
+from cbm import CBMParams, match, robust_fit, se2
 from loaders import Frame, Sequence
 from loaders.errors import unreadable
 

@@ -10,8 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cbm.inspect import Inspection
-from cbm.result import MatchResult
+from cbm import Explanation, MatchResult
 
 from .scenario import Trial
 
@@ -51,11 +50,11 @@ def too_few_covisible(trial: Trial, minimum: int = 3) -> Finding | None:
     return None
 
 
-def no_anchor_reached_two(result: MatchResult, inspection: Inspection) -> Finding | None:
+def no_anchor_reached_two(result: MatchResult, explanation: Explanation) -> Finding | None:
     """No candidate set held 2 pairs (eq. 8), or the distance limit rejected every one."""
     if result.anchor is not None:
         return None
-    if inspection.sets.candidates.count.any():
+    if explanation.sets.candidates.count.any():
         return Finding("no_anchor", "no anchor reached 2 pairs: every candidate set was emptied by consensus "
                                     "and the one-to-one rule or rejected by the distance limit")
     return Finding("no_anchor",
@@ -69,26 +68,26 @@ def single_pair(result: MatchResult) -> Finding | None:
     return None
 
 
-def distance_limit(result: MatchResult, trial: Trial, inspection: Inspection, near: float = 0.8) -> Finding | None:
+def distance_limit(result: MatchResult, trial: Trial, explanation: Explanation, near: float = 0.8) -> Finding | None:
     """The right anchor was rejected by the distance limit, or the winner came within ``near`` of it."""
-    limit = inspection.sets.params.distance_limit
-    right = inspection.best_anchor_among(trial.gt_pairs)
+    limit = explanation.sets.params.distance_limit
+    right = explanation.best_anchor_among(trial.gt_pairs)
     if right is not None and right.rejected:
         return Finding("distance_limit", f"the right anchor {pair_name(trial, right.anchor)} was rejected by the "
                                          f"distance limit: its pairs are {right.mean_distance:.1f} m apart on "
                                          f"average (limit {limit:g} m)")
     if result.anchor is not None:
-        winner = inspection.anchor(*result.anchor)
+        winner = explanation.anchor(*result.anchor)
         if winner.mean_distance >= near * limit:
             return Finding("distance_limit", f"the winning anchor was nearly rejected by the distance limit: "
                                              f"{winner.mean_distance:.1f} m of {limit:g} m")
     return None
 
 
-def heading_fold(trial: Trial, inspection: Inspection) -> Finding | None:
+def heading_fold(trial: Trial, explanation: Explanation) -> Finding | None:
     """Co-visible objects whose local frames CBM compares turned by pi against each other: the frames
     as compared (CAV frame times its sign) point more than 135 degrees apart. Only ``fold`` can do this."""
-    sets = inspection.sets
+    sets = explanation.sets
     gt = np.asarray(trial.gt_pairs).reshape(-1, 2)
     if len(gt) == 0:
         return None
@@ -102,7 +101,7 @@ def heading_fold(trial: Trial, inspection: Inspection) -> Finding | None:
                                    f"heading='align' avoids this")
 
 
-def wrong_anchor(result: MatchResult, trial: Trial, inspection: Inspection) -> Finding | None:
+def wrong_anchor(result: MatchResult, trial: Trial, explanation: Explanation) -> Finding | None:
     """The winning anchor is not a true pair; how the best true anchor scored against the
     consensus margin's runner-up (eq. 12: ``result.runner_up_count``). Nothing when every pair of the
     answer is right (the re-association left the anchor out): the anchor did no harm."""
@@ -113,7 +112,7 @@ def wrong_anchor(result: MatchResult, trial: Trial, inspection: Inspection) -> F
     if tuple(result.anchor) in gt or (answer and answer <= gt):
         return None
     winner = f"the winning anchor {pair_name(trial, result.anchor)} was wrong with {result.consensus_count} pairs"
-    right = inspection.best_anchor_among(trial.gt_pairs)
+    right = explanation.best_anchor_among(trial.gt_pairs)
     if right is None:
         return Finding("wrong_anchor", f"{winner} and there is no right anchor")
     return Finding("wrong_anchor", f"{winner}; the best right anchor {pair_name(trial, right.anchor)} "
@@ -130,9 +129,9 @@ def rank_against_runner_up(size: int, runner_up: int) -> str:
             f"so the margin does not count it")
 
 
-def diagnose(result: MatchResult, trial: Trial, inspection: Inspection) -> list[Finding]:
+def diagnose(result: MatchResult, trial: Trial, explanation: Explanation) -> list[Finding]:
     """Every finding that applies, most basic first; empty when nothing looks wrong."""
-    findings = [too_few_covisible(trial), no_anchor_reached_two(result, inspection), single_pair(result),
-                distance_limit(result, trial, inspection), heading_fold(trial, inspection),
-                wrong_anchor(result, trial, inspection)]
+    findings = [too_few_covisible(trial), no_anchor_reached_two(result, explanation), single_pair(result),
+                distance_limit(result, trial, explanation), heading_fold(trial, explanation),
+                wrong_anchor(result, trial, explanation)]
     return [f for f in findings if f is not None]

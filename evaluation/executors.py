@@ -22,7 +22,7 @@ from collections.abc import Callable, Iterator, Sequence
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from typing import Any
 
-from cbm.engine.threads import Cancelled
+from cbm import Cancelled
 
 from .stop import Stopped
 

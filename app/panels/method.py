@@ -12,8 +12,8 @@ from typing import Any
 
 import viser
 
+from cbm import MOST
 from cbm.methods import METHODS
-from cbm.params import MOST
 
 from ..scene.words import WORDS, label_of
 from ..session.coalesce import Later

@@ -7,8 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cbm import se2
-from cbm.result import MatchResult
+from cbm import MatchResult, se2
 from evaluation.metrics import TrialMetrics, is_success
 from evaluation.scenario import Trial
 

@@ -17,8 +17,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cbm import CBMParams
-from cbm.inspect import AnchorDetail, Inspection
+from cbm import AnchorDetail, CBMParams, Explanation
 from evaluation.diagnosis import pair_name, short_id
 
 from ..session.explorer import Outcome
@@ -131,17 +130,17 @@ def vector_segments(origin: np.ndarray, vectors: np.ndarray) -> np.ndarray:
 
 
 def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None,
-            inspection: Inspection | None = None) -> ContextPicture:
+            explanation: Explanation | None = None) -> ContextPicture:
     """The inspector's picture and text for the object pair (``ego``, ``cav``); either may be None
     (an object seen by one agent only), then only its own context is shown."""
-    inspection = inspection or outcome.inspection()
-    params = inspection.sets.params
+    explanation = explanation or outcome.cbm().explanation
+    params = explanation.params
     trial = outcome.trial
     contexts = {}
     if ego is not None:
-        contexts["ego"] = inspection.context("ego", ego)
+        contexts["ego"] = explanation.context("ego", ego)
     if cav is not None:
-        contexts["cav"] = inspection.context("cav", cav, against=ego)
+        contexts["cav"] = explanation.context("cav", cav, against=ego)
     reach = max([float(np.linalg.norm(v, axis=1).max()) for _, v in contexts.values() if len(v)] or [1.0])
     reach += params.sigma2
     drawn = [boxes[:, 1] + np.hypot(boxes[:, 3], boxes[:, 4]) for boxes, _ in picture.objects.values() if len(boxes)]
@@ -150,7 +149,7 @@ def inspect(outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None
                "cav": np.array([0.0, edge + 2 * PANEL_GAP + 3 * reach])}
     span = 2 * reach * len(contexts) + PANEL_GAP * (len(contexts) - 1)
     metres_per_px = looked_at_scale(span)
-    detail = inspection.anchor(ego, cav) if ego is not None and cav is not None else None
+    detail = explanation.anchor(ego, cav) if ego is not None and cav is not None else None
     lines: dict[str, Lines] = dict(empty().lines)
     labels = {}
     for agent, (members, vectors) in contexts.items():

@@ -5,9 +5,8 @@ import math
 
 import numpy as np
 
-from cbm import se2
+from cbm import MatchResult, se2
 from cbm.methods import METHODS, ORACLE_WORDS, Method
-from cbm.result import MatchResult
 from evaluation.clutter import is_false
 from evaluation.metrics import evaluate, is_success
 

@@ -19,7 +19,7 @@ from collections import deque
 from collections.abc import Callable
 from typing import TypeVar
 
-from cbm.engine.threads import Cancelled, stoppable
+from cbm import Cancelled, stoppable
 
 R = TypeVar("R")
 

@@ -14,12 +14,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from cbm import se2
-from cbm.baselines import match_oracle
-from cbm.engine import Reuse
-from cbm.inspect import Inspection
+from cbm import MatchResult, Reuse, match, se2
 from cbm.methods import METHODS
-from cbm.result import MatchResult
 from evaluation.agents import agent_pose, choose_ego
 from evaluation.diagnosis import Finding, diagnose
 from evaluation.fusion import fused_against_truth
@@ -125,14 +121,15 @@ class Outcome:
             self._kept[key] = Fused(boxes.boxes, hits)
         return self._kept[key]
 
-    def inspection(self) -> Inspection:
-        """CBM's sets on this trial with the thresholds the tab's CBM runs with: the method's own
-        when it builds them, else built on the first ask (the inspector, the walkthrough)."""
-        if "inspection" not in self._kept:
+    def cbm(self) -> MatchResult:
+        """CBM's result on this trial, with its explanation (``cbm.Explanation``), under the thresholds
+        the tab's CBM runs with: the method's own result when it is CBM, else CBM run on the first ask
+        (the inspector, the walkthrough)."""
+        if "cbm" not in self._kept:
             method, trial = METHODS[self.settings.method], self.trial
             params = method.resolved(self.settings.cbm) if method.explains else self.settings.cbm
-            self._kept["inspection"] = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-        return self._kept["inspection"]
+            self._kept["cbm"] = match(trial.ego_boxes, trial.cav_boxes, trial.init, params, explain=True)
+        return self._kept["cbm"]
 
     @property
     def shown_pairs(self) -> np.ndarray:
@@ -209,8 +206,8 @@ class Explorer:
                 return found
         inputs = self.trial_inputs(settings, index)
         trial = inputs.build(settings.scenario, settings.scenario.seed)
-        made = inputs, trial, evaluate(match_oracle(trial.ego_boxes, trial.cav_boxes, trial.init,
-                                                    true_pairs=trial.gt_pairs), trial)
+        made = inputs, trial, evaluate(METHODS["oracle"](trial.ego_boxes, trial.cav_boxes, trial.init,
+                                                         true_pairs=trial.gt_pairs), trial)
         with self._trials_lock:
             self._trials[key] = made
             while len(self._trials) > TRIALS_KEPT:
@@ -229,9 +226,9 @@ class Explorer:
         alone = pooled_from = None
         if METHODS[settings.method].over_time:
             done = self.over_time.frame(settings, index, lambda j: self._timed_trial(settings, j), progress, stop)
-            result, findings, inspection, alone, pooled_from = done.result, [], None, done.alone, done.since
+            result, findings, alone, pooled_from = done.result, [], done.alone, done.since
         else:
-            result, findings, inspection = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
+            result, findings = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
         world_to_ego = se2.inverse(trial.ego_pose)
         objects = inputs.trial
@@ -240,7 +237,7 @@ class Explorer:
                        world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
                        findings=findings, seconds=time.perf_counter() - started, others=others, alone=alone,
                        pooled_from=pooled_from,
-                       _kept={} if inspection is None else {"inspection": inspection})
+                       _kept={} if result.explanation is None else {"cbm": result})
 
     def _timed_trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, float]:
         """Frame ``index``'s inputs and trial (``trial``) and its time in seconds, for a method over time."""
@@ -264,16 +261,16 @@ class Explorer:
 
 
 def _run(settings: Settings, trial: Trial, frame: FrameInputs, peers: list[Trial],
-         reuse: Reuse | None = None) -> tuple[MatchResult, list[Finding], Inspection | None]:
-    """The selected method's result and, for the methods that build CBM's sets, why it failed: the
-    sets are built once and serve both the match and the diagnosis. ``peers``: the other CAVs' trials;
-    ``reuse``: what earlier runs on the same input built that the thresholds do not change."""
+         reuse: Reuse | None = None) -> tuple[MatchResult, list[Finding]]:
+    """The selected method's result and, for the methods that build CBM's sets, why it failed: CBM
+    explains the run that answered (``explain=True``), for the diagnosis and the views. ``peers``: the
+    other CAVs' trials; ``reuse``: what earlier runs on the same input built that the thresholds do not change."""
     method = METHODS[settings.method]
     if not method.explains:
-        return run_method(settings.method, trial, settings.params, frame, peers), [], None
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse)
-    result = inspection.match()
-    return result, diagnose(result, trial, inspection), inspection
+        return run_method(settings.method, trial, settings.params, frame, peers), []
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse=reuse,
+                   explain=True)
+    return result, diagnose(result, trial, result.explanation)
 
 
 def _map_segments(sequence: Sequence) -> dict[str, np.ndarray]:

@@ -2,10 +2,10 @@
 
 numba compiles CBM's kernels on their first call, which takes seconds on a fresh install, and keeps
 them in its on-disk cache. At server start ``prepare`` compiles them in two subprocesses at once
-(``cbm.warmup.compile_side_by_side``; the compiler is mostly Python: in a thread it would hold
+(``cbm.compile_side_by_side``; the compiler is mostly Python: in a thread it would hold
 this process's interpreter lock and stall the server) while the dataset loads, then loads the
 cached kernels into this process with one small match. Until then a recompute of a small frame
-runs CBM interpreted (``running``: ``cbm.engine.interpreted``, the same results without the compiler) and a
+runs CBM interpreted (``running``: ``cbm.interpreted``, the same results without the compiler) and a
 large one waits for ``ready``; the time spent compiling is reported on its own, never as CBM's time.
 """
 from __future__ import annotations
@@ -18,8 +18,15 @@ import time
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 
-from cbm.engine.interpreted import LOCK, guard_compiles, interpreted
-from cbm.warmup import VARIANTS, CompileFailed, compile_side_by_side, in_cache, warm_up
+from cbm import (
+    COMPILE_LOCK,
+    CompileFailed,
+    compile_side_by_side,
+    guard_compiles,
+    interpreted,
+    kernels_cached,
+    load_kernels,
+)
 
 COMPILED_AFTER = 1.0
 """Seconds of compiling above which the kernels were compiled (a warm cache loads in a fraction of one)."""
@@ -36,7 +43,7 @@ class Kernels:
     def __init__(self) -> None:
         self.started = time.monotonic()
         guard_compiles()
-        self.cached = in_cache()
+        self.cached = kernels_cached()
         """The kernels were in numba's cache at start: loading them here takes a fraction of a second."""
         self.compile_seconds: float | None = None
         """Seconds the subprocesses took to fill the cache (None until they finished or if one failed)."""
@@ -61,7 +68,7 @@ class Kernels:
         """CBM within the block runs compiled once the kernels are ready; until then interpreted
         (yields True), one block at a time, and never while this process loads them."""
         if not self.ready:
-            with LOCK:
+            with COMPILE_LOCK:
                 if not self.ready:
                     with interpreted():
                         yield True
@@ -70,7 +77,7 @@ class Kernels:
 
     def when_ready(self, callback: Callable[[], None]) -> None:
         """Call ``callback`` once the kernels are ready (at once if they are)."""
-        with LOCK:
+        with COMPILE_LOCK:
             if not self.ready:
                 self._waiting.append(callback)
                 return
@@ -108,10 +115,10 @@ class Kernels:
         compile them here, when a subprocess failed); ready in any case, so that a broken kernel fails the recompute
         that calls it, with its own error, rather than making it wait forever."""
         self.compile_seconds = None if self.cached else self._compile_in_subprocess()
-        with LOCK:
+        with COMPILE_LOCK:
             try:
                 started = time.perf_counter()
-                warm_up(VARIANTS[:1])
+                load_kernels()
                 self.load_seconds = time.perf_counter() - started
             finally:
                 self._ready.set()

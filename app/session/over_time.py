@@ -14,10 +14,8 @@ import threading
 from collections.abc import Callable
 from dataclasses import dataclass, field
 
-from cbm import match
+from cbm import MatchResult, SequenceCalibrator, match
 from cbm.methods import METHODS
-from cbm.result import MatchResult
-from cbm.sequence import SequenceCalibrator
 from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.trials import NoTrial
 

@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from cbm.engine.threads import Cancelled
+from cbm import Cancelled
 from cbm.methods import METHODS
 from evaluation.ap import pooled_ap
 from evaluation.fusion import decoded

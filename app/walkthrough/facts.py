@@ -1,6 +1,6 @@
-"""What the walkthrough explains, gathered once per outcome: CBM's sets (``cbm.inspect``), the pair
-it follows, that pair's way through eq. 8-13, the robust fit of CBM's own pairs (eq. 14-15) and
-the result after the guided re-association (step 7b)."""
+"""What the walkthrough explains, gathered once per outcome: CBM's run and its explanation
+(``cbm.Explanation``), the pair it follows, that pair's way through eq. 9-14, the robust fit of
+CBM's own pairs (eq. 15-16) and the result after the guided re-association (step 7b, beyond the paper)."""
 from __future__ import annotations
 
 import math
@@ -8,13 +8,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from cbm import se2
-from cbm.estimate import Fit
-from cbm.inspect import AnchorDetail, Inspection
-from cbm.methods import METHODS
-from cbm.params import CBMParams
-from cbm.pipeline import estimate
-from cbm.result import MatchResult
+from cbm import AnchorDetail, CBMParams, Explanation, Fit, MatchResult, se2
 from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import Trial
 
@@ -26,16 +20,23 @@ class Facts:
     """One outcome as the walkthrough tells it: CBM's run on the outcome's trial."""
 
     outcome: Outcome
-    inspection: Inspection
     result: MatchResult
-    """CBM's result: the outcome's own when its method is CBM, else CBM run on the same sets."""
+    """CBM's result: the outcome's own when its method is CBM, else CBM run on the same trial."""
     metrics: TrialMetrics
     pair: tuple[int, int] | None
     """(ego index, CAV index) followed: the winning anchor, else the first true pair."""
     detail: AnchorDetail | None
-    """``pair`` through eq. 8-13."""
-    fit: Fit | None
-    """The robust fit of eq. 14 on CBM's own pairs (None when fewer than 2)."""
+    """``pair`` through eq. 9-14."""
+
+    @property
+    def explanation(self) -> Explanation:
+        """CBM's sets, fit and selection of the very run that gave ``result``."""
+        return self.result.explanation
+
+    @property
+    def fit(self) -> Fit | None:
+        """The robust fit of eq. 15 on CBM's own pairs (None when fewer than 2)."""
+        return self.explanation.fit
 
     @property
     def trial(self) -> Trial:
@@ -43,26 +44,26 @@ class Facts:
 
     @property
     def params(self) -> CBMParams:
-        return self.inspection.sets.params
+        return self.explanation.params
 
     @property
     def ego_xy(self) -> np.ndarray:
-        return self.inspection.sets.ego_xy
+        return self.explanation.sets.ego_xy
 
     @property
     def cav_xy(self) -> np.ndarray:
-        """CAV centres where the wrong pose ``init`` puts them (step 1)."""
-        return self.inspection.sets.cav_xy
+        """CAV centres where the wrong pose ``init`` puts them (step 1, eq. 5)."""
+        return self.explanation.sets.cav_xy
 
     @property
     def own_pairs(self) -> np.ndarray:
-        """CBM's own pairs (eq. 13), before the re-association."""
+        """CBM's own pairs (eq. 14), before the re-association."""
         own = self.result.context_pairs
         return (self.result.pairs if own is None else own).reshape(-1, 2)
 
     @property
     def fit_pose(self) -> np.ndarray:
-        """CAV->ego pose after the robust fit of CBM's own pairs (eq. 15), before step 7b."""
+        """CAV->ego pose after the robust fit of CBM's own pairs (eq. 16), before step 7b."""
         return self.result.init if self.fit is None else self.fit.transform @ self.result.init
 
     def is_anchor(self) -> bool:
@@ -97,15 +98,12 @@ def followed_pair(result: MatchResult, gt_pairs: np.ndarray, n_ego: int, n_cav: 
 
 
 def gather(outcome: Outcome) -> Facts:
-    """The facts of ``outcome``: CBM's sets with the tab's thresholds, reused, not recomputed otherwise."""
-    inspection = outcome.inspection()
-    own = METHODS[outcome.settings.method].explains
-    result = outcome.result if own else inspection.match()
+    """The facts of ``outcome``: CBM's run with the tab's thresholds and its explanation (the
+    outcome's own run when its method is CBM), nothing computed a second time."""
+    result = outcome.cbm()
+    own = result is outcome.result
     metrics = outcome.metrics if own else evaluate(result, outcome.trial)
     trial = outcome.trial
     pair = followed_pair(result, trial.gt_pairs, len(trial.ego_boxes), len(trial.cav_boxes))
-    detail = inspection.anchor(*pair) if pair is not None else None
-    pairs = (result.pairs if result.context_pairs is None else result.context_pairs).reshape(-1, 2)
-    sets = inspection.sets
-    fit = estimate(sets.cav_xy[pairs[:, 1]], sets.ego_xy[pairs[:, 0]], sets.params) if len(pairs) >= 2 else None
-    return Facts(outcome, inspection, result, metrics, pair, detail, fit)
+    detail = result.explanation.anchor(*pair) if pair is not None else None
+    return Facts(outcome, result, metrics, pair, detail)

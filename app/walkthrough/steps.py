@@ -141,8 +141,8 @@ def context_vectors(facts: Facts) -> Step:
     if facts.pair is None:
         return _no_pair(facts, 1)
     i, j = facts.pair
-    ego_members, _ = facts.inspection.context("ego", i)
-    cav_members, _ = facts.inspection.context("cav", j)
+    ego_members, _ = facts.explanation.context("ego", i)
+    cav_members, _ = facts.explanation.context("cav", j)
     same = ("the same object" if (i, j) in facts.truth() else
             "two different objects (an anchor need not be a true pair: its set's other pairs count)")
     text = (f"The pair followed, {'the winning anchor' if facts.is_anchor() else 'a true pair'}, is {same}. "
@@ -161,10 +161,10 @@ def local_matching(facts: Facts) -> Step:
     if facts.pair is None:
         return _no_pair(facts, 2)
     i, j = facts.pair
-    inspection, params, detail = facts.inspection, facts.params, facts.detail
-    ego_members, ego_vectors = inspection.context("ego", i)
-    cav_members, cav_vectors = inspection.context("cav", j, against=i)
-    origin, heading = facts.ego_xy[i], float(inspection.sets.ego_heading[i])
+    explanation, params, detail = facts.explanation, facts.params, facts.detail
+    ego_members, ego_vectors = explanation.context("ego", i)
+    cav_members, cav_vectors = explanation.context("cav", j, against=i)
+    origin, heading = facts.ego_xy[i], float(explanation.sets.ego_heading[i])
     placed = lambda segments, z=planes.LINES: shapes.to_scene(segments, origin, heading, z)  # noqa: E731
     others = detail.candidates[(detail.candidates[:, 0] != i) | (detail.candidates[:, 1] != j)]
     ego_hit, cav_hit = np.isin(ego_members, others[:, 0]), np.isin(cav_members, others[:, 1])

@@ -2,7 +2,7 @@
 edit recomputes only the join and what follows it, and only the join's pass the edit changed.
 
 ``EditCache`` wraps local matching from outside: per input (the boxes, the initial pose and the
-heading mode) it keeps steps 1-3 (``cbm.context.Prepared``), the join's grids and both agents'
+heading mode) it keeps steps 1-3 (``cbm.engine.context.Prepared``), the join's grids and both agents'
 sorted blocks, and each result keyed by exactly the thresholds it depends on: card(L_ij) by
 (sigma1, sigma2), the voting sets by (sigma1, sigma3). So a sigma2 edit counts without listing
 the votes, a sigma3 edit lists the votes without counting, a sigma1 edit does both. Two caches
@@ -22,8 +22,8 @@ from typing import Generic, TypeVar
 
 import numpy as np
 
-from ..context import Prepared, prepare
 from .candidates import SortedBlocks
+from .context import Prepared, prepare
 from .counting import counts_and_votes
 from .distances import HEADROOM, Distances, counted, distances_within
 from .join import Grids

@@ -10,7 +10,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..context import Context
+from .context import Context
 from .grid import MARGIN, accepts
 from .threads import check_stop
 

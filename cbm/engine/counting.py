@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..context import Prepared
+from .context import Prepared
 from .join import Grids, VoteRows, run_join
 from .voting import PairSets, voted_by_member
 

@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from ..context import Prepared
 from . import tuning
+from .context import Prepared
 from .grid import group_signs, heading_groups, l1_and_angle, window
 from .join import ANCHORS_PER_CHUNK, EgoVectors, Grids, by_column, grown, widest_column
 from .threads import check_stop, parts, shared_out, stop_flag

@@ -14,7 +14,7 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..context import Context
+from .context import Context
 from .threads import check_stop, stop_flag
 
 CELLS_PER_RADIUS = 3

@@ -5,13 +5,13 @@ step 6's selection) is a Python function under ``@numba.njit``; numba keeps the 
 dispatcher's ``py_func``. Inside ``interpreted()`` each module of ``cbm`` names the original instead
 of the dispatcher, so ``match`` runs every step in the interpreter, on the same arrays and in the
 same order: the same pairs and transform, compiled or not, at no compile cost. It takes tenths of
-a second on a frame of 30-50 objects per agent (``SMALL``), against the seconds numba takes to
+a second on a frame of 30-50 objects per agent (``INTERPRETED_UP_TO``), against the seconds numba takes to
 compile the kernels on a fresh install; a server answers its first frames this way while the
 kernels compile in the background (``app.session.kernels``).
 
-Only one ``interpreted()`` block runs at a time (``LOCK``), and numba compiles (or loads from its
+Only one ``interpreted()`` block runs at a time (``COMPILE_LOCK``), and numba compiles (or loads from its
 cache) none of the kernels while one runs: it would read the swapped names. ``guard_compiles``
-makes every kernel's compile take ``LOCK`` (a compiled kernel never compiles again, so only the
+makes every kernel's compile take ``COMPILE_LOCK`` (a compiled kernel never compiles again, so only the
 first calls pay for it); ``interpreted()`` calls it, and so should whoever may compile in another
 thread before the first block.
 """
@@ -25,10 +25,10 @@ from functools import wraps
 
 from numba.core.registry import CPUDispatcher
 
-SMALL = 150
+INTERPRETED_UP_TO = 150
 """Objects per agent up to which the interpreted path is quick enough for a first frame (<1 s)."""
 
-LOCK = threading.RLock()
+COMPILE_LOCK = threading.RLock()
 """Held by an ``interpreted()`` block, and by whoever loads or compiles the kernels meanwhile."""
 
 
@@ -45,7 +45,7 @@ def kernels() -> list[tuple[object, str, CPUDispatcher]]:
 
 
 def guard_compiles() -> None:
-    """Every loaded kernel compiles (or loads from the cache) holding ``LOCK``, never during an
+    """Every loaded kernel compiles (or loads from the cache) holding ``COMPILE_LOCK``, never during an
     ``interpreted()`` block of another thread."""
     for _, _, dispatcher in kernels():
         if not getattr(dispatcher.compile, "guarded", False):
@@ -53,10 +53,10 @@ def guard_compiles() -> None:
 
 
 def _locked(compile_: Callable) -> Callable:
-    """``compile_`` holding ``LOCK``."""
+    """``compile_`` holding ``COMPILE_LOCK``."""
     @wraps(compile_)
     def compile_holding_the_lock(*args, **kwargs):
-        with LOCK:
+        with COMPILE_LOCK:
             return compile_(*args, **kwargs)
 
     compile_holding_the_lock.guarded = True
@@ -67,7 +67,7 @@ def _locked(compile_: Callable) -> Callable:
 def interpreted() -> Iterator[None]:
     """Within the block, ``cbm.match`` runs its kernels' plain Python functions (nothing compiles)."""
     guard_compiles()
-    with LOCK:
+    with COMPILE_LOCK:
         swapped = kernels()
         try:
             for module, attribute, dispatcher in swapped:

@@ -16,8 +16,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from ..context import Context, Prepared
 from . import tuning
+from .context import Context, Prepared
 from .grid import VectorGrid, build_grid, column, group_signs, heading_groups, l1_and_angle, window
 from .threads import TRIM_FROM, check_stop, shared_out, stop_flag, trim_freed
 

@@ -21,9 +21,9 @@ from typing import NamedTuple, TypeVar
 import numba
 import numpy as np
 
-from ..context import Prepared
 from . import tuning
 from .candidates import Lookup, SortedBlocks, members_into, members_room, sorted_blocks
+from .context import Prepared
 from .threads import parts, shared_out
 
 T = TypeVar("T")

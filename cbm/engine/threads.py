@@ -20,7 +20,7 @@ from typing import TypeVar
 import numpy as np
 
 from . import tuning
-from .interpreted import LOCK
+from .interpreted import COMPILE_LOCK
 
 T = TypeVar("T")
 
@@ -59,9 +59,10 @@ def stoppable(should_stop: Callable[[], bool]) -> Iterator[None]:
     ``stop_flag()``, read between chunks of a few milliseconds of work: a watcher thread asks
     ``should_stop()`` every ``WATCH_EVERY`` seconds while the block runs and sets the flag when
     it says so; a kernel then returns early, and its caller raises ``Cancelled`` before anything
-    reads what it returned (``check_stop``)."""
+    reads what it returned (``check_stop``). Inside another such block, either one's question stops it."""
     outer = getattr(_inside, "stop", None)
-    abandon, done = _Abandon(should_stop, np.zeros(1, np.uint8)), threading.Event()
+    asked = should_stop if outer is None else lambda: should_stop() or outer.asked()
+    abandon, done = _Abandon(asked, np.zeros(1, np.uint8)), threading.Event()
     _inside.stop = abandon
     watcher = threading.Thread(target=_watch, args=(abandon, done), name="cbm-stop-watcher", daemon=True)
     watcher.start()
@@ -107,12 +108,12 @@ def shared_out(tasks: Sequence[Callable[[], T]]) -> list[T]:
     """Every task's result, in the tasks' order. Up to ``tuning.THREADS`` threads (the calling one
     and the pool's) each take the next task not yet taken until none is left, so a long task never
     holds up the ones behind it. One task, one thread, a call from inside a task, or a caller that
-    holds the compile lock (``interpreted.LOCK``: a pool thread would wait on it to compile a
+    holds the compile lock (``interpreted.COMPILE_LOCK``: a pool thread would wait on it to compile a
     kernel) runs them all on the calling thread. An exception of a task is raised here once every
     thread has stopped."""
     workers = min(tuning.THREADS, len(tasks))
     abandon = getattr(_inside, "stop", None)
-    if workers <= 1 or getattr(_inside, "task", False) or LOCK._is_owned():
+    if workers <= 1 or getattr(_inside, "task", False) or COMPILE_LOCK._is_owned():
         return [_checked(task, abandon) for task in tasks]
     results: list = [None] * len(tasks)
     indices = iter(range(len(tasks)))

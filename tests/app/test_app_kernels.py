@@ -33,7 +33,7 @@ def test_warm_up_calls_match_once_per_variant() -> None:
 def test_the_kernels_get_ready_when_the_subprocess_cannot_run(monkeypatch: pytest.MonkeyPatch,
                                                               tmp_path: Path) -> None:
     monkeypatch.setattr(sys, "executable", str(tmp_path / "no-such-python"))
-    monkeypatch.setattr(kernels_module, "in_cache", lambda: False)
+    monkeypatch.setattr(kernels_module, "kernels_cached", lambda: False)
     kernels = Kernels()
     assert kernels.wait(timeout=300)
     assert kernels.compile_seconds is None and kernels.load_seconds is not None
@@ -44,7 +44,7 @@ def test_a_frame_runs_interpreted_while_the_kernels_compile(monkeypatch: pytest.
     ends the waiting callbacks run and CBM runs compiled."""
     release, called = threading.Event(), []
     monkeypatch.setattr(kernels_module, "compile_side_by_side", lambda *args, **kwargs: release.wait(60) and 0.0)
-    monkeypatch.setattr(kernels_module, "in_cache", lambda: False)
+    monkeypatch.setattr(kernels_module, "kernels_cached", lambda: False)
     kernels = Kernels()
     ego, cav, init = scene()
     expected = match(ego, cav, init, CBMParams())
@@ -61,9 +61,9 @@ def test_a_frame_runs_interpreted_while_the_kernels_compile(monkeypatch: pytest.
 
 
 def test_the_cache_is_found_filled_or_empty(tmp_path: Path) -> None:
-    """``in_cache`` in a new process: False on an empty cache, True once ``--part`` filled both halves."""
+    """``kernels_cached`` in a new process: False on an empty cache, True once ``--part`` filled both halves."""
     env = {"NUMBA_CACHE_DIR": str(tmp_path), "PATH": "/usr/bin:/bin"}
-    asked = [sys.executable, "-c", "from cbm.warmup import in_cache; print(in_cache())"]
+    asked = [sys.executable, "-c", "from cbm.warmup import kernels_cached; print(kernels_cached())"]
     before = subprocess.run(asked, cwd=REPO, env=env, capture_output=True, text=True, check=True).stdout.split()
     for part in ("matching", "selection"):
         subprocess.run([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=REPO, env=env, check=True,

@@ -41,7 +41,7 @@ def test_the_winning_anchor_is_drawn_and_explained(small_explorer: Explorer) -> 
     assert lines["inspector_ego_vectors"] == n_ego and lines["inspector_cav_vectors"] == n_cav
     assert lines["inspector_ego_bands"] == n_ego * (2 + inspector.ARC_SEGMENTS)
     assert lines["inspector_ego_regions"] == 4 * n_ego and lines["inspector_cav_regions"] == 4 * n_cav
-    detail = outcome.inspection().anchor(i, j)
+    detail = outcome.cbm().explanation.anchor(i, j)
     assert lines["inspector_ego_kept"] > 0
     assert f"L_ij holds {len(detail.candidates)} pairs" in shown.markdown
     rows = zip(detail.candidates.tolist()[:5], detail.votes.tolist(), detail.kept_by_consensus.tolist())

@@ -58,5 +58,7 @@ def test_the_drawn_fused_boxes_are_the_outcomes(small_explorer: Explorer) -> Non
 
 def test_cbm_sets_are_the_ones_the_method_built(small_explorer: Explorer) -> None:
     outcome = small_explorer.compute(Settings(frame=3))
-    assert outcome.inspection() is outcome.inspection()
-    assert np.array_equal(outcome.inspection().match().pairs, outcome.result.pairs)
+    assert outcome.cbm() is outcome.result, "the method is CBM: its own run explains it, nothing runs twice"
+    assert outcome.result.explanation is not None
+    baseline = small_explorer.compute(Settings(frame=3, method="icp"))
+    assert baseline.cbm() is baseline.cbm() and baseline.cbm().explanation is not None

@@ -61,5 +61,5 @@ def test_one_pair_is_one_pair(small_explorer: Explorer) -> None:
     assert " 1 pairs" not in shown.markdown
     result = dataclasses.replace(outcome.result, consensus_count=1)
     assert "with 1 pair." in inspector._markdown(dataclasses.replace(outcome, result=result), *map(
-        int, outcome.result.anchor), outcome.inspection().anchor(*map(int, outcome.result.anchor)),
-        outcome.inspection().sets.params)
+        int, outcome.result.anchor), outcome.cbm().explanation.anchor(*map(int, outcome.result.anchor)),
+        outcome.cbm().explanation.params)

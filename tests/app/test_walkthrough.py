@@ -60,7 +60,7 @@ def test_local_matching_draws_one_wedge_and_diamond(outcome: Outcome) -> None:
     facts = gather(outcome)
     origin = facts.ego_xy[facts.pair[0]]
     assert np.allclose(step.lines["ego_vectors"].segments[:, 0, :2], origin, atol=1e-4)
-    members, _ = facts.inspection.context("ego", facts.pair[0])
+    members, _ = facts.explanation.context("ego", facts.pair[0])
     assert np.allclose(step.lines["ego_vectors"].segments[:, 1, :2], facts.ego_xy[members], atol=1e-3)
 
 

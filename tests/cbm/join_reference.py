@@ -53,7 +53,8 @@ def cases() -> Iterator[tuple[str, np.ndarray, np.ndarray, np.ndarray, dict]]:
 def outcome(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, keywords: dict) -> dict[str, np.ndarray]:
     """What is stored of one join: digest, size and sum of the counts and of the sorted voting keys."""
     from cbm import CBMParams
-    from cbm.pipeline import build_sets, checked_inputs
+    from cbm.pipeline import checked_inputs
+    from cbm.sets import build_sets
 
     ego, cav, init, params = checked_inputs(ego, cav, init, CBMParams(**keywords))
     sets = build_sets(ego, cav, init, params)

@@ -4,13 +4,12 @@ sigma2 again, and its results stay those of a fresh match."""
 import numpy as np
 import pytest
 
-from cbm import CBMParams
-from cbm.context import prepare
+from cbm import CBMParams, match
 from cbm.engine import EditCache, Reuse, listing
 from cbm.engine.cache import Keyed
 from cbm.engine.candidates import members_into, members_room
+from cbm.engine.context import prepare
 from cbm.engine.listing import NO_LISTING, listed_into
-from cbm.pipeline import build_sets, checked_inputs, match_sets
 
 from .join_reference import NOISE, layouts
 
@@ -44,9 +43,8 @@ def trial(layout: str, seed: int):
 
 def outcome(t, params: CBMParams, reuse: Reuse | None) -> dict:
     """The match of ``t`` under ``params``, its candidate counts and its voting sets (each as a set)."""
-    ego, cav, init, params = checked_inputs(t.ego_boxes, t.cav_boxes, t.init, params)
-    sets = build_sets(ego, cav, init, params, reuse=reuse)
-    result = match_sets(sets, init)
+    result = match(t.ego_boxes, t.cav_boxes, t.init, params, reuse=reuse, explain=True)
+    sets = result.explanation.sets
     voted_by, n_pairs = sets.voted_by, len(sets.candidates.count)
     owner = np.repeat(np.arange(n_pairs), np.diff(voted_by.start))
     return dict(pairs=result.pairs, transform=result.transform, counts=sets.candidates.count,

@@ -7,9 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from cbm import CBMParams
+from cbm import CBMParams, match
 from cbm.engine import Reuse, rival, tuning
-from cbm.pipeline import build_sets, checked_inputs, match_sets_visited
 
 from .conftest import NEVER
 from .join_reference import NOISE, layouts
@@ -31,9 +30,8 @@ def trial(layout: str, seed: int = 3):
 def outcome(t, params: CBMParams, reuse: Reuse | None = None) -> dict:
     """Everything a match computed that a thread could change (the voting sets as sets: the join's
     parts may list a set's votes in another order, which no count reads)."""
-    ego, cav, init, params = checked_inputs(t.ego_boxes, t.cav_boxes, t.init, params)
-    sets = build_sets(ego, cav, init, params, reuse=reuse)
-    result, visit = match_sets_visited(sets, init)
+    result = match(t.ego_boxes, t.cav_boxes, t.init, params, reuse=reuse, explain=True)
+    sets, visit = result.explanation.sets, result.explanation.visit
     voted_by, n_pairs = sets.voted_by, len(sets.candidates.count)
     owner = np.repeat(np.arange(n_pairs), np.diff(voted_by.start))
     return dict(pairs=result.pairs, transform=result.transform, context_pairs=result.context_pairs,
@@ -99,7 +97,7 @@ def test_the_thread_count_follows_the_cpus_this_process_may_use_or_cbm_threads(m
 def test_shared_out_gives_results_in_order_and_runs_inline_where_a_pool_thread_could_wait(tuned):
     import threading
 
-    from cbm.engine.interpreted import LOCK
+    from cbm.engine.interpreted import COMPILE_LOCK as LOCK
     from cbm.engine.threads import shared_out
 
     tuned(threads=4)

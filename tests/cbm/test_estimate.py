@@ -6,15 +6,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from cbm import se2
+from cbm.engine.fitting import WELSCH_EFFICIENT_SCALE, by_centroid_distance
 from cbm.engine.interpreted import interpreted
-from cbm.estimate import (
-    WELSCH_EFFICIENT_SCALE,
-    by_centroid_distance,
-    hypothesis_pairs,
-    least_squares_fit,
-    robust_fit,
-    weighted_procrustes,
-)
+from cbm.estimate import hypothesis_pairs, least_squares_fit, robust_fit, weighted_procrustes
 
 pytestmark = pytest.mark.filterwarnings("error")
 NU_FLOOR = 0.3

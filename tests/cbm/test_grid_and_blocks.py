@@ -5,8 +5,8 @@ import math
 import numpy as np
 import pytest
 
-from cbm.context import aligned_signs, build_context
 from cbm.engine.candidates import sorted_blocks
+from cbm.engine.context import aligned_signs, build_context
 from cbm.engine.grid import build_grid
 from cbm.reference import context_vectors, pair_signs
 

@@ -106,7 +106,8 @@ def test_the_evidence_of_a_pair_falls_with_distance_and_heading_disagreement_and
 @pytest.mark.parametrize("k, pool", [(6, 64), (3, 64), (6, 400)])
 def test_the_pool_taken_from_the_visit_is_the_pool_filtered_whole(layout, seed, k, pool):
     from cbm.engine import anchor_sets, select
-    from cbm.pipeline import build_sets, checked_inputs
+    from cbm.pipeline import checked_inputs
+    from cbm.sets import build_sets
     from support.scenes import dense_scene
 
     if layout == "dense":

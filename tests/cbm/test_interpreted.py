@@ -6,7 +6,8 @@ import threading
 import numpy as np
 import pytest
 
-from cbm.engine.interpreted import LOCK, interpreted
+from cbm.engine.interpreted import COMPILE_LOCK as LOCK
+from cbm.engine.interpreted import interpreted
 
 from .match_reference import cases, outcome
 
@@ -24,7 +25,7 @@ def test_the_interpreted_path_gives_the_compiled_results(case):
 
 
 def test_the_kernels_are_restored_after_the_block():
-    from cbm import context
+    from cbm.engine import context
     kernel = context._fill_context
     with interpreted():
         assert context._fill_context is kernel.py_func
@@ -32,7 +33,7 @@ def test_the_kernels_are_restored_after_the_block():
 
 
 def test_a_kernel_compiles_only_outside_an_interpreted_block():
-    from cbm import context
+    from cbm.engine import context
     from cbm.warmup import VARIANTS, warm_up
     kernel = context._fill_context
     with interpreted():

@@ -6,8 +6,8 @@ from hypothesis import given
 from hypothesis import strategies as st
 
 from cbm import CBMParams, reference, se2
-from cbm.context import prepare
 from cbm.engine import candidate_sets
+from cbm.engine.context import prepare
 from cbm.engine.counting import counts_and_votes
 from cbm.engine.selection import by_count_descending
 from support.scenes import street_scene

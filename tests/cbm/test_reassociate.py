@@ -6,10 +6,11 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match, se2
-from cbm import reassociate as module
+from cbm.engine import assignment as module
+from cbm.engine.assignment import gated_assignment
 from cbm.engine.interpreted import interpreted
 from cbm.estimate import robust_fit
-from cbm.reassociate import MAX_ROUNDS, gated_assignment, reassociate
+from cbm.reassociate import MAX_ROUNDS, reassociate
 from evaluation.metrics import aggregate, evaluate, is_success
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene

@@ -8,7 +8,8 @@ from cbm.engine import select
 from cbm.engine.filtered import filtering
 from cbm.engine.rival import runner_up
 from cbm.engine.visit import filtered_members
-from cbm.pipeline import build_sets, checked_inputs
+from cbm.pipeline import checked_inputs
+from cbm.sets import build_sets
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
@@ -54,8 +55,8 @@ kept with the listing from the calls before."""
 
 @pytest.mark.parametrize("seed", range(6))
 def test_edits_that_read_kept_bounds_find_the_runner_up_of_a_fresh_match(seed):
+    from cbm import match
     from cbm.engine import Reuse
-    from cbm.pipeline import match_sets
 
     rng = np.random.default_rng(100 + seed)
     n = int(rng.integers(30, 60))
@@ -63,8 +64,8 @@ def test_edits_that_read_kept_bounds_find_the_runner_up_of_a_fresh_match(seed):
     trial = make_trial(world, np.arange(n), ScenarioParams(eta=0.6, sigma_p=0.3, sigma_theta=3.0, seed=seed))
     reuse = Reuse()
     for edit in EDITS:
-        ego, cav, init, params = checked_inputs(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams(**edit))
-        kept, fresh = (match_sets(build_sets(ego, cav, init, params, reuse=r), init) for r in (reuse, None))
+        kept, fresh = (match(trial.ego_boxes, trial.cav_boxes, trial.init, CBMParams(**edit), reuse=r)
+                       for r in (reuse, None))
         assert kept.runner_up_count == fresh.runner_up_count, edit
         np.testing.assert_array_equal(kept.pairs, fresh.pairs)
 

@@ -67,7 +67,7 @@ def test_cbm_stops_between_its_steps_and_answers_the_same_when_not_stopped() -> 
 def test_a_kernel_returns_at_its_next_check_once_the_flag_is_set() -> None:
     """Inside a compiled kernel the question is ``stop_flag()``: set, the join counts and lists
     nothing more (its caller then raises ``Cancelled``: the tests below)."""
-    from cbm.context import prepare
+    from cbm.engine.context import prepare
     from cbm.engine.grid import build_grid, group_signs, heading_groups
     from cbm.engine.join import EgoVectors, Test, joined
 
@@ -111,15 +111,14 @@ def test_an_edit_stopped_inside_a_kernel_leaves_the_kept_results_as_a_fresh_matc
     inside its kernels (the flag set as the join takes its grid, after every check before it; one
     thread and one heading group, so no other part asks after it), the same edit left alone answers
     as a fresh match."""
-    from cbm import CBMParams
+    from cbm import CBMParams, match
     from cbm.engine import Reuse
     from cbm.engine.join import Grids
-    from cbm.pipeline import build_sets, match_sets
 
     monkeypatch.setattr(tuning, "THREADS", 1)
     ego, cav, true = scene(200)
     reuse, params = Reuse(), CBMParams(heading="fold", **edits)
-    match_sets(build_sets(ego, cav, true, CBMParams(heading="fold"), reuse=reuse), true)
+    match(ego, cav, true, CBMParams(heading="fold"), reuse=reuse)
     grid = Grids.grid
 
     def grid_then_stop(self, *args):
@@ -129,8 +128,8 @@ def test_an_edit_stopped_inside_a_kernel_leaves_the_kept_results_as_a_fresh_matc
     with stoppable(lambda: False), monkeypatch.context() as patched:
         patched.setattr(Grids, "grid", grid_then_stop)
         with pytest.raises(Cancelled):
-            match_sets(build_sets(ego, cav, true, params, reuse=reuse), true)
-    kept = match_sets(build_sets(ego, cav, true, params, reuse=reuse), true)
+            match(ego, cav, true, params, reuse=reuse)
+    kept = match(ego, cav, true, params, reuse=reuse)
     fresh = match(ego, cav, true, params)
     np.testing.assert_array_equal(kept.pairs, fresh.pairs)
     np.testing.assert_array_equal(kept.transform, fresh.transform)

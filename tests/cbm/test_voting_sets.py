@@ -4,8 +4,8 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams
-from cbm.context import prepare
 from cbm.engine import join
+from cbm.engine.context import prepare
 from cbm.engine.counting import counts_and_votes
 from cbm.engine.voting import voted_by_member
 from cbm.warmup import scene

@@ -4,17 +4,21 @@ import dataclasses
 import numpy as np
 import pytest
 
-from cbm import CBMParams, match
-from cbm.inspect import Inspection
+from cbm import CBMParams, Explanation, match
 from evaluation.diagnosis import diagnose, pair_name, rank_against_runner_up, short_id
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 
 
+def explained(ego, cav, init, params=None) -> Explanation:
+    """CBM's explanation of its own run on the input (``match(..., explain=True)``)."""
+    return match(ego, cav, init, params, explain=True).explanation
+
+
 def codes(trial, params=None):
     params = params or CBMParams()
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-    return {f.code for f in diagnose(result, trial, Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params))}
+    return {f.code for f in diagnose(result, trial, explained(trial.ego_boxes, trial.cav_boxes, trial.init, params))}
 
 
 def trial_of(world, **scenario):
@@ -53,7 +57,7 @@ def test_single_pair_winner():
     result = match(ego, cav, np.eye(3), params)
     assert result.anchor == (0, 0) and result.consensus_count == 1 and not result.estimated
     findings = diagnose(result, make_trial(np.zeros((0, 7)), np.zeros(0), ScenarioParams()),
-                        Inspection(ego, cav, np.eye(3), params))
+                        explained(ego, cav, np.eye(3), params))
     assert "single_pair" in {f.code for f in findings}
 
 
@@ -77,7 +81,7 @@ def test_wrong_anchor_reports_both_counts():
     trial = trial_of(world, eta=0.15, sigma_p=0.8, sigma_theta=10.0, seed=0)
     params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = explained(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     findings = {f.code: f.message for f in diagnose(result, trial, inspection)}
     assert tuple(result.anchor) not in {tuple(p) for p in trial.gt_pairs.tolist()}
     right = inspection.best_anchor_among(trial.gt_pairs)
@@ -95,7 +99,7 @@ def test_a_wrong_anchor_whose_answer_is_all_right_is_no_finding():
     params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     right = dataclasses.replace(result, pairs=np.asarray(trial.gt_pairs)[:5])
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = explained(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     assert "wrong_anchor" in {f.code for f in diagnose(result, trial, inspection)}
     assert "wrong_anchor" not in {f.code for f in diagnose(right, trial, inspection)}
 
@@ -108,7 +112,7 @@ def test_messages_name_objects_by_their_ids_not_rows():
                                 cav_ids=np.array([f"c{k + 700}" for k in range(len(trial.cav_boxes))]))
     params = CBMParams(sigma2=6.0, sigma1=25.0, consensus=False)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = explained(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     message = {f.code: f.message for f in diagnose(result, trial, inspection)}["wrong_anchor"]
     i, j = result.anchor
     assert f"ego e{i + 500} ↔ CAV c{j + 700}" in message
@@ -135,8 +139,8 @@ def test_inspector_agrees_with_the_fast_path(setting):
     trial = trial_of(world, eta=0.6, sigma_p=0.3, sigma_theta=3.0, seed=9)
     params = CBMParams(**setting)
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
-    again = inspection.match()
+    again = match(trial.ego_boxes, trial.cav_boxes, trial.init, params, explain=True)
+    inspection = again.explanation
     np.testing.assert_array_equal(again.pairs, result.pairs)
     np.testing.assert_array_equal(again.transform, result.transform)
     winner = inspection.anchor(*result.anchor)
@@ -151,7 +155,7 @@ def test_context_of_a_cav_object_turns_with_its_sign():
     ego = world.copy()
     cav = world.copy()
     cav[:, 6] += np.pi
-    inspection = Inspection(ego, cav, np.eye(3), CBMParams(heading="align"))
+    inspection = explained(ego, cav, np.eye(3), CBMParams(heading="align"))
     members, ego_vectors = inspection.context("ego", 0)
     _, cav_vectors = inspection.context("cav", 0, against=0)
     np.testing.assert_allclose(cav_vectors, ego_vectors, atol=1e-9)
@@ -165,7 +169,7 @@ def test_an_inspection_is_freed_when_dropped():
     import weakref
 
     trial = make_trial(street_scene(40, np.random.default_rng(0)), np.arange(40), ScenarioParams(eta=0.6, sigma_p=0.2))
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init)
+    inspection = explained(trial.ego_boxes, trial.cav_boxes, trial.init)
     first = inspection.best_anchor_among(trial.gt_pairs)
     assert inspection.best_anchor_among(trial.gt_pairs) is first
     alive = weakref.ref(inspection)
@@ -180,7 +184,7 @@ def test_best_anchor_among_the_true_pairs_equals_explaining_each_of_them(seed, r
     world = street_scene(60, np.random.default_rng(seed))
     trial = trial_of(world, eta=0.5, sigma_p=0.6, sigma_theta=4.0, seed=seed)
     params = CBMParams(consensus_rule=rule, distance_limit=6.0)
-    inspection = Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params)
+    inspection = explained(trial.ego_boxes, trial.cav_boxes, trial.init, params)
     details = [inspection.anchor(i, j) for i, j in trial.gt_pairs]
     slowest = max(details, key=lambda d: d.size)
     assert inspection.best_anchor_among(trial.gt_pairs).anchor == slowest.anchor
@@ -196,9 +200,10 @@ def test_the_best_true_anchor_after_a_match_reuses_the_visit_and_stays_the_same(
     world = street_scene(60, np.random.default_rng(seed))
     trial = trial_of(world, eta=0.5, sigma_p=0.6, sigma_theta=4.0, seed=seed)
     params = CBMParams(consensus_rule=rule, distance_limit=limit)
-    matched, fresh = (Inspection(trial.ego_boxes, trial.cav_boxes, trial.init, params) for _ in range(2))
-    result = matched.match()
-    assert (matched._visited is not None) == (result.anchor is not None)
+    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, params, explain=True)
+    matched = result.explanation
+    fresh = Explanation(matched.sets, matched.init, matched.fit, visit=None)
+    assert (matched.visit is not None) == (result.anchor is not None)
     assert matched.best_anchor_among(trial.gt_pairs).anchor == fresh.best_anchor_among(trial.gt_pairs).anchor
     assert diagnose(result, trial, matched) == diagnose(result, trial, fresh)
     wrong = np.array([[i, (j + 1) % len(trial.cav_boxes)] for i, j in trial.gt_pairs])

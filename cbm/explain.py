@@ -1,37 +1,37 @@
-"""Explain CBM on one input: any anchor's context, candidate set, votes and filtered set.
+"""Why CBM answered as it did: any anchor's context, candidate set, votes and filtered set.
 
-``Inspection`` runs steps 1-4 once (``cbm.pipeline.build_sets``) and then explains single anchors
-with the paper's own steps (``cbm.reference``: the consensus, the one-to-one rule and the distance
-limit) on the sets the engine built, so the app shows why a pair was kept or dropped in the terms
-a reader of the reference finds there.
+``cbm.match(..., explain=True)`` hands its result an ``Explanation`` of the very run that answered:
+its sets (steps 1-4, ``cbm.sets``), the fit of its winning set and what its selection filtered. An
+anchor is explained with the paper's own steps (``cbm.reference``: the consensus, the one-to-one
+rule and the distance limit) on those sets, so the app shows why a pair was kept or dropped in the
+terms a reader of the reference finds there, and never from a second computation of the answer.
 """
 from __future__ import annotations
 
-import time
 from dataclasses import dataclass
 
 import numpy as np
 
 from . import reference
-from .engine import PairSets, Reuse, filtered_sizes
+from .engine import PairSets, Visit, filtered_sizes
 from .params import CBMParams
-from .pipeline import Sets, build_sets, checked_inputs, match_sets_visited
-from .result import MatchResult
+from .result import Fit
+from .sets import Sets
 
 
 @dataclass(frozen=True)
 class AnchorDetail:
-    """One anchor pair's way through eq. 8-13."""
+    """One anchor pair's way through eq. 9-13."""
 
     anchor: tuple[int, int]
     candidates: np.ndarray
-    """(K, 2) L_ij, the anchor pair included (eq. 8); empty when fewer than 2 pairs were accepted."""
+    """(K, 2) L_ij, the anchor pair included (eq. 9); empty when fewer than 2 pairs were accepted."""
     votes: np.ndarray
-    """(K,) votes each candidate got from the set's voters (left side of eq. 10)."""
+    """(K,) votes each candidate got from the set's voters (the sum of eq. 10)."""
     kept_by_consensus: np.ndarray
     """(K,) bool: the candidate survived the consensus rule (all True when consensus is off)."""
     final: np.ndarray
-    """(M, 2) L^(2)_ij after the one-to-one rule (eq. 11)."""
+    """(M, 2) L^(2)_ij after the one-to-one rule (eq. 12)."""
     mean_distance: float
     """Mean centre distance of the final pairs after ``init`` (NaN when empty)."""
     rejected: bool
@@ -39,7 +39,7 @@ class AnchorDetail:
 
     @property
     def size(self) -> int:
-        """What the anchor scores in eq. 12: card(L^(2)_ij), 0 when rejected."""
+        """What the anchor scores in eq. 13: card(L^(2)_ij), 0 when rejected."""
         return 0 if self.rejected else len(self.final)
 
 
@@ -55,36 +55,29 @@ def votes_from(voted_by: PairSets, members: np.ndarray, by: np.ndarray, shape: t
     return counted
 
 
-class Inspection:
-    """CBM's sets on one input, kept so that any anchor can be explained."""
+class Explanation:
+    """The sets, fit and selection of one ``cbm.match`` run, kept so that any anchor can be explained."""
 
-    def __init__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None = None,
-                 params: CBMParams | None = None, reuse: Reuse | None = None) -> None:
-        """Steps 1-4 on the input; with ``reuse``, what an earlier inspection of it built is reused."""
-        started = time.perf_counter()
-        ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, params)
-        self._timings: dict[str, float] = {}
-        self.sets: Sets = build_sets(ego, cav, init, params, self._timings, reuse)
-        self.init, self.n_cav, self._started = init, len(cav), started
+    def __init__(self, sets: Sets, init: np.ndarray, fit: Fit | None, visit: Visit | None) -> None:
+        self.sets, self.init, self.fit = sets, init, fit
+        """What the run built (steps 1-4), the ``init`` it started from, and the robust fit of its
+        winning set (eq. 15; None with fewer than two pairs)."""
+        self.n_cav = len(sets.cav_xy)
         self._anchors: dict[tuple[int, int], AnchorDetail] = {}
-        """Anchors explained so far: kept with this inspection and forgotten with it."""
-        self._visited: tuple[np.ndarray, np.ndarray] | None = None
-        """(anchors, filtered sizes) the selection's visit computed (``match``), None before."""
+        """Anchors explained so far: kept with this explanation and forgotten with it."""
+        self.visit = visit
+        """What the selection's visit filtered (eq. 13-14), None when every set was empty."""
 
-    def match(self) -> MatchResult:
-        """What ``cbm.match`` returns on the same input, from the sets already built; the filtered
-        sizes its selection computed are kept for ``best_anchor_among``."""
-        result, visit = match_sets_visited(self.sets, self.init, dict(self._timings), self._started)
-        if visit is not None:
-            self._visited = visit.order[:len(visit.sizes)], visit.sizes
-        return result
+    @property
+    def params(self) -> CBMParams:
+        return self.sets.params
 
     def _pairs(self, ids: np.ndarray) -> np.ndarray:
         return np.stack([ids // self.n_cav, ids % self.n_cav], axis=1).reshape(-1, 2)
 
     def context(self, agent: str, index: int, against: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """(neighbour indices, (n - 1, 2) context vectors) of one object in its own local frame
-        (eq. 5-6, ``cbm.reference.context_vectors``). For a CAV object compared ``against`` an ego
+        (eq. 6-7, ``cbm.reference.context_vectors``). For a CAV object compared ``against`` an ego
         object, the frame as CBM turns it (step 2)."""
         sets = self.sets
         xy, heading = (sets.ego_xy, sets.ego_heading) if agent == "ego" else (sets.cav_xy, sets.cav_heading)
@@ -101,7 +94,7 @@ class Inspection:
         return self._anchors[key]
 
     def _explain(self, i: int, j: int) -> AnchorDetail:
-        """Anchor (i, j) through the reference's eq. 10-12, on the engine's candidate and voting sets."""
+        """Anchor (i, j) through the reference's eq. 10-12, on the run's candidate and voting sets."""
         sets = self.sets
         shape = sets.signs.shape
         members = sets.candidates.members(i * self.n_cav + j)
@@ -138,7 +131,8 @@ class Inspection:
         card(L_ij) is below the largest size taken (filtering never grows a set: it cannot be the
         largest), which gets -1."""
         sets = self.sets
-        taken = {} if self._visited is None else dict(zip(*(values.tolist() for values in self._visited)))
+        visit = self.visit
+        taken = {} if visit is None else dict(zip(visit.order[:len(visit.sizes)].tolist(), visit.sizes.tolist()))
         sizes = np.array([taken.get(anchor, -1) for anchor in anchors.tolist()], np.int64)
         unknown = (sizes < 0) & (sets.candidates.count[anchors] >= sizes.max(initial=0))
         sizes[unknown] = filtered_sizes(anchors[unknown], sets.candidates, sets.voted_by, sets.rule, sets.ego_xy,

@@ -9,8 +9,8 @@ from typing import NamedTuple
 import numba
 import numpy as np
 
-from . import se2
-from .reference import fold_heading, pair_signs
+from .. import se2
+from ..reference import fold_heading, pair_signs
 
 
 class Context(NamedTuple):
