@@ -5,7 +5,7 @@ clutter (missed detections and false boxes), and drift-heavy, drift-clutter and 
 localization error that drifts like GNSS); see ``evaluation.conditions``.
 
 Methods: the released code's CBM (headings folded, least-squares fit, no re-association), CBM as
-published (eq. 14 fit, no re-association), CBM with this project's defaults, CBM over time (the
+published (eq. 15 fit, no re-association), CBM with this project's defaults, CBM over time (the
 frames of each sequence in time order, ``cbm.SequenceCalibrator``), and the oracle (least squares
 on the true pairs, per frame); ``--others`` adds ICP, RICP, VIPS and none, and the prior-free methods:
 CBM without a prior (``cbm.prior_free``), V2X-Reg++ and FreeAlign, which use no ``init``; condition
@@ -48,7 +48,7 @@ DATASETS = {
 """Dataset groups: (name, frames) of each sequence in the group (None: the ``--frames`` option)."""
 CBM_VARIANTS = {
     "CBM, released code + least squares": {"heading": "fold", "estimator": "least_squares", "refine": False},
-    "CBM as published (eq. 14, no refinement)": {"heading": "align", "estimator": "welsch", "refine": False},
+    "CBM as published (eq. 15, no refinement)": {"heading": "align", "estimator": "welsch", "refine": False},
     "CBM, our defaults": {"heading": "align", "estimator": "welsch", "refine": True},
 }
 OVER_TIME = {"cbm-time": "CBM over time (our defaults)"}

@@ -1,4 +1,4 @@
-"""The floor of the exact count: a bare kernel that only counts the quadruples eq. 7 accepts.
+"""The floor of the exact count: a bare kernel that only counts the quadruples eq. 8 accepts.
 
 It reads the same grids the join reads (``cbm.engine.grid.build_grid``, built beforehand and not
 timed), visits each ego context vector's cells in one tight loop and adds 1 per accepted quadruple
@@ -24,7 +24,7 @@ from cbm.reference import fold_heading, pair_signs
 
 @numba.njit(cache=True, nogil=True)
 def _count(ego_ids, ego_vectors, per_anchor, signs, grid, cos2_sigma1, radius):
-    """Accepted quadruples (eq. 7) of the ego objects ``ego_ids`` against one grid."""
+    """Accepted quadruples (eq. 8) of the ego objects ``ego_ids`` against one grid."""
     u0, v0, cell, nx, ny = grid.cells
     start, gx, gy, g_anchor, g_check = grid.start, grid.x, grid.y, grid.anchor, grid.check
     total = 0

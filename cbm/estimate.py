@@ -1,6 +1,6 @@
-"""Transform estimation from matched centres (paper eq. 14-15).
+"""Transform estimation from matched centres (paper eq. 15-16).
 
-The robust loss psi of eq. 14 is Welsch's, ``1 - exp(-r^2 / (2 nu^2))``, minimised as in "Fast and
+The robust loss psi of eq. 15 is Welsch's, ``1 - exp(-r^2 / (2 nu^2))``, minimised as in "Fast and
 Robust Iterative Closest Point" (Zhang, Yao, Deng, TPAMI 2022) with the correspondences fixed:
 iteratively reweighted weighted Procrustes, started from a least-median fit and run at a scale nu
 that follows the noise the residuals show (``robust_fit``).
@@ -83,7 +83,7 @@ def readmit_bounds(most: int) -> np.ndarray:
 
 
 def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
-    """Robust SE(2) fit of eq. 14 with Welsch weights and a scale that follows the data (>= 2 pairs).
+    """Robust SE(2) fit of eq. 15 with Welsch weights and a scale that follows the data (>= 2 pairs).
 
     1. Single out wrong pairs where fewer than half of them can pull (from ``MIN_TO_REJECT``
        pairs on): the least-median fit and its scale sigma_0 (``gated_inliers``,
@@ -92,7 +92,7 @@ def robust_fit(src: np.ndarray, dst: np.ndarray, nu_floor: float) -> Fit:
        (``inlier_sigma``, never below ``nu_floor / c``) -- Rousseeuw and Leroy's reweighted least
        squares (1987, ch. 5); a pair left out comes back when it lies within ``readmit_bounds``
        sigma of that fit (few inliers know their noise only roughly), then the fit is repeated.
-    3. Minimise eq. 14 by iteratively reweighted Procrustes (the majorise-minimise step of Zhang,
+    3. Minimise eq. 15 by iteratively reweighted Procrustes (the majorise-minimise step of Zhang,
        Yao, Deng, TPAMI 2022) at nu = c sigma, ``c = WELSCH_EFFICIENT_SCALE``: Holland and Welsch's
        95 %-efficiency constant.
 

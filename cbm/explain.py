@@ -66,7 +66,7 @@ class Explanation:
         self._anchors: dict[tuple[int, int], AnchorDetail] = {}
         """Anchors explained so far: kept with this explanation and forgotten with it."""
         self.visit = visit
-        """What the selection's visit filtered (eq. 13-14), None when every set was empty."""
+        """What the selection's visit filtered (eq. 13), None when every set was empty."""
 
     @property
     def params(self) -> CBMParams:

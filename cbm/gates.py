@@ -2,7 +2,7 @@
 object may lie, read from the scene itself rather than fixed.
 
 The scale is the pairs' own: the residuals' per-axis std-dev (``scene_sigma``), read from pairs the
-robust fit (eq. 14) and the gate have already cleaned, never below the least detection noise
+robust fit (eq. 15) and the gate have already cleaned, never below the least detection noise
 assumed; the heading noise likewise (``heading_sigma``). A pair is then weighed against
 coincidence: a CAV box lies within distance d of an ego box by chance with probability about
 ``lambda * pi d^2`` (``lambda`` the boxes' density, ``clutter_density``) and its heading axis at a

@@ -2,10 +2,10 @@
 the one that explains the scene best kept, as RANSAC-style verification does in registration.
 
 Eq. 13 keeps one anchor; under heavy noise its set can be a coincidence, and nothing checks it.
-So the ``HYPOTHESES`` anchors with the largest filtered sets (eq. 12; among the ``POOL`` largest
+So the ``HYPOTHESES`` anchors with the largest filtered sets (eq. 12-13; among the ``POOL`` largest
 candidate sets, the eq. 13 winner always first) are each
 
-1. fitted robustly (eq. 14, ``cbm.estimate.robust_fit``); the eq. 13 winner is also re-associated
+1. fitted robustly (eq. 15, ``cbm.estimate.robust_fit``); the eq. 13 winner is also re-associated
    as without verification (``cbm.reassociate``);
 2. re-associated once more under the noise-aware gate (``cbm.gates``): a one-to-one assignment
    (``cbm.reassociate.gated_assignment``) inside 3 sigma, sigma read from the pairs' residuals,
@@ -134,7 +134,7 @@ def score(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, T: np.ndarray, si
 
 
 def least_squares(ego: np.ndarray, cav: np.ndarray, pairs: np.ndarray, floor: float) -> tuple[np.ndarray, float]:
-    """The least-squares correction of ``pairs`` (eq. 14 with every weight 1: the efficient fit once
+    """The least-squares correction of ``pairs`` (eq. 15 with every weight 1: the efficient fit once
     the gate has cleaned them) and the noise sigma of its residuals (``cbm.gates.scene_sigma``)."""
     src, dst = cav[pairs[:, 1], :2], ego[pairs[:, 0], :2]
     T = weighted_procrustes(src, dst)

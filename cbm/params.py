@@ -32,25 +32,25 @@ class CBMParams:
     """
 
     sigma1: float = 10.0
-    """Degrees. Largest angle between two context vectors that still match (eq. 7, first term)."""
+    """Degrees. Largest angle between two context vectors that still match (eq. 8, first term)."""
     sigma2: float = 3.0
-    """Metres. Largest L1 distance between two context vectors that still match (eq. 7, second term)."""
+    """Metres. Largest L1 distance between two context vectors that still match (eq. 8, second term)."""
     sigma3: float = 1.0
     """Metres. L1 distance for the voting sets of the global consensus (with the paper's rule,
-    sigma3 = sigma2 makes eq. 10 exact)."""
+    sigma3 = sigma2 makes eq. 10 exact; sigma3 itself is the released code's, beyond the paper)."""
     distance_limit: float = 20.0
     """Metres. An anchor whose pairs are on average farther apart than this after ``init`` is rejected;
     ``math.inf``: no limit (CBM without a prior, ``cbm.prior_free``)."""
     consensus: bool = True
-    """Global consensus (eq. 9-10) on or off (off is the paper's ablation)."""
+    """Global consensus (eq. 10-11) on or off (off is the paper's ablation)."""
     consensus_rule: ConsensusRule = "released"
-    """``paper``: eq. 9-10, every candidate needs another member's vote. ``released``: the authors'
+    """``paper``: eq. 10-11, every candidate needs another member's vote. ``released``: the authors'
     code, only candidates sharing a row or column of their set need a vote (see ``cbm.reference.consensus``)."""
     heading: HeadingMode = "align"
     """``fold``: fold every heading into (-pi/2, pi/2] (released code). ``align``: turn each CAV
     object's heading by pi where that brings it closer to the ego object it is compared with."""
     estimator: Estimator = "welsch"
-    """Pose estimate from the pairs: ``welsch`` the robust fit of eq. 14, ``least_squares`` the
+    """Pose estimate from the pairs: ``welsch`` the robust fit of eq. 15, ``least_squares`` the
     released code's SVD fit."""
     welsch_floor: float = 0.3
     """Metres. Smallest Welsch scale nu of the robust pose estimate: the least detection noise assumed."""

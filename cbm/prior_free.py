@@ -1,7 +1,7 @@
 """CBM without a prior: the CAV's pose found from the boxes alone, when there is no GNSS at all.
 
-CBM's context vectors (eq. 5-6) are each expressed in its object's own frame, so eq. 7's comparison
-does not depend on the pose between the agents, and neither do the consensus (eq. 9-10) or the
+CBM's context vectors (eq. 6-7) are each expressed in its object's own frame, so eq. 8's comparison
+does not depend on the pose between the agents, and neither do the consensus (eq. 10-11) or the
 selection (eq. 13). Two steps do depend on ``init``:
 
 - the distance limit, which rejects an anchor whose pairs lie far apart under ``init``: here off;

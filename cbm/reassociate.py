@@ -1,6 +1,6 @@
 """Guided re-association after CBM (beyond the paper, step 7b).
 
-CBM's answer is one anchor's set (eq. 13): under hard noise its local tests (eq. 7) miss many true
+CBM's answer is one anchor's set (eq. 14): under hard noise its local tests (eq. 8) miss many true
 pairs, although once the pose is known most true pairs lie within a metre or two of each other.
 So, starting from CBM's pairs and pose estimate:
 

@@ -1,4 +1,4 @@
-"""CBM as the paper states it: eq. 5-13, one short function per equation, in plain numpy.
+"""CBM as the paper states it: eq. 5-14, one short function per equation, in plain numpy.
 
 Song et al., "A Spatial Calibration Method for Robust Cooperative Perception", IEEE RA-L 2024,
 section III-B. This module is the definition of CBM's matching: the fast engine that ``cbm.match``
@@ -77,7 +77,7 @@ def agents(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, headi
 
 
 def context_vectors(xy: np.ndarray, heading: np.ndarray, i: int) -> np.ndarray:
-    """Eq. 5-6: the context matrix P_i of object i, as (N, 2) rows ``z_ii' = R(theta_i)^T (p_i' - p_i)``,
+    """Eq. 6-7: the context matrix P_i of object i, as (N, 2) rows ``z_ii' = R(theta_i)^T (p_i' - p_i)``,
     every neighbour i' in its anchor's own frame (row i is the zero vector and never used)."""
     c, s = np.cos(heading[i]), np.sin(heading[i])
     d = xy - xy[i]
@@ -85,7 +85,7 @@ def context_vectors(xy: np.ndarray, heading: np.ndarray, i: int) -> np.ndarray:
 
 
 def similar(z: np.ndarray, w: np.ndarray, sigma1: float, sigma2: float) -> np.ndarray:
-    """Eq. 7 (Algorithm 1): context vectors z and w (broadcast, last axis x, y) match when the
+    """Eq. 8 (Algorithm 1): context vectors z and w (broadcast, last axis x, y) match when the
     angle between their lines is within sigma1 (radians) and their L1 distance within sigma2:
 
         arccos(|z . w| / (|z| |w|)) <= sigma1      and      ||z - w||_1 <= sigma2
@@ -98,10 +98,11 @@ def similar(z: np.ndarray, w: np.ndarray, sigma1: float, sigma2: float) -> np.nd
 
 
 def candidate_set(a: Agents, i: int, j: int, sigma1: float, tolerance: float) -> np.ndarray:
-    """Eq. 8: L_ij, the pairs (i', j') whose context vectors seen from the anchor pair (i, j) match
-    (eq. 7 with L1 tolerance ``tolerance``), i' != i and j' != j; the anchor pair joins a set that
+    """Eq. 9: L_ij, the pairs (i', j') whose context vectors seen from the anchor pair (i, j) match
+    (eq. 8 with L1 tolerance ``tolerance``), i' != i and j' != j; the anchor pair joins a set that
     is not empty. The CAV frame is turned by the pair's sign (step 2). With sigma3 for the
-    tolerance it is the voting set V_ij of eq. 9."""
+    tolerance it is the voting set V_ij (the authors' released code: beyond the paper, whose eq. 10
+    votes with the sets L_ij themselves)."""
     z = context_vectors(a.ego_xy, a.ego_heading, i)
     w = a.signs[i, j] * context_vectors(a.cav_xy, a.cav_heading, j)
     members = similar(z[:, None, :], w[None, :, :], sigma1, tolerance)
@@ -111,7 +112,7 @@ def candidate_set(a: Agents, i: int, j: int, sigma1: float, tolerance: float) ->
 
 
 def candidate_sets(a: Agents, sigma1: float, tolerance: float) -> np.ndarray:
-    """Eq. 8 (or eq. 9) for every anchor pair: ``sets[i, j]`` is L_ij (or V_ij)."""
+    """Eq. 9 for every anchor pair: ``sets[i, j]`` is L_ij (with sigma3, V_ij: ``candidate_set``)."""
     n_ego, n_cav = a.signs.shape
     sets = np.zeros((n_ego, n_cav, n_ego, n_cav), dtype=bool)
     for i in range(n_ego):
@@ -121,7 +122,7 @@ def candidate_sets(a: Agents, sigma1: float, tolerance: float) -> np.ndarray:
 
 
 def one_to_one(pairs: np.ndarray) -> np.ndarray:
-    """Eq. 11: the pairs of the set ``pairs`` that are alone in their row and their column, so that
+    """Eq. 12: the pairs of the set ``pairs`` that are alone in their row and their column, so that
     no ego or CAV object is paired twice."""
     return pairs & (pairs.sum(axis=1, keepdims=True) == 1) & (pairs.sum(axis=0, keepdims=True) == 1)
 
@@ -136,13 +137,13 @@ def voters(members: np.ndarray, rule: Rule) -> np.ndarray:
 
 
 def votes(voting: np.ndarray, by: np.ndarray) -> np.ndarray:
-    """Eq. 10's left side for every pair (i', j'): how many of the pairs ``by`` hold it in their
+    """Eq. 10's sum for every pair (i', j'): how many of the pairs ``by`` hold it in their
     voting set, ``sum_{(k', h') in by} V_k'h'(i', j')``, from every pair's voting set ``voting``."""
     return voting[by].sum(axis=0)
 
 
 def consensus(members: np.ndarray, votes_of: Callable[[np.ndarray], np.ndarray], rule: Rule) -> np.ndarray:
-    """Eq. 9-10: the members of a candidate set that its own members vouch for; ``votes_of(by)``
+    """Eq. 10-11: the members of a candidate set that its own members vouch for; ``votes_of(by)``
     counts, for every pair, the voting sets of the pairs ``by`` that hold it (``votes``).
 
     ``paper``: (i', j') stays when ``sum_{(k', h') in L_ij} V_k'h'(i', j') > 1``: another member's
@@ -165,8 +166,8 @@ def mean_distance(a: Agents, pairs: np.ndarray) -> float:
 
 def filtered_set(a: Agents, members: np.ndarray, votes_of: Callable[[np.ndarray], np.ndarray], rule: Rule,
                  distance_limit: float) -> np.ndarray:
-    """Eq. 12's L^(2)_ij: a candidate set after the consensus (eq. 10) and the one-to-one rule
-    (eq. 11); empty when its pairs lie on average farther apart than ``distance_limit`` metres
+    """Eq. 12's L^(2)_ij: a candidate set after the consensus (eq. 10-11) and the one-to-one rule
+    (eq. 12); empty when its pairs lie on average farther apart than ``distance_limit`` metres
     under the initial pose (the released code's check)."""
     kept = one_to_one(consensus(members, votes_of, rule))
     return np.zeros_like(kept) if mean_distance(a, kept) > distance_limit else kept
@@ -220,26 +221,27 @@ def runner_up(filtered: np.ndarray, winner: np.ndarray) -> int:
 
 @dataclass(frozen=True)
 class Matching:
-    """What eq. 5-13 give on one input."""
+    """What eq. 5-14 give on one input."""
 
     pairs: np.ndarray
     """(K, 2) (ego index, CAV index) of the winning filtered set, sorted by ego index."""
     anchor: tuple[int, int] | None
     """The winning anchor pair, None when every filtered set is empty."""
     candidate_count: int
-    """card(L_ij) of the winning anchor (eq. 8), the anchor pair included."""
+    """card(L_ij) of the winning anchor (eq. 9), the anchor pair included."""
     runner_up_count: int
     """The largest filtered set sharing no pair with the winner's (``runner_up``)."""
     candidates: np.ndarray
-    """(Ne, Nc, Ne, Nc) every anchor's candidate set L_ij (eq. 8)."""
+    """(Ne, Nc, Ne, Nc) every anchor's candidate set L_ij (eq. 9)."""
     filtered: np.ndarray
     """(Ne, Nc, Ne, Nc) every anchor's filtered set L^(2)_ij (eq. 12)."""
 
 
 def match_sets(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, sigma1: float, sigma2: float,
                sigma3: float, distance_limit: float, rule: Rule, heading: str = "align") -> Matching:
-    """Eq. 5-13 on (N, 7) boxes and the initial pose: every anchor's candidate set (eq. 8) and
-    voting set (eq. 9), its filtered set (eq. 10-12), and the largest of them (eq. 13). ``sigma1``
+    """Eq. 5-14 on (N, 7) boxes and the initial pose: every anchor's candidate set (eq. 9) and
+    voting set (sigma3: the released code's), its filtered set (eq. 10-12), and the largest of them
+    (eq. 13-14). ``sigma1``
     in radians, the others in metres; ``rule`` None switches the consensus off."""
     a = agents(np.asarray(ego_boxes, dtype=float), np.asarray(cav_boxes, dtype=float), init, heading)
     candidates = candidate_sets(a, sigma1, sigma2)

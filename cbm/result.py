@@ -15,7 +15,7 @@ class Fit:
     """A rigid fit of matched centres and the noise it assumes (``cbm.estimate``)."""
 
     transform: np.ndarray
-    """(3, 3) T minimising eq. 14 (``dst ~ T src``)."""
+    """(3, 3) T minimising eq. 15 (``dst ~ T src``)."""
     weights: np.ndarray
     """(K,) final weight of each pair in [0, 1] (all 1 for least squares)."""
     scale: float
@@ -64,9 +64,9 @@ class MatchResult:
     anchor: tuple[int, int] | None
     """The winning anchor pair (ego index, CAV index), or None when no anchor had a set."""
     candidate_count: int
-    """Size of the winning anchor's candidate set L_ij before consensus (eq. 8)."""
+    """Size of the winning anchor's candidate set L_ij before consensus (eq. 9)."""
     consensus_count: int
-    """Size of the winning set after consensus and the one-to-one rule (eq. 11-12): CBM's own pairs."""
+    """Size of the winning set after consensus and the one-to-one rule (eq. 10-12): CBM's own pairs."""
     runner_up_count: int
     """Largest set of an anchor that shares no pair with the winner (0 when there is none)."""
     residuals: np.ndarray
@@ -74,7 +74,7 @@ class MatchResult:
     timings: dict[str, float] = field(default_factory=dict)
     """Seconds per stage."""
     context_pairs: np.ndarray | None = None
-    """(K0, 2) CBM's own pairs, the winning set of eq. 13, before the guided re-association that
+    """(K0, 2) CBM's own pairs, the winning set of eq. 14, before the guided re-association that
     may add to them (``cbm.reassociate``); None for methods that are not CBM."""
     abstained: bool = False
     """"Not enough evidence": fewer than 3 pairs, or a different pose explains the scene almost as
@@ -112,5 +112,5 @@ class MatchResult:
 
     @property
     def correction(self) -> np.ndarray:
-        """The ego-frame correction (R*, t*) of eq. 15: ``transform = correction @ init``."""
+        """The ego-frame correction (R*, t*) of eq. 16: ``transform = correction @ init``."""
         return self.transform @ se2.inverse(self.init)

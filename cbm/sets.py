@@ -26,7 +26,7 @@ class Sets:
     prepared: Prepared
     """Steps 1-3 of this input (``cbm.engine.context.prepare``)."""
     candidates: CandidateSets
-    """L_ij of every anchor (eq. 8) by pair id ``i * Nc + j``: sizes, and members on demand."""
+    """L_ij of every anchor (eq. 9) by pair id ``i * Nc + j``: sizes, and members on demand."""
     voted_by: PairSets
     """Row m: the pairs whose voting set holds pair m (empty when consensus is off)."""
 
@@ -67,7 +67,7 @@ class Sets:
 
 def build_sets(ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
                timings: dict[str, float] | None = None, reuse: Reuse | None = None) -> Sets:
-    """Steps 1-3, then card(L_ij) of every anchor (eq. 7-8) and the voting sets (eq. 9) grouped by
+    """Steps 1-3, then card(L_ij) of every anchor (eq. 8-9) and the voting sets (sigma3) grouped by
     member, for checked inputs (timed together as ``local_matching``). With ``reuse``, what an
     earlier call on the same input built and no threshold changes is taken from its
     ``cbm.engine.EditCache``, which runs only what the edit changed."""

@@ -9,7 +9,7 @@ frame and CAV this module
 1. takes each agent's labels in its own frame (``Frame.agent_view`` mapped back with the dataset's
    pose of that agent: exactly the boxes of the label files),
 2. estimates the CAV -> ego transform from them twice, with no noise added: the **oracle** fits the
-   centres of the objects both label under one track id (CBM's robust SE(2) fit, eq. 14), and
+   centres of the objects both label under one track id (CBM's robust SE(2) fit, eq. 15), and
    **CBM** matches the two label sets by context alone, starting from the dataset's transform,
 3. compares each estimate with the dataset's transform ``T_dataset = ego_pose⁻¹ ∘ cav_pose``: the
    disagreement is the RTE (metres) and RRE (degrees) between them,

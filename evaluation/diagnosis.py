@@ -51,14 +51,14 @@ def too_few_covisible(trial: Trial, minimum: int = 3) -> Finding | None:
 
 
 def no_anchor_reached_two(result: MatchResult, explanation: Explanation) -> Finding | None:
-    """No candidate set held 2 pairs (eq. 8), or the distance limit rejected every one."""
+    """No candidate set held 2 pairs (eq. 9), or the distance limit rejected every one."""
     if result.anchor is not None:
         return None
     if explanation.sets.candidates.count.any():
         return Finding("no_anchor", "no anchor reached 2 pairs: every candidate set was emptied by consensus "
                                     "and the one-to-one rule or rejected by the distance limit")
     return Finding("no_anchor",
-                   "no anchor reached 2 pairs: no context vectors agreed within sigma1 and sigma2 (eq. 7-8)")
+                   "no anchor reached 2 pairs: no context vectors agreed within sigma1 and sigma2 (eq. 8-9)")
 
 
 def single_pair(result: MatchResult) -> Finding | None:
@@ -103,7 +103,7 @@ def heading_fold(trial: Trial, explanation: Explanation) -> Finding | None:
 
 def wrong_anchor(result: MatchResult, trial: Trial, explanation: Explanation) -> Finding | None:
     """The winning anchor is not a true pair; how the best true anchor scored against the
-    consensus margin's runner-up (eq. 12: ``result.runner_up_count``). Nothing when every pair of the
+    consensus margin's runner-up (eq. 13: ``result.runner_up_count``). Nothing when every pair of the
     answer is right (the re-association left the anchor out): the anchor did no harm."""
     if result.anchor is None:
         return None

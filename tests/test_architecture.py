@@ -98,6 +98,43 @@ def test_the_method_imports_nothing_of_the_project_but_itself() -> None:
     assert imported <= {"cbm"}
 
 
+PUBLIC_CBM = ("cbm", "cbm.methods", "cbm.reference")
+"""What app/, evaluation/ and loaders/ may import from the method: ``cbm``'s face (its ``__all__``),
+the method registry and the reference."""
+
+
+def test_outside_cbm_only_its_public_face_is_imported() -> None:
+    import cbm
+
+    inside = [(m, module, what) for m, path in SOURCES.items() if not m.startswith("cbm")
+              for module, what in _imports(path) if module.split(".")[0] == "cbm"]
+    private = sorted({f"{module}:{what}" for _, module, what in inside
+                      if module not in PUBLIC_CBM or (module == "cbm" and what not in cbm.__all__)})
+    assert not private, f"names of cbm used from outside it that cbm/__init__.py does not export: {private}"
+
+
+def _floor(module: str, graph: dict[str, set[str]], seen: dict[str, int]) -> int:
+    """1 for a module that imports nothing of its package, else one above the highest it imports."""
+    if module not in seen:
+        seen[module] = 1 + max((_floor(t, graph, seen) for t in graph[module]), default=0)
+    return seen[module]
+
+
+def test_cbm_stands_on_at_most_seven_floors() -> None:
+    """Rooms as the picture of the house counts them: ``cbm/engine/`` and ``cbm/baselines/`` are one
+    room each (their inside arrows do not count), every other module of ``cbm`` one."""
+    def room(module: str) -> str:
+        return ".".join(module.split(".")[:2]) if module.startswith(("cbm.engine", "cbm.baselines")) else module
+
+    graph: dict[str, set[str]] = {}
+    for module, targets in GRAPH.items():
+        if module.startswith("cbm.") or module == "cbm":
+            graph.setdefault(room(module), set()).update(room(t) for t in targets if room(t) != room(module))
+    seen: dict[str, int] = {}
+    floors = {module: _floor(module, graph, seen) for module in graph if module != "cbm"}
+    assert max(floors.values()) <= 7, sorted(floors.items(), key=lambda item: -item[1])
+
+
 def test_no_circle_of_imports() -> None:
     circles = [sorted(group) for group in _strongly_connected(GRAPH) if len(group) > 1]
     assert not circles, f"modules that import each other: {circles}"

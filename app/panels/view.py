@@ -78,7 +78,7 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         lines=gui.add_checkbox("match lines", view.lines),
         line_pairs=gui.add_dropdown("CBM's lines", tuple(LINE_PAIRS.values()),
                                     initial_value=LINE_PAIRS[view.line_pairs],
-                                    hint="CBM's own pairs (eq. 13), or all pairs after the guided re-association"),
+                                    hint="CBM's own pairs (eq. 14), or all pairs after the guided re-association"),
         labels=gui.add_checkbox("label clicked objects", view.labels),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),

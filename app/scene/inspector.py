@@ -1,8 +1,8 @@
 """The context inspector: one object's context -- the vectors to its neighbours in its own frame
-(eq. 5-6) -- for the ego and for its CAV counterpart, side by side next to the scene; for the anchor
+(eq. 6-7) -- for the ego and for its CAV counterpart, side by side next to the scene; for the anchor
 pair they form, the sigma1 angular band and the sigma2 region (an L1 ball: a diamond) around each
-context vector (eq. 7), the candidate set ``L_ij`` (eq. 8), what consensus removed and the votes
-each pair got (eq. 9-11), from ``cbm.inspect``. The panels go left of the scene (+y), away from the
+context vector (eq. 8), the candidate set ``L_ij`` (eq. 9), what consensus removed and the votes
+each pair got (eq. 10-12), from ``cbm.Explanation``. The panels go left of the scene (+y), away from the
 control panel on the page's right, each on a plate that hides the map beneath; neighbours are
 labelled with their object ids where a label does not cover another (as the camera that looks at
 the panels shows them), and a legend names every colour.

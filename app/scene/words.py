@@ -6,24 +6,24 @@ import math
 
 WORDS = {
     # (parameter set, field): (label, hint in plain words)
-    ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 5-6) "
-                        "count as the same neighbour only if they point within this angle of each other (eq. 7)."),
+    ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 6-7) "
+                        "count as the same neighbour only if they point within this angle of each other (eq. 8)."),
     ("cbm", "sigma2"): ("σ2 L1 (m)", "Two neighbour vectors count as the same neighbour only if their tips are at most "
-                        "this far apart, |Δx| + |Δy| in metres (eq. 7). Larger: more candidate matches, more of them "
+                        "this far apart, |Δx| + |Δy| in metres (eq. 8). Larger: more candidate matches, more of them "
                         "wrong."),
     ("cbm", "sigma3"): ("σ3 voting (m)", "In the consensus vote, a candidate pair backs another when their "
-                        "neighbourhoods agree within this distance, |Δx| + |Δy| in metres (eq. 9); pairs nobody "
-                        "backs are dropped."),
+                        "neighbourhoods agree within this distance, |Δx| + |Δy| in metres (the released code's "
+                        "vote, beyond the paper's eq. 10); pairs nobody backs are dropped."),
     ("cbm", "distance_limit"): ("distance limit (m)", "An anchor whose pairs lie farther apart than this on average "
                                 "under the initial pose is rejected."),
-    ("cbm", "consensus"): ("consensus", "The global consensus vote of eq. 9-10 (off: the paper's ablation)."),
+    ("cbm", "consensus"): ("consensus", "The global consensus vote of eq. 10-11 (off: the paper's ablation)."),
     ("cbm", "consensus_rule"): ("consensus rule", "paper: every candidate needs a vote from another member "
-                                "(eq. 9-10). released: as the authors' code, only candidates that share an object "
+                                "(eq. 10-11). released: as the authors' code, only candidates that share an object "
                                 "with another need one."),
     ("cbm", "heading"): ("heading handling", "align: turn a CAV object's heading by 180° where that brings it "
                          "closer to the ego object's. fold: fold every heading into (-90°, 90°], as the released "
                          "code."),
-    ("cbm", "estimator"): ("pose estimator", "welsch: the robust fit of eq. 14, outliers weigh little. "
+    ("cbm", "estimator"): ("pose estimator", "welsch: the robust fit of eq. 15, outliers weigh little. "
                            "least_squares: the released code's plain fit, every pair weighs the same."),
     ("cbm", "welsch_floor"): ("Welsch scale floor (m)", "The robust fit's scale ν never goes below this: the least "
                               "detection noise assumed."),

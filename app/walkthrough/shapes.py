@@ -65,7 +65,7 @@ def rays(origin: np.ndarray, targets: np.ndarray, z: float = planes.LINES) -> np
 
 
 def to_scene(segments: np.ndarray, origin: np.ndarray, heading: float, z: float = planes.LINES) -> np.ndarray:
-    """Segments given in an object's own frame (eq. 5-6), placed at ``origin`` turned by ``heading``."""
+    """Segments given in an object's own frame (eq. 6-7), placed at ``origin`` turned by ``heading``."""
     c, s = np.cos(heading), np.sin(heading)
     out = np.array(segments, dtype=np.float32, copy=True)
     x, y = out[..., 0].copy(), out[..., 1].copy()
@@ -80,7 +80,7 @@ def local_vectors(vectors: np.ndarray) -> np.ndarray:
 
 
 def tolerance_region(vector: np.ndarray, sigma1_deg: float, sigma2: float) -> tuple[np.ndarray, np.ndarray]:
-    """The sigma1 wedge and the sigma2 diamond (L1 ball) of eq. 7 around one context vector, in
+    """The sigma1 wedge and the sigma2 diamond (L1 ball) of eq. 8 around one context vector, in
     its object's frame (``cbm`` tests a vector of the other agent against both)."""
     vector = np.asarray(vector, dtype=float).reshape(1, 2)
     return band_segments(np.zeros(2), vector, sigma1_deg, sigma2), region_segments(np.zeros(2), vector, sigma2)

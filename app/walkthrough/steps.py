@@ -55,15 +55,15 @@ class Step:
 
 
 NAMES = (("pose", "The wrong pose", "eq. 4"),
-         ("context", "Context vectors", "eq. 5-6"),
-         ("local", "Local matching", "eq. 7"),
-         ("candidates", "Candidate set", "eq. 8"),
-         ("consensus", "Global consensus", "eq. 9-10"),
-         ("anchor", "The anchor and its matches", "eq. 11-13"),
-         ("estimate", "Robust estimate", "eq. 14-15"),
-         ("reassociate", "Guided re-association", "step 7b"),
+         ("context", "Context vectors", "eq. 6-7"),
+         ("local", "Local matching", "eq. 8"),
+         ("candidates", "Candidate set", "eq. 9"),
+         ("consensus", "Global consensus", "eq. 10-11"),
+         ("anchor", "The anchor and its matches", "eq. 12-14"),
+         ("estimate", "Robust estimate", "eq. 15-16"),
+         ("reassociate", "Guided re-association", "step 7b, beyond the paper"),
          ("result", "Result", "metrics"),
-         ("over_time", "Over time", "step 8"))
+         ("over_time", "Over time", "step 8, beyond the paper"))
 """Every step's key, name and equations; the last only for a method over time (``count``)."""
 
 
@@ -137,7 +137,7 @@ def wrong_pose(facts: Facts) -> Step:
 
 
 def context_vectors(facts: Facts) -> Step:
-    """Step 2: the followed objects' vectors to their neighbours (eq. 5-6)."""
+    """Step 2: the followed objects' vectors to their neighbours (eq. 6-7)."""
     if facts.pair is None:
         return _no_pair(facts, 1)
     i, j = facts.pair
@@ -147,7 +147,7 @@ def context_vectors(facts: Facts) -> Step:
             "two different objects (an anchor need not be a true pair: its set's other pairs count)")
     text = (f"The pair followed, {'the winning anchor' if facts.is_anchor() else 'a true pair'}, is {same}. "
             f"CBM describes {facts.ego_name(i)} by the vectors to its {plural(len(ego_members), 'neighbour')} "
-            f"(blue), z = R(θ)ᵀ(p′ − p), in its own frame (eq. 5-6); {facts.cav_name(j)} likewise by its "
+            f"(blue), z = R(θ)ᵀ(p′ − p), in its own frame (eq. 6-7); {facts.cav_name(j)} likewise by its "
             f"{len(cav_members)} (orange). The vectors do not change with the agents' poses, so the two lists "
             f"can be compared although `init` is wrong.")
     lines = {"ego_vectors": Lines(shapes.rays(facts.ego_xy[i], facts.ego_xy[ego_members]), EGO_BOXES, 2.0),
@@ -157,7 +157,7 @@ def context_vectors(facts: Facts) -> Step:
 
 def local_matching(facts: Facts) -> Step:
     """Step 3: the CAV object's vectors turned into the ego object's frame, one of them with its
-    sigma1 wedge and sigma2 diamond (eq. 7), and the vectors that agree."""
+    sigma1 wedge and sigma2 diamond (eq. 8), and the vectors that agree."""
     if facts.pair is None:
         return _no_pair(facts, 2)
     i, j = facts.pair
@@ -188,7 +188,7 @@ def local_matching(facts: Facts) -> Step:
                  f"{facts.ego_name(int(shown_pair[0]))} lies in both, so they match.")
     text = (f"The CAV object's {plural(len(cav_vectors), 'vector')} (orange) are laid over the ego object's "
             f"{len(ego_vectors)} (blue) in its frame; two vectors match when their angle is within σ1 and "
-            f"their L1 distance within σ2 (eq. 7).{shown} |L_ij| = {len(detail.candidates)} "
+            f"their L1 distance within σ2 (eq. 8).{shown} |L_ij| = {len(detail.candidates)} "
             f"(the anchor pair included; green: the vectors that found a partner).")
     return _step(facts, 2, text, lines, labels, span=span)
 
@@ -208,14 +208,14 @@ def _showcase(pairs: np.ndarray, cav_members: np.ndarray, cav_vectors: np.ndarra
 
 
 def candidate_set(facts: Facts) -> Step:
-    """Step 4: the anchor's candidate set L_ij as pair lines, true pairs green (eq. 8)."""
+    """Step 4: the anchor's candidate set L_ij as pair lines, true pairs green (eq. 9)."""
     if facts.pair is None:
         return _no_pair(facts, 3)
     candidates, truth = facts.detail.candidates, facts.truth()
     true = np.array([tuple(p) in truth for p in candidates.tolist()], dtype=bool)
     segments = shapes.pair_segments(facts.ego_xy, facts.cav_xy, candidates)
     i, j = facts.pair
-    text = (f"Every object pair whose vectors matched joins the anchor's candidate set L_ij (eq. 8): "
+    text = (f"Every object pair whose vectors matched joins the anchor's candidate set L_ij (eq. 9): "
             f"{plural(len(candidates), 'pair')} for the anchor ({facts.ego_name(i)}, {facts.cav_name(j)}), "
             f"{_tally(int(true.sum()), 'true pair', 'green')} and {_tally(int((~true).sum()), 'wrong pair', 'red')}. "
             + ("A set of fewer than two pairs is emptied." if len(candidates) == 0 else
@@ -231,7 +231,7 @@ def _anchor_line(facts: Facts, width: float) -> Lines:
 
 
 def consensus(facts: Facts) -> Step:
-    """Step 5: which candidates the voting sets kept and which they removed, with their votes (eq. 9-10)."""
+    """Step 5: which candidates the voting sets kept and which they removed, with their votes (eq. 10-11)."""
     if facts.pair is None:
         return _no_pair(facts, 4)
     detail, params = facts.detail, facts.params
@@ -245,8 +245,9 @@ def consensus(facts: Facts) -> Step:
     else:
         rule = ("every candidate needs a vote from another member" if params.consensus_rule == "paper" else
                 "a candidate that shares its ego or CAV object with another needs a vote from a lone member")
-        how = (f"Each candidate votes for the members it sees within σ3 = {params.sigma3:g} m (eq. 9); under the "
-               f"{params.consensus_rule} rule {rule} (eq. 10).")
+        how = (f"Each candidate votes for the members it sees within σ3 = {params.sigma3:g} m (as the authors' "
+               f"released code; the paper's eq. 10 votes with the candidate sets themselves); under the "
+               f"{params.consensus_rule} rule {rule} (eq. 10-11).")
     text = (f"{how} Of {plural(len(kept), 'candidate')}, it keeps {_tally(int(kept.sum()), 'candidate', 'green')} "
             f"and removes {_tally(int((~kept).sum()), 'candidate', 'red')}; the labels give each candidate's votes.")
     lines = {"kept": Lines(segments[kept], RIGHT, 3.0), "removed": Lines(segments[~kept], WRONG, 3.0)}
@@ -254,7 +255,7 @@ def consensus(facts: Facts) -> Step:
 
 
 def anchor(facts: Facts) -> Step:
-    """Step 6: the one-to-one rule, the anchor's score and the winner (eq. 11-13)."""
+    """Step 6: the one-to-one rule, the anchor's score and the winner (eq. 12-14)."""
     if facts.pair is None:
         return _no_pair(facts, 5)
     detail, result, params = facts.detail, facts.result, facts.params
@@ -263,12 +264,12 @@ def anchor(facts: Facts) -> Step:
     dropped = np.array([p for p in survivors.tolist() if tuple(p) not in final], dtype=int).reshape(-1, 2)
     i, j = facts.pair
     if facts.is_anchor():
-        verdict = (f"It is the largest set of all anchors (eq. 12-13): the anchor ({facts.ego_name(i)}, "
+        verdict = (f"It is the largest set of all anchors (eq. 13-14): the anchor ({facts.ego_name(i)}, "
                    f"{facts.cav_name(j)}) wins with {plural(result.consensus_count, 'pair')} against "
                    f"{result.runner_up_count} for the strongest rival (margin {result.margin}).")
     else:
         verdict = "No anchor won on this frame, so this true pair is shown instead; CBM matched nothing."
-    text = (f"Pairs that share an object with another are dropped (eq. 11, grey): {len(detail.final)} of "
+    text = (f"Pairs that share an object with another are dropped (eq. 12, grey): {len(detail.final)} of "
             f"{len(survivors)} remain, on average {number(detail.mean_distance, ' m', 1)} apart under `init` "
             f"(limit {params.distance_limit:g} m{', rejected' if detail.rejected else ''}). {verdict}")
     lines = {"final": Lines(shapes.pair_segments(facts.ego_xy, facts.cav_xy, detail.final), RIGHT, 3.5),
@@ -278,7 +279,7 @@ def anchor(facts: Facts) -> Step:
 
 
 def robust_estimate(facts: Facts) -> Step:
-    """Step 7: CBM's pairs with their Welsch weights as line widths, the fitted pose outlined (eq. 14-15)."""
+    """Step 7: CBM's pairs with their Welsch weights as line widths, the fitted pose outlined (eq. 15-16)."""
     pairs, fit = facts.own_pairs, facts.fit
     if fit is None:
         return _step(facts, 6, f"CBM matched {plural(len(pairs), 'pair')}: at least two are needed for a pose, so "
@@ -292,13 +293,13 @@ def robust_estimate(facts: Facts) -> Step:
                  f"{int((fit.weights < 0.5).sum())} of {plural(len(pairs), 'pair')} weigh under 0.5"
                  if np.isfinite(fit.scale) else "least squares: every pair weighs 1")
     text = (f"The correction minimises Σ ψ(‖p_i − (R p_j + t)‖) over CBM's {plural(len(pairs), 'pair')} "
-            f"(eq. 14), {weighting}; line width shows each pair's weight. {_correction_words(facts)} "
+            f"(eq. 15), {weighting}; line width shows each pair's weight. {_correction_words(facts)} "
             f"Orange outlines: the boxes where it puts them; play to see it.")
     return _step(facts, 6, text, lines, labels, motion=(facts.result.init, facts.fit_pose))
 
 
 def _correction_words(facts: Facts) -> str:
-    """What the correction of eq. 15 does, and why its shift is not the CAV's error: it turns about
+    """What the correction of eq. 16 does, and why its shift is not the CAV's error: it turns about
     the ego's origin, which moves the CAV too, so the CAV itself moves by another distance."""
     correction = facts.fit.transform
     shift = float(np.linalg.norm(se2.translation_of(correction)))
@@ -307,7 +308,7 @@ def _correction_words(facts: Facts) -> str:
     carried = 2.0 * away * abs(np.sin(np.radians(turn) / 2.0))
     moved = float(np.linalg.norm(se2.translation_of(facts.fit_pose) - se2.translation_of(facts.result.init)))
     off = pose_error(facts.result.init, facts.trial.T_true)[0]
-    return (f"The correction (eq. 15) turns the CAV's boxes by {abs(turn):.2f}° about the ego's origin and shifts "
+    return (f"The correction (eq. 16) turns the CAV's boxes by {abs(turn):.2f}° about the ego's origin and shifts "
             f"them by {shift:.2f} m. Turning about the ego's origin also carries the CAV, {away:.1f} m from it, "
             f"{carried:.2f} m sideways, and the shift makes up for that too: the CAV itself moves by {moved:.2f} m, "
             f"back across the {off:.2f} m its pose was off.")

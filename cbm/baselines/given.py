@@ -35,7 +35,7 @@ def match_none(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
 
 def match_oracle(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,
                  params: NoParams | None = None, *, true_pairs: np.ndarray) -> MatchResult:
-    """The true pairs, fitted by least squares (eq. 14 with psi(r) = r^2): the pose error left is
+    """The true pairs, fitted by least squares (eq. 15 with psi(r) = r^2): the pose error left is
     the detection noise's alone. Fewer than 2 true pairs: no estimate (``init`` stays)."""
     check_params(params, NoParams)
     ego_boxes = checked_boxes("ego_boxes", ego_boxes)

@@ -1,8 +1,9 @@
-"""The fast exact path of CBM's matching (eq. 7-13): the same pairs, counts, anchor and runner-up
-as ``cbm.reference``, at a cost that grows with the quadruples eq. 7 accepts, not with (Ne Nc)^2.
+"""The fast exact path of CBM's matching (eq. 8-14): the same pairs, counts, anchor and runner-up
+as ``cbm.reference``, at a cost that grows with the quadruples eq. 8 accepts, not with (Ne Nc)^2.
 
 ``cbm.pipeline`` runs it step by step: ``local_matching`` (the join over grids of context vectors,
-eq. 7-9), ``candidate_sets`` (members on demand, eq. 8), ``select`` (eq. 10-13 by branch and bound)
+eq. 8-9, and the voting sets of sigma3, beyond the paper), ``candidate_sets`` (members on demand,
+eq. 9), ``select`` (eq. 10-14 by branch and bound)
 and ``runner_up_beside``; ``EditCache`` and ``Reuse`` keep what a threshold edit does not change.
 How many threads it uses, and from what size, is ``tuning``'s.
 """

@@ -93,7 +93,7 @@ class Lookup(NamedTuple):
 
 class Members(NamedTuple):
     """Where ``members_into`` writes a set's members: their pair ids, their ego and CAV objects (so
-    that no consumer divides a pair id) and their L1 distances of eq. 7."""
+    that no consumer divides a pair id) and their L1 distances of eq. 8."""
 
     pair: np.ndarray
     ego: np.ndarray

@@ -1,5 +1,5 @@
 """Steps 1-3 as the engine holds them: the CAV boxes in the ego frame, the folded headings and
-the signs (``cbm.reference``'s steps 1-2), and every object's context vectors (eq. 5-6,
+the signs (``cbm.reference``'s steps 1-2), and every object's context vectors (eq. 6-7,
 ``cbm.reference.context_vectors``) stacked anchor by anchor, with the extent the join's grid needs."""
 from __future__ import annotations
 
@@ -17,18 +17,18 @@ class Context(NamedTuple):
     """All context vectors of one agent: ``vectors[k] = R(theta_anchor)^T (p_member - p_anchor)``."""
 
     anchor: np.ndarray
-    """(M,) index of the object whose local frame the vector is expressed in (i in eq. 5)."""
+    """(M,) index of the object whose local frame the vector is expressed in (i in eq. 6)."""
     member: np.ndarray
-    """(M,) index of the neighbour the vector points to (i' in eq. 5)."""
+    """(M,) index of the neighbour the vector points to (i' in eq. 6)."""
     vectors: np.ndarray
-    """(M, 2) the context vectors z_ii' (columns of P_i in eq. 6)."""
+    """(M, 2) the context vectors z_ii' (columns of P_i in eq. 7)."""
     bounds: np.ndarray
     """(N, 4) per object i, the lowest and highest u = x + y, then v = x - y, of its context vectors
     (+inf, -inf without any): the extent of any grid of them (``local_matching.grid``) in O(N)."""
 
 
 def build_context(xy: np.ndarray, heading: np.ndarray, stop: np.ndarray | None = None) -> Context:
-    """Context matrices P_i of eq. 6 for every object, stacked: one row per ordered pair i != i',
+    """Context matrices P_i of eq. 7 for every object, stacked: one row per ordered pair i != i',
     anchor by anchor. Once ``stop[0]`` is set (``cbm.engine.threads.stop_flag``) the rows left are
     not filled: the caller then raises ``Cancelled``."""
     rows = len(xy) * (len(xy) - 1)

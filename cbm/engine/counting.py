@@ -20,8 +20,8 @@ def counts_and_votes(prepared: Prepared, sigma1_rad: float, sigma2: float, sigma
                      counting: bool = True, listing: bool = True,
                      grids: Grids | None = None) -> tuple[np.ndarray | None, list[VoteRows]]:
     """One join: with ``counting``, card(L_ij) + 1 of every anchor with a candidate at ``sigma2``
-    (0 for the others: eq. 8 with the anchor pair itself); with ``listing`` and a ``sigma3`` (None:
-    the consensus is off), every quadruple within ``sigma3``, the voting sets of eq. 9 without their
+    (0 for the others: eq. 9 with the anchor pair itself); with ``listing`` and a ``sigma3`` (None:
+    the consensus is off), every quadruple within ``sigma3``, the voting sets (the released code's) without their
     own pairs, as the join's parts (``VoteRows``). The grids are built for the wider of both
     thresholds whichever pass runs, so that kept ``grids`` serve the next edit of either."""
     n_ego, n_cav = prepared.signs.shape

@@ -1,6 +1,6 @@
 """card(L_ij) after a sigma2 edit by a scan instead of a join, for ``cbm.engine.cache``.
 
-With sigma1 fixed, L_ij at sigma2 holds the quadruples eq. 7's angle test accepts whose L1
+With sigma1 fixed, L_ij at sigma2 holds the quadruples eq. 8's angle test accepts whose L1
 distance is within sigma2: the same numbers whatever sigma2 is. So on the first sigma2 edit of an
 input the L1 distance of every accepted quadruple within a radius above it is kept with its anchor
 pair (``Distances``), and card(L_ij) at any sigma2 up to that radius is counted from them
@@ -29,7 +29,7 @@ MOST_QUADRUPLES = 8 * 2**20
 
 @dataclass(frozen=True)
 class Distances:
-    """The anchor pair (``i Nc + b``) and the L1 distance of every quadruple eq. 7 accepts within
+    """The anchor pair (``i Nc + b``) and the L1 distance of every quadruple eq. 8 accepts within
     ``radius``, for one input and sigma1; both None where they were more than ``MOST_QUADRUPLES``
     (the join counts then, at this radius and above)."""
 
@@ -39,7 +39,7 @@ class Distances:
 
 
 def distances_within(prepared: Prepared, sigma1_rad: float, radius: float, grids: Grids) -> Distances:
-    """Every quadruple eq. 7 accepts within ``radius`` (with the kept ``grids``), heading group by
+    """Every quadruple eq. 8 accepts within ``radius`` (with the kept ``grids``), heading group by
     heading group; from ``DISTANCES_APART_FROM`` context vectors each group in parts, all shared out
     between the threads."""
     ego = prepared.ego_context
@@ -65,7 +65,7 @@ def distances_within(prepared: Prepared, sigma1_rad: float, radius: float, grids
 
 @numba.njit(cache=True, nogil=True)
 def _accepted(ego_ids, ego, signs, grid, cos2_sigma1, radius, most, stop):
-    """The anchor pairs and L1 distances of the quadruples of the ego objects ``ego_ids`` that eq. 7
+    """The anchor pairs and L1 distances of the quadruples of the ego objects ``ego_ids`` that eq. 8
     accepts within ``radius`` against a grid, and True; none and False past ``most`` or once
     ``stop[0]`` is set (``threads.stop_flag``: the caller then raises ``Cancelled``). A row whose
     sign varies counts where it is the pair's, as the join counts it. Like the join, the ego vectors

@@ -179,7 +179,7 @@ def filtered_sizes_of(anchors, width, f):
 @numba.njit(cache=True, nogil=True)
 def _voters(ego, cav, size, rule, ego_count, cav_count, voter):
     """voter[r] for rows 0..size-1 (pair of ego object ``ego[r]`` and CAV object ``cav[r]``): every row
-    under the paper rule (eq. 9-10), else the rows whose objects occur once in the set (the released
+    under the paper rule (eq. 10-11), else the rows whose objects occur once in the set (the released
     rule's lone members). ``ego_count`` and ``cav_count`` must be zero and are left holding how often
     each object occurs."""
     for row in range(size):

@@ -1,4 +1,4 @@
-"""The grid local matching's join searches (``cbm.reference.similar``, eq. 7).
+"""The grid local matching's join searches (``cbm.reference.similar``, eq. 8).
 
 The ego objects go in ``HEADING_GROUPS`` groups of neighbouring headings; for each group the CAV
 context vectors lie in a grid (``VectorGrid``), already turned by the sign they have against it,
@@ -24,7 +24,7 @@ MAX_CELLS = 1 << 21
 CELLS_PER_ROW = 4
 """Most grid cells per vector: a sparse scene gets wider cells rather than many empty ones."""
 MARGIN = 1e-6
-"""Metres added to every search window, so that rounding never hides a vector eq. 7 accepts;
+"""Metres added to every search window, so that rounding never hides a vector eq. 8 accepts;
 each vector in the window is then tested exactly."""
 MOST_ROWS = 2**31 - 1
 """Most grid rows (twice the CAV context vectors at most): the grid's offsets are int32."""
@@ -197,7 +197,7 @@ def _cell(x, y, u0, v0, cell, nx, ny):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def accepts(zx, zy, wx, wy, cos2_sigma1, radius):
-    """L1 distance of z and w when eq. 7 accepts them, else -1; the angle test is evaluated as
+    """L1 distance of z and w when eq. 8 accepts them, else -1; the angle test is evaluated as
     (z.w)^2 >= cos^2(sigma1) |z|^2 |w|^2 (sigma1 <= 90 degrees), without square roots or arccos."""
     l1 = abs(zx - wx) + abs(zy - wy)
     if l1 > radius:
@@ -211,7 +211,7 @@ def accepts(zx, zy, wx, wy, cos2_sigma1, radius):
 
 @numba.njit(cache=True, nogil=True, inline="always")
 def l1_and_angle(zx, zy, z2, wx, wy, cos2_sigma1):
-    """Eq. 7 for z and w without a branch: their L1 distance, and whether the angle test accepts
+    """Eq. 8 for z and w without a branch: their L1 distance, and whether the angle test accepts
     them (as in ``accepts``; ``z2`` is |z|^2)."""
     dot = zx * wx + zy * wy
     squared_norms = z2 * (wx * wx + wy * wy)

@@ -40,7 +40,7 @@ class EgoVectors(NamedTuple):
 
 
 class Test(NamedTuple):
-    """Eq. 7's thresholds as the join applies them: cos^2(sigma1), and the L1 radius of the count
+    """Eq. 8's thresholds as the join applies them: cos^2(sigma1), and the L1 radius of the count
     and of the votes (negative: that pass does not run)."""
 
     cos2_sigma1: float
@@ -122,7 +122,7 @@ def by_column(ego_ids, chunk, ego, cells, column_start, order):
 
 @numba.njit(cache=True, nogil=True)
 def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits, stop):
-    """Eq. 7 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
+    """Eq. 8 for the vectors of the ego objects ``ego_ids`` against a grid of (turned) CAV vectors.
 
     Adds, per anchor pair a, the accepted quadruples within ``test.sigma2`` to ``count2[a]``;
     returns those within ``test.sigma3`` packed as ``VoteRows.rows`` (``rows``: an empty array of

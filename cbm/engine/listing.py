@@ -3,7 +3,7 @@ listed kept for the next sigma2 edit (``Listing``).
 
 The selection lists the members of every anchor it visits (``members_into``), and a sigma2 edit
 makes it visit them again. With sigma1 fixed, L_ij at a smaller sigma2 is L_ij at a larger one
-without the members whose L1 distance (eq. 7) exceeds it, in the same order: the window only
+without the members whose L1 distance (eq. 8) exceeds it, in the same order: the window only
 shrinks and its test reads the same numbers. So per input and sigma1 the members of the anchors
 visited so far are kept with their distances, listed at the largest sigma2 asked for, and a later
 call at a sigma2 up to that one filters them instead of listing them again (``listed_into``); a
@@ -34,7 +34,7 @@ CAPACITY = 1 << 20
 
 class ListingArrays(NamedTuple):
     """A listing as its kernels read it: anchor a's members are rows ``at[a]:at[a] + length[a]`` of
-    ``ego``, ``cav`` (their objects) and ``distance`` (their L1 distance of eq. 7), without the
+    ``ego``, ``cav`` (their objects) and ``distance`` (their L1 distance of eq. 8), without the
     anchor pair; ``at[a]`` is -1 for an anchor not listed. ``fill[0]`` is the first row not in use.
     ``bound[a]``: min(distinct ego objects, distinct CAV objects) of L_ij at ``sigma2``, -1 where
     not known yet: no one-to-one subset of L_ij at this or a smaller sigma2 holds more (the

@@ -1,4 +1,4 @@
-"""Eq. 12-13 (``cbm.reference.select_anchor``) with the distance limit, over sparse candidate sets.
+"""Eq. 13-14 (``cbm.reference.select_anchor``) with the distance limit, over sparse candidate sets.
 
 Filtering never grows a set, so card(L_ij) bounds card(L^(2)_ij): anchors are visited from the
 largest candidate set down and the visit stops once no remaining set can reach the best size
@@ -27,7 +27,7 @@ class Selection:
     pairs: np.ndarray
     """(K, 2) (ego index, CAV index) of the winning set, sorted by ego index."""
     candidate_count: int
-    """card(L_ij) of the winning anchor before filtering (eq. 8)."""
+    """card(L_ij) of the winning anchor before filtering (eq. 9)."""
     rival: RivalSearch | None = None
     """Where the runner-up search starts (``cbm.engine.rival.runner_up``); None without a winner."""
     visit: Visit | None = None
@@ -59,7 +59,7 @@ def _as_pairs(members: np.ndarray, n_cav: int) -> np.ndarray:
 
 def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, rule: str | None,
                    ego_xy: np.ndarray, cav_xy: np.ndarray, distance_limit: float) -> np.ndarray:
-    """card(L^(2)) of each of ``anchors`` (eq. 12), 0 where the distance limit rejects it."""
+    """card(L^(2)) of each of ``anchors`` (eq. 13), 0 where the distance limit rejects it."""
     anchors = np.asarray(anchors, dtype=np.int64)
     if len(anchors) == 0:
         return np.zeros(0, np.int64)
@@ -69,7 +69,7 @@ def filtered_sizes(anchors: np.ndarray, L: CandidateSets, voted_by: PairSets, ru
 
 def select(L: CandidateSets, voted_by: PairSets, rule: str | None, ego_xy: np.ndarray, cav_xy: np.ndarray,
            distance_limit: float) -> Selection:
-    """Eq. 12-13: the largest filtered set after rejecting anchors beyond the distance limit, and
+    """Eq. 13-14: the largest filtered set after rejecting anchors beyond the distance limit, and
     where the runner-up search starts."""
     n_ego, n_cav = len(ego_xy), len(cav_xy)
     empty = Selection(anchor=None, pairs=np.zeros((0, 2), dtype=np.intp), candidate_count=0)

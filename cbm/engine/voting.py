@@ -1,6 +1,6 @@
-"""The voting sets of eq. 9 grouped by the pair they hold (``cbm.reference.votes`` reads them the
-other way round), so that the consensus of one anchor costs the votes cast in its own set, never
-(Ne Nc)^2.
+"""The voting sets (sigma3, as in the authors' released code: beyond the paper) grouped by the pair
+they hold (``cbm.reference.votes`` reads them the other way round), so that the consensus of one
+anchor costs the votes cast in its own set, never (Ne Nc)^2.
 """
 from __future__ import annotations
 
@@ -86,7 +86,7 @@ def _place_own(has_set, fill, values):
 
 
 def voted_by_member(votes: list, n_pairs: int) -> PairSets:
-    """Row m: the pairs whose voting set (eq. 9, quadruples within sigma3) holds pair m.
+    """Row m: the pairs whose voting set (quadruples within sigma3, the released code's) holds pair m.
 
     ``votes`` are the join's parts (``cbm.engine.join.VoteRows``), in order. A counting sort
     groups their quadruples by member (in row order), then adds (A, A) for every anchor A that has

@@ -38,7 +38,8 @@ def test_nine_titled_steps_with_the_frames_numbers(outcome: Outcome) -> None:
     shown = steps.walkthrough(outcome)
     assert [s.title for s in shown] == [steps.title(k) for k in range(9)]
     assert shown[0].title == "Step 1/9 · The wrong pose (eq. 4)"
-    assert shown[6].title == "Step 7/9 · Robust estimate (eq. 14-15)"
+    assert shown[7].title == "Step 8/9 · Guided re-association (step 7b, beyond the paper)"
+    assert shown[6].title == "Step 7/9 · Robust estimate (eq. 15-16)"
     facts = gather(outcome)
     i, j = facts.pair
     assert facts.pair == tuple(outcome.result.anchor)

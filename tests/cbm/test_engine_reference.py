@@ -1,4 +1,4 @@
-"""The fast engine that ``cbm.match`` runs gives exactly what ``cbm.reference`` (eq. 5-13 as the
+"""The fast engine that ``cbm.match`` runs gives exactly what ``cbm.reference`` (eq. 5-14 as the
 paper states them) gives: the winning pairs, the winner's card(L_ij), the anchor and the runner-up,
 on random scenes of up to 40 objects per agent, for every heading rule and consensus rule, with the
 engine's hand-overs as tuned for this machine, all taken (on four threads) and none taken."""
@@ -74,7 +74,7 @@ def test_with_the_verification_beyond_the_paper_cbms_own_pairs_are_still_the_ref
 
 def test_the_reference_reads_as_the_paper_on_a_scene_worked_by_hand():
     """Three cars in a row seen by both agents, the CAV's frame turned by 90 degrees: every anchor on
-    one car matches the other two (eq. 7-8), the consensus keeps them (eq. 10), and the set of three
+    one car matches the other two (eq. 8-9), the consensus keeps them (eq. 10-11), and the set of three
     wins (eq. 13)."""
     ego = np.zeros((3, 7))
     ego[:, 0], ego[:, 3:6] = [0.0, 10.0, 25.0], (4.5, 1.9, 1.6)

@@ -1,4 +1,4 @@
-"""The pose estimate of eq. 14: exact on exact pairs, as good as least squares on Gaussian noise
+"""The pose estimate of eq. 15: exact on exact pairs, as good as least squares on Gaussian noise
 (whatever its size), deaf to gross outliers."""
 import numpy as np
 import pytest

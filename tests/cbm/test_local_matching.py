@@ -1,5 +1,6 @@
 """The output-sensitive join and the candidate sets listed on demand agree with the reference's
-candidate and voting sets (eq. 7-9, ``cbm.reference.candidate_sets``), on every path of the join."""
+candidate sets (eq. 8-9) and the released code's voting sets (``cbm.reference.candidate_sets``), on
+every path of the join."""
 import numpy as np
 import pytest
 from hypothesis import given
