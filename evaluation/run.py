@@ -58,20 +58,22 @@ class Plan:
                    default=0)
 
 
-def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str,
-                 cav_distance: float = TARGET_DISTANCE, agents: int = 2) -> tuple[list[FrameInputs], list[int]]:
+def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str, cav_distance: float = TARGET_DISTANCE,
+                 agents: int = 2, window_s: float = 0.0) -> tuple[list[FrameInputs], list[int]]:
     """What the sweep needs of each frame (``evaluation.trials.frame_inputs``, as the app builds its
     trials), and the frames skipped for want of an ego or a CAV. ``ValueError`` for the OPV2V
     protocol on a dataset that does not say what each agent sees."""
     if protocol == "opv2v" and seq.visibility is None:
         raise ValueError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
-    return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance, agents=agents)
+    return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance, agents=agents, window_s=window_s)
 
 
 def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]] | None = None,
-                cav_distance: float = TARGET_DISTANCE, detections: str | None = None, agents: int = 2) -> Source:
+                cav_distance: float = TARGET_DISTANCE, detections: str | None = None, agents: int = 2,
+                window_s: float = 0.0) -> Source:
     """Open dataset ``name`` (with a detector's ``detections``, a stage1_boxes.json, when given) and
-    make its frame inputs; ``frames(n)`` picks frame indices among ``n`` (default: all).
+    make its frame inputs; ``frames(n)`` picks frame indices among ``n`` (default: all); ``window_s``:
+    seconds of the frames before each that a late message may come from.
     ``ValueError`` with one line when nothing can be run."""
     try:
         seq = loaders.open(name, detections=detections)
@@ -82,7 +84,7 @@ def load_source(name: str, protocol: str, frames: Callable[[int], Sequence[int]]
                          "(try other --frames, or synthetic:N with N > 0)")
     if not any(len(seq[index].track_ids) for index in picked):
         raise nothing
-    inputs, skipped = frame_inputs(seq, picked, protocol, cav_distance, agents)
+    inputs, skipped = frame_inputs(seq, picked, protocol, cav_distance, agents, window_s)
     if not inputs:
         raise ValueError(f"no frame of {name} has an ego and a CAV for the {protocol} protocol")
     if not any(len(frame.trial["ids"]) for frame in inputs):
@@ -106,8 +108,17 @@ def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
     protocol = protocol or scenario.protocol
     sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, fusion=fusion, params=dict(params or {}),
                   scenario=dataclasses.replace(scenario, protocol=protocol))
-    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections, agents)
+    window = late_window(scenario, sweep.grid)
+    return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections, agents, window)
                              for name in datasets))
+
+
+def late_window(scenario: ScenarioParams, grid: Mapping[str, Sequence[Any]]) -> float:
+    """Seconds of frames before each frame that the run's oldest late message needs: the scenario's,
+    or the largest the grid asks for."""
+    delays = [*grid.get("delay_ms", []), scenario.delay_ms]
+    jitters = [*grid.get("jitter_ms", []), scenario.jitter_ms]
+    return (max(delays) + max(jitters)) / 1000.0
 
 
 def run_plan(plan: Plan, *, workers: int = 1, progress: Callable[[int], None] | None = None,

@@ -32,9 +32,11 @@ import numpy as np
 from cbm import se2
 
 from .clutter import missed, with_false_boxes
+from .delay import MOST_MS, History, delay_rng, message_delay
 from .detected import with_detections
 from .drift import drift_error
 from .localization import reported_cav_pose
+from .visibility import agents_see
 
 Protocol = Literal["sind", "opv2v", "range"]
 Localization = Literal["fixed", "gaussian", "drifting", "dataset", "none"]
@@ -44,7 +46,7 @@ RANGES: dict[str, tuple[float, float]] = {
     "eta": (0.0, 1.0), "sigma_p": (0.0, 3.0), "sigma_theta": (0.0, 45.0), "flip_prob": (0.0, 1.0),
     "loc_x": (-50.0, 50.0), "loc_y": (-50.0, 50.0), "loc_yaw": (-90.0, 90.0), "loc_tau": (1.0, 3600.0),
     "loc_white": (0.0, 1.0), "sensor_range": (10.0, 300.0), "miss_rate": (0.0, 1.0), "false_rate": (0.0, 2.0),
-    "min_score": (0.0, 1.0),
+    "min_score": (0.0, 1.0), "sight_share": (0.05, 1.0), "delay_ms": (0.0, MOST_MS), "jitter_ms": (0.0, MOST_MS),
 }
 """The one range of each number of a scenario, wherever it is given (a slider, a preset, ``--grid``, a
 search space): beyond them a trial takes minutes or means nothing (issue 40: ``false_rate = 50`` made
@@ -86,6 +88,18 @@ class ScenarioParams:
     """Drifting: white noise added every frame, as a share of each axis's std-dev (GNSS jitter)."""
     sensor_range: float = 50.0
     """Metres (range protocol): an agent sees the objects whose centre is at most this far from it."""
+    sight: bool = False
+    """Range protocol: an agent sees an object only in its line of sight (``evaluation.sight``: at
+    least ``sight_share`` of the footprint not hidden behind nearer boxes), or, where the dataset says
+    what the agent saw (Argoverse 2's lidar points for the recording car, per-agent labels), that."""
+    sight_share: float = 0.25
+    """Least visible share of an object's footprint for an agent to see it (``sight``)."""
+    delay_ms: float = 0.0
+    """Milliseconds between the CAV's capture and the ego's frame (``evaluation.delay``): the CAV's
+    detections and reported pose are those of the sequence at the capture time; with the gap between
+    the agents' own timestamps where the dataset has them."""
+    jitter_ms: float = 0.0
+    """Milliseconds: each frame's delay is ``delay_ms`` plus a uniform draw within +- this."""
     miss_rate: float = 0.0
     """Probability that an agent misses a detection it would make (each agent draws its own misses)."""
     false_rate: float = 0.0
@@ -111,6 +125,19 @@ class ScenarioParams:
             _require(self, name, is_valid, f"a number >= 0 (a std-dev, as localization={self.localization!r})")
         is_seed = isinstance(self.seed, (int, np.integer)) and not isinstance(self.seed, bool) and self.seed >= 0
         _require(self, "seed", is_seed, "an integer >= 0")
+        _require(self, "sight", isinstance(self.sight, (bool, np.bool_)), "true or false")
+        _require(self, "jitter_ms", self.delay_ms + self.jitter_ms <= MOST_MS,
+                 f"at most {MOST_MS:g} - delay_ms (no message older than {MOST_MS:g} ms)")
+
+    @property
+    def delayed(self) -> bool:
+        """Whether the CAV's messages are late (``delay_ms`` or ``jitter_ms``)."""
+        return self.delay_ms > 0.0 or self.jitter_ms > 0.0
+
+    @property
+    def window_s(self) -> float:
+        """Seconds of frames before a frame that its trial may need (the oldest late message)."""
+        return (self.delay_ms + self.jitter_ms) / 1000.0
 
     @property
     def sigma_theta_rad(self) -> float:
@@ -158,7 +185,9 @@ class Trial:
     ego_pose: np.ndarray
     """(3, 3) ego->world."""
     cav_pose: np.ndarray
-    """(3, 3) true CAV->world."""
+    """(3, 3) true CAV->world (at capture: ``message_age_s`` before the ego's frame)."""
+    message_age_s: float = 0.0
+    """Seconds between the CAV's capture and the ego's frame (``evaluation.delay``)."""
 
 
 def trial_rng(seed: int, frame_index: int, stream: int = 0) -> np.random.Generator:
@@ -197,6 +226,11 @@ class FrameInputs:
     a localization error that drifts over time (``evaluation.drift``)."""
     cav: str = ""
     """The CAV's id (empty for abstract agents): its drift is its own."""
+    history: History | None = None
+    """The frames before this one as the CAV saw them, for a late message (``evaluation.delay``);
+    None when the scenario asked for none (``frame_inputs``' ``window_s``)."""
+    gap_s: float = 0.0
+    """Seconds by which the CAV's own capture precedes the ego's in the dataset (its timestamps)."""
 
     @property
     def peers(self) -> tuple[FrameInputs, ...]:
@@ -206,13 +240,27 @@ class FrameInputs:
     def build(self, params: ScenarioParams, seed: int) -> Trial:
         """The trial of this frame under ``params`` and ``seed``: every trial of the app, the
         evaluation, sweeps and search is made here."""
-        trial = make_trial(**self.trial, params=params, rng=trial_rng(seed, self.index, self.stream),
+        trial = make_trial(**self.late(params, seed), params=params, rng=trial_rng(seed, self.index, self.stream),
                            loc_error=self.drift(params, seed))
         if not self.detections:
             return trial
         agents = {"ego": self.trial.get("ego_id"), "cav": self.trial.get("cav_id")}
         kept = {role: found.above(params.min_score).boxes for role, found in self.detections.items()}
         return with_detections(trial, kept, self.trial["boxes"], self.trial["ids"], agents)
+
+    def late(self, params: ScenarioParams, seed: int) -> Mapping[str, Any]:
+        """``make_trial``'s arguments with the CAV's objects and pose at its capture time, the
+        dataset's own gap plus the scenario's delay before this frame (``History.at``); as they are
+        when the message is not late."""
+        if not params.delayed and self.gap_s == 0.0:
+            return self.trial
+        if self.history is None:
+            raise ValueError("a late message needs the frames before this one (frame_inputs(..., window_s=...))")
+        age = self.gap_s + (message_delay(params.delay_ms, params.jitter_ms, delay_rng(seed, self.index, self.stream))
+                            if params.delayed else 0.0)
+        cav_world, cav_pose, captured = self.history.at(self.history.times[-1] - age)
+        return {**self.trial, "cav_world": cav_world, "cav_pose": cav_pose,
+                "message_age_s": float(self.history.times[-1] - captured)}
 
     def drift(self, params: ScenarioParams, seed: int) -> np.ndarray | None:
         """This frame's drifting localization error (None unless ``localization="drifting"``)."""
@@ -242,6 +290,8 @@ def make_trial(
     cav_reported_pose: np.ndarray | None = None,
     rng: np.random.Generator | None = None,
     loc_error: np.ndarray | None = None,
+    cav_world: np.ndarray | None = None,
+    message_age_s: float = 0.0,
 ) -> Trial:
     """Make one trial from ``(N, 7)`` world-frame ``boxes`` with unique ``ids``.
 
@@ -252,7 +302,9 @@ def make_trial(
     detects itself (removed after the deal, so sind counts hold for objects other than the agents).
     ``rng`` defaults to ``np.random.default_rng(params.seed)``; the draw order is in the module docstring.
     ``loc_error`` is the drifting localization error of this frame (``FrameInputs.drift``), which
-    ``localization="drifting"`` needs.
+    ``localization="drifting"`` needs. ``cav_world``: the same objects (rows of ``boxes``) where the
+    CAV saw them, ``message_age_s`` before (a late message, ``FrameInputs.late``; NaN rows: not there
+    then), with ``cav_pose`` the CAV's pose at that time.
     """
     boxes, ids = _checked_objects(boxes, ids)
     rng = np.random.default_rng(params.seed) if rng is None else rng
@@ -265,7 +317,8 @@ def make_trial(
     cav_noise = (rng.standard_normal((n, 3)), rng.random(n))
     ego_missed, cav_missed = missed(rng.random(n), params.miss_rate), missed(rng.random(n), params.miss_rate)
 
-    ego_sees, cav_sees = _visibility(boxes, ids, params, order, ego_pose, cav_pose, visibility)
+    cav_world = boxes if cav_world is None else np.asarray(cav_world, dtype=float)
+    ego_sees, cav_sees = agents_see(boxes, cav_world, ids, params, order, ego_pose, cav_pose, visibility)
     ego_sees &= ~ego_missed if ego_id is None else ~ego_missed & (ids != ego_id)
     cav_sees &= ~cav_missed if cav_id is None else ~cav_missed & (ids != cav_id)
 
@@ -273,7 +326,7 @@ def make_trial(
     reported = reported_cav_pose(params, ego_pose, cav_pose, loc_draw, cav_reported_pose, loc_error)
     init = se2.inverse(ego_pose) @ reported
     ego_frame_boxes = se2.apply_boxes(se2.inverse(ego_pose), boxes[ego_sees])
-    cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), boxes[cav_sees])
+    cav_frame_boxes = se2.apply_boxes(se2.inverse(cav_pose), cav_world[cav_sees])
     trial = Trial(
         ego_boxes=_detect(ego_frame_boxes, ego_noise[0][ego_sees], ego_noise[1][ego_sees], params),
         cav_boxes=_detect(cav_frame_boxes, cav_noise[0][cav_sees], cav_noise[1][cav_sees], params),
@@ -286,6 +339,7 @@ def make_trial(
         cav_true_xy=se2.apply_points(T_true, cav_frame_boxes[:, :2]),
         ego_pose=ego_pose,
         cav_pose=cav_pose,
+        message_age_s=message_age_s,
     )
     if params.false_rate == 0.0:
         return trial
@@ -324,47 +378,6 @@ def _checked_pose(name: str, pose: np.ndarray) -> np.ndarray:
     if pose.shape != (3, 3):
         raise ValueError(f"{name} must be a (3, 3) SE(2) matrix, got shape {pose.shape}")
     return pose.copy()
-
-
-def _visibility(
-    boxes: np.ndarray,
-    ids: np.ndarray,
-    params: ScenarioParams,
-    order: np.ndarray,
-    ego_pose: np.ndarray,
-    cav_pose: np.ndarray,
-    visibility: Mapping[str, np.ndarray] | None,
-) -> tuple[np.ndarray, np.ndarray]:
-    if params.protocol == "sind":
-        return sind_split(order, params.eta)
-    if params.protocol == "range":
-        return in_range(boxes, ego_pose, params.sensor_range), in_range(boxes, cav_pose, params.sensor_range)
-    if visibility is None or "ego" not in visibility or "cav" not in visibility:
-        raise ValueError('the opv2v protocol needs visibility={"ego": ids, "cav": ids} (ids each agent sees)')
-    return np.isin(ids, np.asarray(visibility["ego"])), np.isin(ids, np.asarray(visibility["cav"]))
-
-
-def sind_split(order: np.ndarray, eta: float) -> tuple[np.ndarray, np.ndarray]:
-    """SIND protocol (sec. IV-A): masks of what the ego and the CAV see.
-
-    The first ``round(eta * N)`` objects of the random ``order`` form the co-visible set M; the rest
-    are dealt alternately, ego first, so I_X u I_Y = I and I_X n I_Y = M. An odd remainder's extra
-    object goes to the ego.
-    """
-    n = len(order)
-    k = int(round(eta * n))
-    ego_sees = np.zeros(n, dtype=bool)
-    cav_sees = np.zeros(n, dtype=bool)
-    ego_sees[order[:k]] = True
-    cav_sees[order[:k]] = True
-    ego_sees[order[k::2]] = True
-    cav_sees[order[k + 1 :: 2]] = True
-    return ego_sees, cav_sees
-
-
-def in_range(boxes: np.ndarray, pose: np.ndarray, sensor_range: float) -> np.ndarray:
-    """Range protocol: mask of the objects whose centre is within ``sensor_range`` of the agent."""
-    return np.linalg.norm(boxes[:, :2] - se2.translation_of(pose), axis=1) <= sensor_range
 
 
 def _detect(boxes: np.ndarray, gauss: np.ndarray, uniform: np.ndarray, params: ScenarioParams) -> np.ndarray:

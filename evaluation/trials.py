@@ -29,7 +29,9 @@ from collections.abc import Iterable
 import numpy as np
 
 from cbm import se2
-from evaluation.scenario import FrameInputs, Protocol, ScenarioParams, Trial, in_range
+from evaluation.delay import History, history_of
+from evaluation.scenario import FrameInputs, Protocol, ScenarioParams, Trial
+from evaluation.visibility import in_range
 from loaders import Frame, Sequence
 from loaders.detections import DetectedBoxes
 
@@ -83,18 +85,19 @@ def agents_of(frame: Frame, cav: str = AUTO_CAV,
 
 
 def frame_inputs(frame: Frame, protocol: Protocol, cav: str = AUTO_CAV, target_distance: float = TARGET_DISTANCE,
-                 sensor_range: float = ScenarioParams.sensor_range) -> FrameInputs:
-    """The inputs of every trial of ``frame`` under ``protocol``; ``NoTrial`` when it has none."""
+                 sensor_range: float = ScenarioParams.sensor_range, window_s: float = 0.0) -> FrameInputs:
+    """The inputs of every trial of ``frame`` under ``protocol``; ``NoTrial`` when it has none.
+    ``window_s``: seconds of the frames before it that a late message may come from (``FrameInputs.history``)."""
     agents = agents_of(frame, cav, target_distance)
     if agents is None:
         return _abstract_inputs(frame, protocol)
     ego, chosen, note = agents
-    return _pair_inputs(frame, protocol, ego, chosen, note, sensor_range)
+    return _pair_inputs(frame, protocol, ego, chosen, note, sensor_range, window_s=window_s)
 
 
 def frame_cav_inputs(frame: Frame, protocol: Protocol, agents: int = 2, cav: str = AUTO_CAV,
-                     target_distance: float = TARGET_DISTANCE,
-                     sensor_range: float = ScenarioParams.sensor_range) -> list[FrameInputs]:
+                     target_distance: float = TARGET_DISTANCE, sensor_range: float = ScenarioParams.sensor_range,
+                     window_s: float = 0.0) -> list[FrameInputs]:
     """The inputs of the trials of ``frame`` with ``agents`` agents: one per CAV, at most
     ``agents - 1`` (fewer when the frame has fewer candidates); ``NoTrial`` when it has none.
 
@@ -113,8 +116,8 @@ def frame_cav_inputs(frame: Frame, protocol: Protocol, agents: int = 2, cav: str
         return _with_peers([dataclasses.replace(abstract, stream=rank) for rank in range(count)])
     ego, chosen, note = first
     cavs = [chosen, *other_cavs(frame, ego, chosen, target_distance)][:agents - 1]
-    return _with_peers([_pair_inputs(frame, protocol, ego, track, note if rank == 0 else "auto", sensor_range, rank)
-                        for rank, track in enumerate(cavs)])
+    return _with_peers([_pair_inputs(frame, protocol, ego, track, note if rank == 0 else "auto", sensor_range, rank,
+                                     window_s) for rank, track in enumerate(cavs)])
 
 
 def other_cavs(frame: Frame, ego: str, chosen: str, target_distance: float = TARGET_DISTANCE) -> list[str]:
@@ -127,13 +130,14 @@ def other_cavs(frame: Frame, ego: str, chosen: str, target_distance: float = TAR
 
 def sequence_inputs(sequence: Sequence, frames: Iterable[int], protocol: Protocol, cav: str = AUTO_CAV,
                     target_distance: float = TARGET_DISTANCE, sensor_range: float = ScenarioParams.sensor_range,
-                    agents: int = 2) -> tuple[list[FrameInputs], list[int]]:
+                    agents: int = 2, window_s: float = 0.0) -> tuple[list[FrameInputs], list[int]]:
     """``frame_cav_inputs`` of each of ``frames`` (one input per frame with two agents), and the
     frames that make no trial (skipped)."""
     inputs, skipped = [], []
     for k in frames:
         try:
-            inputs.extend(frame_cav_inputs(sequence[k], protocol, agents, cav, target_distance, sensor_range))
+            inputs.extend(frame_cav_inputs(sequence[k], protocol, agents, cav, target_distance, sensor_range,
+                                           window_s))
         except NoTrial:
             skipped.append(k)
     return inputs, skipped
@@ -149,7 +153,7 @@ def build_trial(frame: Frame, scenario: ScenarioParams, seed: int, cav: str = AU
                 target_distance: float = TARGET_DISTANCE) -> Trial:
     """The trial of ``frame`` under ``scenario`` and ``seed``: ``frame_inputs`` then
     ``FrameInputs.build`` (draws from ``trial_rng(seed, frame.index)``)."""
-    inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range)
+    inputs = frame_inputs(frame, scenario.protocol, cav, target_distance, scenario.sensor_range, scenario.window_s)
     return inputs.build(scenario, seed)
 
 
@@ -163,9 +167,12 @@ def _abstract_inputs(frame: Frame, protocol: Protocol) -> FrameInputs:
 
 
 def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: str, sensor_range: float,
-                 stream: int = 0) -> FrameInputs:
+                 stream: int = 0, window_s: float = 0.0) -> FrameInputs:
     """The inputs of the trial of ``ego`` and the CAV ``chosen``, drawing from stream ``stream``."""
     inputs = frame_trial_inputs(frame, ego, chosen)
+    gap = capture_gap(frame, ego, chosen)
+    if gap:
+        note += f"; the CAV captured {1000 * gap:.0f} ms before the ego (the dataset's timestamps)"
     inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
     if protocol == "opv2v" and inputs["visibility"] is None:
         inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
@@ -173,8 +180,51 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     detected = _detections(frame, ego, chosen)
     if detected:
         note += f"; real detections of {' and '.join(detected)}"
+    window = window_s + gap
+    history = _history(frame, chosen, inputs["ids"], window) if window > 0.0 else None
     return FrameInputs(frame.index, inputs, labels=frame.categories[in_trials(frame)], note=note,
-                       detections=detected or None, stream=stream, times=frame.sequence.timestamps, cav=str(chosen))
+                       detections=detected or None, stream=stream, times=frame.sequence.timestamps, cav=str(chosen),
+                       history=history, gap_s=gap)
+
+
+def capture_gap(frame: Frame, ego: str, cav: str) -> float:
+    """Seconds by which the CAV's capture precedes the ego's in the dataset's own timestamps (0 where
+    the dataset has one time per frame; never negative: a later CAV capture counts as none)."""
+    times = frame.agent_times()
+    if not times or ego not in times or cav not in times:
+        return 0.0
+    return max(times[ego] - times[cav], 0.0)
+
+
+def _history(frame: Frame, cav: str, ids: np.ndarray, window_s: float) -> History:
+    """The frames from ``window_s`` seconds (and one frame more) before ``frame`` up to it, as the CAV
+    saw them: the boxes of ``frame``'s objects ``ids`` in each, and the CAV's pose (``evaluation.delay``)."""
+    sequence, index = frame.sequence, frame.index
+    times, boxes, poses = [], [], []
+    for j in range(index, -1, -1):
+        earlier = sequence[j]
+        try:
+            pose = agent_pose(earlier, cav)
+        except KeyError:
+            break
+        times.append(earlier.timestamp)
+        boxes.append(_aligned(earlier, ids))
+        poses.append(pose)
+        if frame.timestamp - earlier.timestamp >= window_s:
+            break
+    return history_of(times[::-1], boxes[::-1], poses[::-1])
+
+
+def _aligned(frame: Frame, ids: np.ndarray) -> np.ndarray:
+    """(len(ids), 7) the boxes of ``frame``'s objects ``ids`` in that order, NaN where one is absent."""
+    kept = in_trials(frame)
+    have, boxes = frame.track_ids[kept], frame.boxes()[kept]
+    out = np.full((len(ids), 7), np.nan)
+    order = np.argsort(have)
+    at = np.searchsorted(have, ids, sorter=order)
+    found = (at < len(have)) & (have[order[np.minimum(at, len(have) - 1)]] == ids) if len(have) else at < 0
+    out[found] = boxes[order[at[found]]]
+    return out
 
 
 def _with_peers(inputs: list[FrameInputs]) -> list[FrameInputs]:

@@ -156,6 +156,10 @@ class Sequence:
         """Categories of ``objects`` that trials leave out unless the user includes them (set it to an
         empty set): the OPV2V family's pedestrians (``walkers``), which the release's vehicle-only
         benchmarks never match."""
+        self.agent_times: dict[int, dict[str, float]] = {}
+        """``frame index -> agent id -> seconds``: when that agent captured its part of the frame, on
+        the clock of ``timestamps``, where the dataset keeps each agent's own time (DAIR-V2X's vehicle
+        and infrastructure frames, the OPV2V family's per-CAV files); a late message starts from it."""
         self.detections: dict[int, dict] = {}
         """``frame index -> agent id -> loaders.detections.DetectedBoxes``: a real detector's boxes,
         when a detections file is attached (``loaders.open(path, detections=...)``)."""
@@ -294,6 +298,11 @@ class Frame:
         seen = {str(agents[a]): tracks[a:b] for a, b in zip(bounds[:-1], bounds[1:])}
         present = seq._agent_ids[self._rows(seq._agent_offsets)] if seq.agents is not None else []
         return {**{str(a): tracks[:0] for a in present}, **seen}
+
+    def agent_times(self) -> dict[str, float]:
+        """``agent id -> seconds``: each agent's own capture time of this frame (``Sequence.agent_times``),
+        empty where the dataset has one time per frame."""
+        return dict(self.sequence.agent_times.get(self.index, {}))
 
     @property
     def detections(self) -> dict | None:

@@ -192,7 +192,8 @@ class Explorer:
         """Frame ``index``'s trial inputs under ``settings`` (``evaluation.trials.frame_inputs``), as
         ``compute`` and the sequence runs use them; ``ValueError`` when the frame makes no trial."""
         scenario = settings.scenario
-        return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range)
+        return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range,
+                            window_s=scenario.window_s)
 
     def trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, TrialMetrics]:
         """Frame ``index``'s trial inputs and trial under ``settings`` (its scenario and CAV choice, all
@@ -250,7 +251,7 @@ class Explorer:
         with the others as its peers)."""
         scenario, agents = settings.scenario, min(settings.cavs, MAX_CAVS) + 1
         every = frame_cav_inputs(self.sequence[index], scenario.protocol, agents, settings.cav,
-                                 sensor_range=scenario.sensor_range)
+                                 sensor_range=scenario.sensor_range, window_s=scenario.window_s)
         trials = [inputs.build(scenario, scenario.seed) for inputs in every]
         outcomes = []
         for k, (inputs, trial) in enumerate(zip(every[1:], trials[1:]), start=1):

@@ -44,7 +44,7 @@ def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) 
     no CAV (skipped)."""
     scenario = settings.scenario
     return sequence_inputs(explorer.sequence, frames, scenario.protocol, settings.cav,
-                           sensor_range=scenario.sensor_range)
+                           sensor_range=scenario.sensor_range, window_s=scenario.window_s)
 
 
 @dataclass(frozen=True)

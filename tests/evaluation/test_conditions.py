@@ -65,7 +65,11 @@ def test_bad_clutter_rates_name_the_field(field, value):
 
 def test_the_named_conditions_are_the_issue_settings():
     assert list(CONDITIONS) == ["mild", "hard", "range-50", "heavy-noise", "prior-error", "clutter", "drift-heavy",
-                                "drift-clutter", "drift-bigloc", "no-prior"]
+                                "drift-clutter", "drift-bigloc", "no-prior", "occluded", "latency"]
+    occluded, late = CONDITIONS["occluded"], CONDITIONS["latency"]
+    assert (occluded.sight, occluded.sensor_range, occluded.sigma_p) == (True, 50.0, CONDITIONS["range-50"].sigma_p)
+    assert (late.delay_ms - late.jitter_ms, late.delay_ms + late.jitter_ms, late.localization) == (100.0, 300.0,
+                                                                                                   "drifting")
     drift, bigloc = CONDITIONS["drift-heavy"], CONDITIONS["drift-bigloc"]
     assert (drift.localization, drift.sigma_p, drift.sigma_theta, drift.miss_rate) == ("drifting", 0.8, 15.0, 0.2)
     assert (bigloc.loc_x, bigloc.loc_yaw, bigloc.loc_tau) == (6.0, 15.0, 60.0)
