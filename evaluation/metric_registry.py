@@ -55,8 +55,8 @@ DEGREES = Unit("deg", "°")
 PAIRS = Unit("pairs", " pairs", 1.0, 1)
 MILLISECONDS = Unit("ms", " ms", 1000.0, 1)
 """Stored in seconds."""
-SUCCESS_LEVELS = (1.0, 2.0, 3.0)
-"""Thresholds t of the success rates reported: RTE < t m and RRE < t deg."""
+SUCCESS_LEVELS = (1.0, 2.0, 3.0, 4.0, 5.0)
+"""Thresholds t of the success rates reported: RTE < t m and RRE < t deg (V2X-Reg++ reports 1 to 5)."""
 HEADLINE_LEVEL = 1.0
 """The success test of ``evaluation.metrics.is_success``: its rate is ``success_rate``."""
 
@@ -248,6 +248,19 @@ class SuccessRate(RunMetric):
         return _ratio(sum(is_success(m, rte_max=self.level, rre_max=self.level) for m in trials), len(trials))
 
 
+class MeanOfSuccesses(RunMetric):
+    """mX @ t = the mean of a trial metric X over the trials that succeed at t (RTE < t m and RRE <
+    t deg): V2X-Reg++'s mRRE and mRTE beside its success rates; NaN when no trial succeeds."""
+
+    def __init__(self, metric: TrialMetric, level: float) -> None:
+        self.metric, self.level, self.unit, self.better = metric, level, metric.unit, metric.better
+        self.key, self.label = f"m{metric.key}@{level:g}", f"m{metric.label} of successes @ {level:g} m, {level:g} deg"
+
+    def __call__(self, trials: Sequence[TrialMetrics]) -> float:
+        values = [self.metric.of(m) for m in trials if is_success(m, rte_max=self.level, rre_max=self.level)]
+        return float(np.mean(values)) if values else math.nan
+
+
 class AbstainRate(RunMetric):
     """abstained = the share of the trials on which the method said its pose has not enough evidence
     (``cbm.MatchResult.abstained``; that pose is still scored)."""
@@ -318,6 +331,8 @@ def _ratio(numerator: float, denominator: float) -> float:
 
 for _metric in (RTE(), RRE(), Precision(), Recall(), AverageDistance(), Margin(),
                 PooledPrecision(), PooledRecall(), PooledDistance(), Median(RRE(), headline=True),
-                Median(RTE(), headline=True), Mean(RRE()), Mean(RTE()), *(SuccessRate(t) for t in SUCCESS_LEVELS),
+                Median(RTE(), headline=True), Mean(RRE()), Mean(RTE()),
+                *(m for t in SUCCESS_LEVELS for m in (SuccessRate(t), MeanOfSuccesses(RRE(), t),
+                                                      MeanOfSuccesses(RTE(), t))),
                 AbstainRate(), ReturnedSuccess(), Median(Margin()), MedianRuntime()):
     register(_metric)
