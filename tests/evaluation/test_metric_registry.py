@@ -141,3 +141,33 @@ def test_a_metric_registered_once_appears_in_every_output_of_a_run(two_new_metri
     summary = (tmp_path / "summary.md").read_text()
     assert f"| worst RTE (m) | {metrics['cbm']['rte_max']:.2f} | {metrics['icp']['rte_max']:.2f} |" in summary
     assert f"- {WorstRTE().formula}" in summary
+
+
+def test_mean_errors_over_the_successes_at_each_level_as_v2x_reg_plus_plus_reports_them() -> None:
+    trials = [record(0.4, 0.2), record(1.5, 0.5), record(0.3, 2.6), record(0.0, 0.0, estimated=False),
+              record(4.5, 1.0), record(0.9, 0.99, abstained=True), record(2.0, 0.1)]
+    found = aggregate(trials)
+    expected = {  # t: (successes, mRRE, mRTE); a threshold is strict, an abstention still counts
+        1: (2, (0.2 + 0.99) / 2, (0.4 + 0.9) / 2),
+        2: (3, (0.2 + 0.5 + 0.99) / 3, (0.4 + 1.5 + 0.9) / 3),
+        3: (5, (0.2 + 0.5 + 2.6 + 0.99 + 0.1) / 5, (0.4 + 1.5 + 0.3 + 0.9 + 2.0) / 5),
+        4: (5, (0.2 + 0.5 + 2.6 + 0.99 + 0.1) / 5, (0.4 + 1.5 + 0.3 + 0.9 + 2.0) / 5),
+        5: (6, (0.2 + 0.5 + 2.6 + 1.0 + 0.99 + 0.1) / 6, (0.4 + 1.5 + 0.3 + 4.5 + 0.9 + 2.0) / 6),
+    }
+    for t, (successes, mrre, mrte) in expected.items():
+        rate = found["success_rate" if t == 1 else f"success_rate_{t}"]
+        assert (rate, found[f"mrre@{t}"], found[f"mrte@{t}"]) == pytest.approx((successes / 7, mrre, mrte))
+    nothing = aggregate([record(9.0, 9.0), record(0.0, 0.0, estimated=False)])
+    assert all(math.isnan(nothing[f"m{error}@{t}"]) for error in ("rre", "rte") for t in expected)
+
+
+def test_success_and_the_mean_errors_of_successes_at_1_to_5_are_in_metrics_json_and_the_summary() -> None:
+    rows = [row(record(0.4, 0.2)), row(record(1.5, 0.5)), row(record(0.0, 0.0, estimated=False))]
+    metrics = method_metrics(rows, ["cbm"] * 3, timing=False)["cbm"]
+    table = cells(table_one(rows, ["cbm"] * 3, timing=False))
+    for t, (rate, mrre, mrte) in {1: (1 / 3, 0.2, 0.4), 2: (2 / 3, 0.35, 0.95), 5: (2 / 3, 0.35, 0.95)}.items():
+        success = "success_rate" if t == 1 else f"success_rate_{t}"
+        assert (metrics[success], metrics[f"mrre@{t}"], metrics[f"mrte@{t}"]) == pytest.approx((rate, mrre, mrte))
+        assert table[f"success @ {t} m, {t} deg (%)"][0] == f"{100 * rate:.1f}"
+        assert table[f"mRRE of successes @ {t} m, {t} deg (deg)"][0] == f"{mrre:.2f}"
+        assert table[f"mRTE of successes @ {t} m, {t} deg (m)"][0] == f"{mrte:.2f}"
