@@ -59,7 +59,7 @@ GRID = {name: tuple(dict.fromkeys(v[name] for v in CBM_VARIANTS.values()))
         for name in ("heading", "estimator", "refine")}
 COLUMNS = (("precision", "precision"), ("recall", "recall"), ("S@1", "success_rate"), ("S@2", "success_rate_2"),
            ("S@3", "success_rate_3"), ("abstained", "abstain_rate"))
-"""Printed columns: header and ``evaluation.metrics.aggregate`` key."""
+"""Printed columns: header and ``evaluation.metric_registry.aggregate`` key."""
 
 
 @dataclass(frozen=True)

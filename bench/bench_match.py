@@ -51,7 +51,8 @@ def measure(size: int, count: int, heading: str, layout: str) -> dict:
     from floor import floor_seconds
 
     from cbm import CBMParams, match
-    from evaluation.metrics import aggregate, evaluate
+    from evaluation.metric_registry import aggregate
+    from evaluation.metrics import evaluate
 
     params = CBMParams(heading=heading)
     trials = trials_for(size, count, layout)

@@ -4,7 +4,8 @@ table, reports and plots read it, the command line is thin.
     import evaluation
     table = evaluation.run(["argoverse2"], methods=("cbm", "oracle"), grid={"sigma_p": (0.3, 0.6)}, seed=0)
 
-Modules: ``run`` (datasets and a sweep into the table), ``report`` (Markdown summary),
+Modules: ``run`` (datasets and a sweep into the table), ``metric_registry`` (every metric reported,
+one object each), ``report`` (Markdown summary),
 ``aggregates`` (``metrics.json`` and the success curve), ``latex`` (``summary.tex``), ``plots`` (the
 paper's figures), ``outputs`` (the files, written atomically), ``compare`` (two runs' differences),
 ``cli`` (``evaluate.py`` and ``evaluate.py compare``).

@@ -1,5 +1,6 @@
 """Per-method aggregates of an evaluation in machine-readable form: ``metrics.json`` (each method's
-Table-I metrics under its name) and the success rate as a curve over error thresholds.
+run metrics, ``evaluation.metric_registry``, under its name) and the success rate as a curve over
+error thresholds.
 
     success_curve(rows, variants)  # [(0.5, {"cbm": 0.2, ...}), (1.0, {...}), ..., (5.0, {...})]
 """
@@ -15,42 +16,25 @@ import polars as pl
 
 from evaluation.ap import IOU_THRESHOLDS, pooled_ap
 from evaluation.fusion import decoded
+from evaluation.metric_registry import HEADLINE_LEVEL, run_metrics
 from evaluation.sweep import summarise
 
-SUCCESS_RTE_M = 1.0
-SUCCESS_RRE_DEG = 1.0
+SUCCESS_RTE_M = SUCCESS_RRE_DEG = HEADLINE_LEVEL
 """The thresholds of ``success_rate`` (``evaluation.metrics.is_success``): RTE < 1 m and RRE < 1 deg."""
 THRESHOLDS = tuple(0.5 * k for k in range(1, 11))
 """The success curve's thresholds t, 0.5 to 5 in 0.5 steps: RTE < t m and RRE < t deg."""
-METRIC_KEYS = (
-    ("precision", "precision"),
-    ("recall", "recall"),
-    ("success_rate", "success_rate"),
-    ("median_rte", "rte_median"),
-    ("median_rre", "rre_median"),
-    ("mean_rte", "rte_mean"),
-    ("mean_rre", "rre_mean"),
-    ("ad", "ad"),
-    ("success_rate_2", "success_rate_2"),
-    ("success_rate_3", "success_rate_3"),
-    ("abstain_rate", "abstain_rate"),
-    ("returned_success", "returned_success"),
-)
-"""``metrics.json`` key and the ``evaluation.metrics.aggregate`` key it holds."""
-RUNTIME_KEY = ("median_runtime_s", "runtime_median_s")
 
 
 def method_metrics(rows: Sequence[Mapping[str, Any]], variants: Sequence[str],
                    timing: bool = True) -> dict[str, dict[str, Any]]:
-    """Each method variant's micro-averaged aggregates over all its trials (as Table I), under the
-    ``metrics.json`` keys, with its trial counts and the success thresholds; NaN where nothing was
-    measured. ``timing``: with the median runtime. With late fusion (the rows have ``fused``
-    detections), each method's ``ap@0.5`` and ``ap@0.7`` too (``fused_ap``)."""
+    """Each method variant's run metrics over all its trials (``evaluation.metric_registry``), under
+    their ``metrics.json`` keys, with its trial counts and the success thresholds; NaN where nothing
+    was measured. ``timing``: with the metrics that measure time. With late fusion (the rows have
+    ``fused`` detections), each method's ``ap@0.5`` and ``ap@0.7`` too (``fused_ap``)."""
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
-    keys = (*METRIC_KEYS, *([RUNTIME_KEY] if timing else []))
     found: dict[str, dict[str, Any]] = {}
     for (name,), stats in summarise(keyed, ["variant"]):
-        found[name] = {key: float(stats[source]) for key, source in keys}
+        found[name] = {metric.saved_as: float(stats[metric.key]) for metric in run_metrics(timing)}
         found[name].update(n_trials=int(stats["n_trials"]), n_estimated=int(stats["n_estimated"]),
                            success_rte_max_m=SUCCESS_RTE_M, success_rre_max_deg=SUCCESS_RRE_DEG)
     for name, ap in fused_ap(rows, variants).items():

@@ -4,7 +4,8 @@
     python evaluate.py compare results/before results/after     # also: cbm-evaluate compare A B
 
 Prints the differences as Markdown and writes ``compare.md`` and ``compare.png`` (a bar chart of
-the differences) into ``--out`` (default: ``RUN_B/compare_vs_<name of RUN_A>/``).
+the differences of the headline run metrics, ``evaluation.metric_registry``) into ``--out``
+(default: ``RUN_B/compare_vs_<name of RUN_A>/``).
 """
 from __future__ import annotations
 
@@ -18,13 +19,10 @@ import polars as pl
 from loaders.errors import unreadable
 
 from . import run_files
-from .aggregates import METRIC_KEYS
+from .metric_registry import run_metrics
 from .outputs import OutError, check_writable, write_together
 from .plots import plot_differences, plt
 
-PLOTTED = [key for key, _ in METRIC_KEYS[:5]]
-"""The headline keys drawn in ``compare.png``: precision, recall, success rate, median RTE and RRE."""
-LOWER_IS_BETTER = {"median_rte", "median_rre", "mean_rte", "mean_rre", "ad", "median_runtime_s"}
 SETTINGS = ("success_rte_max_m", "success_rre_max_deg")
 """Keys that say how a metric was computed, not how well a method did: not compared."""
 
@@ -159,7 +157,9 @@ def compare(run_a: Path, run_b: Path, out: Path | None = None) -> str:
     given = out is not None
     out = out if out is not None else run_b / f"compare_vs_{run_a.resolve().name}"
     check_compare_out(out, given)
-    fig = plot_differences(found, PLOTTED, LOWER_IS_BETTER, f"{run_b.name} minus {run_a.name}")
+    headline = [metric.saved_as for metric in run_metrics() if metric.headline]
+    lower_better = {metric.saved_as for metric in run_metrics() if metric.better == "lower"}
+    fig = plot_differences(found, headline, lower_better, f"{run_b.name} minus {run_a.name}")
     try:
         write_together(out, {"compare.md": lambda p: p.write_text(report),
                              "compare.png": lambda p: fig.savefig(p, format="png", dpi=120)})

@@ -1,4 +1,5 @@
-"""Per-trial metrics of a matching result and their micro-averaged aggregates.
+"""Per-trial metrics of a matching result: the record of a trial (``TrialMetrics``) that the metric
+registry (``evaluation.metric_registry``) reads, per trial and over a run.
 
 Pairs are ``(K, 2)`` int arrays of (ego index, CAV index), one row per distinct pair. A metric that
 has nothing to measure is NaN, never 0, so that it cannot pass for a real score.
@@ -6,7 +7,6 @@ has nothing to measure is NaN, never 0, so that it cannot pass for a real score.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -93,12 +93,7 @@ class TrialMetrics:
     estimated: bool
     abstained: bool = False
     """The method said its pose has not enough evidence (``cbm.MatchResult.abstained``); its pose
-    is still scored, and counted apart (``aggregate``)."""
-
-
-SUCCESS_LEVELS = (1.0, 2.0, 3.0)
-"""Thresholds t of the success rates reported: RTE < t m and RRE < t deg (V2X-Reg++ and the
-calibration literature report 1, 2 and 3)."""
+    is still scored, and counted apart (``evaluation.metric_registry.AbstainRate``)."""
 
 
 def evaluate(result: Any, trial: Trial) -> TrialMetrics:
@@ -131,57 +126,3 @@ def evaluate(result: Any, trial: Trial) -> TrialMetrics:
 def is_success(m: TrialMetrics, *, rte_max: float = 1.0, rre_max: float = 1.0) -> bool:
     """A trial succeeds when a pose was estimated with RTE < rte_max (m) and RRE < rre_max (deg)."""
     return m.estimated and m.rte < rte_max and m.rre < rre_max
-
-
-def aggregate(metrics: Sequence[TrialMetrics], *, rte_max: float = 1.0, rre_max: float = 1.0) -> dict[str, float]:
-    """Micro-averaged aggregates over trials: every pair weighs the same, whatever its trial.
-
-    precision = sum n_correct / sum n_matched; recall = sum n_correct / sum n_true;
-    ad = sum(ad * n_matched) / sum n_matched; rre/rte mean and median over the trials with an
-    estimate; success_rate = share of all trials that pass ``is_success``; success_rate_2 and
-    success_rate_3 the same at 2 and 3 m / deg; abstain_rate = share of trials the method abstained
-    on; returned_success = success rate over the trials it did not abstain on (how far its answers
-    can be trusted); median runtime; median consensus margin over the trials that have one. Ratios
-    with a zero denominator are NaN.
-    """
-    matched = sum(m.n_matched for m in metrics)
-    correct = sum(m.n_correct for m in metrics)
-    true = sum(m.n_true for m in metrics)
-    ad_weighted = sum(m.ad * m.n_matched for m in metrics if m.n_matched)
-    estimated = [m for m in metrics if m.estimated]
-    rres = np.array([m.rre for m in estimated])
-    rtes = np.array([m.rte for m in estimated])
-    runtimes = np.array([m.runtime_s for m in metrics if not math.isnan(m.runtime_s)])
-    returned = [m for m in metrics if not m.abstained]
-    margins = np.array([m.margin for m in metrics if not math.isnan(m.margin)])
-    return {
-        "n_trials": float(len(metrics)),
-        "n_estimated": float(len(estimated)),
-        "precision": _ratio(correct, matched),
-        "recall": _ratio(correct, true),
-        "ad": _ratio(ad_weighted, matched),
-        "rre_mean": _mean(rres),
-        "rre_median": _median(rres),
-        "rte_mean": _mean(rtes),
-        "rte_median": _median(rtes),
-        "success_rate": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in metrics), len(metrics)),
-        **{f"success_rate_{t:g}": _ratio(sum(is_success(m, rte_max=t, rre_max=t) for m in metrics), len(metrics))
-           for t in SUCCESS_LEVELS[1:]},
-        "abstain_rate": _ratio(sum(m.abstained for m in metrics), len(metrics)),
-        "returned_success": _ratio(sum(is_success(m, rte_max=rte_max, rre_max=rre_max) for m in returned),
-                                   len(returned)),
-        "runtime_median_s": _median(runtimes),
-        "margin_median": _median(margins),
-    }
-
-
-def _ratio(numerator: float, denominator: float) -> float:
-    return float(numerator) / float(denominator) if denominator else math.nan
-
-
-def _mean(values: np.ndarray) -> float:
-    return float(values.mean()) if len(values) else math.nan
-
-
-def _median(values: np.ndarray) -> float:
-    return float(np.median(values)) if len(values) else math.nan

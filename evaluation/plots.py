@@ -11,6 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
+from evaluation.metric_registry import RUN_METRICS, TRIAL_METRICS  # noqa: E402
 from evaluation.sweep import Sweep, summarise  # noqa: E402
 
 from .report import _ranges, fmt, init_name, levels  # noqa: E402
@@ -41,6 +42,7 @@ def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep
     """The paper's SIND figure: precision against eta, one panel per noise level, one line per method
     (one column per value of the last noise parameter of the grid when it has at most 5)."""
     by = levels(sweep)
+    precision = RUN_METRICS["precision"]
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
     stats = summarise(keyed, [*by, "variant", "eta"])
     panels = list(dict.fromkeys(key[:-2] for key, _ in stats))
@@ -50,7 +52,8 @@ def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep
     fig, axes = plt.subplots(n_rows, columns, figsize=(3.6 * columns, 3.2 * n_rows), sharey=True, squeeze=False)
     for ax, panel in zip(axes.flat, panels):
         for k, variant in enumerate(dict.fromkeys(variants)):
-            points = [(key[-1], a["precision"] * 100) for key, a in stats if key[:-2] == panel and key[-2] == variant]
+            points = [(key[-1], a[precision.key] * precision.unit.scale) for key, a in stats
+                      if key[:-2] == panel and key[-2] == variant]
             ax.plot(*zip(*points), marker=MARKERS[k % len(MARKERS)], markerfacecolor="none", label=variant)
         ax.set_title(", ".join(f"{n}={fmt(v)}" for n, v in zip(by, panel)) or "all trials", fontsize=9)
         ax.set_xlabel("co-visibility rate eta")
@@ -58,7 +61,7 @@ def plot_precision_vs_eta(rows: list[dict[str, Any]], variants: list[str], sweep
     for ax in axes.flat[len(panels):]:
         ax.set_visible(False)
     for ax in axes[:, 0]:
-        ax.set_ylabel("precision (%)")
+        ax.set_ylabel(precision.heading)
     axes.flat[0].legend(fontsize=8)
     fig.tight_layout()
     return fig
@@ -70,16 +73,16 @@ def plot_rre_rte(rows: list[dict[str, Any]], variants: list[str]) -> plt.Figure:
     names = list(dict.fromkeys(variants))
     first = [row for row, v in zip(rows, variants) if v == names[0]]
     fig, axes = plt.subplots(1, 2, figsize=(10.0, 3.8))
-    for ax, metric, unit in ((axes[0], "rre", "deg"), (axes[1], "rte", "m")):
-        data = [[row[metric] for row, v in zip(rows, variants) if v == name and row["estimated"]] for name in names]
+    for ax, metric in zip(axes, (TRIAL_METRICS["rre"], TRIAL_METRICS["rte"])):
+        data = [[row[metric.key] for row, v in zip(rows, variants) if v == name and row["estimated"]] for name in names]
         ticks = list(names)
         if "none" not in names:
-            data.append([row[f"init_{metric}"] for row in first])
+            data.append([row[f"init_{metric.key}"] for row in first])
             ticks.append(init_name(rows))
         ax.boxplot([[max(x, LOG_FLOOR) for x in d] or [math.nan] for d in data], showfliers=True)
         ax.set_xticks(range(1, len(data) + 1), ticks, rotation=30, ha="right", fontsize=8)
         ax.set_yscale("log")
-        ax.set_ylabel(f"{metric.upper()} ({unit}, below {LOG_FLOOR:g} drawn at {LOG_FLOOR:g})", fontsize=8)
+        ax.set_ylabel(f"{metric.label} ({metric.unit.text}, below {LOG_FLOOR:g} drawn at {LOG_FLOOR:g})", fontsize=8)
         ax.grid(alpha=0.3, axis="y")
     fig.tight_layout()
     return fig

@@ -9,24 +9,13 @@ from typing import Any
 import polars as pl
 
 from cbm.methods import ORACLE_WORDS
+from evaluation.metric_registry import RUN_METRICS, SHARE, RunMetric, aggregate, run_metrics
+from evaluation.metrics import TrialMetrics
 from evaluation.sweep import SCENARIO_FIELDS, Sweep, summarise
 
 from .aggregates import AP_ROWS, curve_markdown, fused_ap, success_curve
 from .run import Plan
 
-TABLE_ROWS = (
-    ("Pre. (%)", "precision", 100.0),
-    ("Rec. (%)", "recall", 100.0),
-    ("AD (m)", "ad", 1.0),
-    ("median RRE (deg)", "rre_median", 1.0),
-    ("median RTE (m)", "rte_median", 1.0),
-    ("success (%)", "success_rate", 100.0),
-    ("success @ 2 m, 2 deg (%)", "success_rate_2", 100.0),
-    ("success @ 3 m, 3 deg (%)", "success_rate_3", 100.0),
-    ("abstained (%)", "abstain_rate", 100.0),
-    ("success where not abstained (%)", "returned_success", 100.0),
-)
-RUNTIME_ROW = ("median runtime (ms)", "runtime_median_s", 1000.0)
 ORACLE_COLUMN = f"oracle ({ORACLE_WORDS})"
 """The oracle's column header and its name in the notes."""
 FUSION_NOTE = ("AP@0.5 / AP@0.7: late fusion (`evaluation.fusion`): the CAV's boxes placed by the method's pose, "
@@ -65,25 +54,37 @@ def column_name(variant: str) -> str:
 
 
 def table_one(rows: list[dict[str, Any]], variants: list[str], timing: bool) -> str:
-    """Markdown: one row per metric, one column per method variant (the paper's Table I), plus the
-    RRE/RTE of the uncalibrated ``init`` unless the method ``none`` (which reports it) is a column."""
+    """Markdown: one row per run metric (``evaluation.metric_registry``), one column per method
+    variant (the paper's Table I), plus the uncalibrated ``init`` unless the method ``none`` (which
+    reports it) is a column."""
     keyed = [{**row, "variant": v} for row, v in zip(rows, variants)]
     stats = dict(summarise(keyed, ["variant"]))
     names = [key[0] for key in stats]
     columns = [stats[(n,)] for n in names]
     if "none" not in names:
-        first = [row for row in keyed if row["variant"] == names[0]]
         names.append(init_name(rows))
-        columns.append({"rre_median": _median([r["init_rre"] for r in first]),
-                        "rte_median": _median([r["init_rte"] for r in first])})
+        columns.append(aggregate([init_record(row) for row in keyed if row["variant"] == names[0]]))
     lines = [f"| metric | {' | '.join(column_name(n) for n in names)} |", "|---|" + "---:|" * len(names)]
-    for label, key, scale in (*TABLE_ROWS, *([RUNTIME_ROW] if timing else [])):
-        lines.append(f"| {label} | {' | '.join(_cell(column.get(key, math.nan), scale) for column in columns)} |")
+    for metric in run_metrics(timing):
+        lines.append(f"| {metric.heading} | {' | '.join(metric.unit.shown(c[metric.key]) for c in columns)} |")
     ap = fused_ap(rows, variants)
     for label, threshold in AP_ROWS if ap else ():
-        cells = [_cell(ap[n][threshold] if n in ap else math.nan, 100.0) for n in names]
+        cells = [SHARE.shown(ap[n][threshold] if n in ap else math.nan) for n in names]
         lines.append(f"| {label} | {' | '.join(cells)} |")
     return "\n".join(lines)
+
+
+def init_record(row: dict[str, Any]) -> TrialMetrics:
+    """What the pose before calibration scores on a row's trial, as the method ``none`` would:
+    nothing matched, its RRE and RTE."""
+    return TrialMetrics(n_ego=row["n_ego"], n_cav=row["n_cav"], n_true=row["n_true"], n_matched=0, n_correct=0,
+                        precision=math.nan, recall=0.0 if row["n_true"] else math.nan, ad=math.nan,
+                        rre=row["init_rre"], rte=row["init_rte"], runtime_s=math.nan, margin=math.nan, estimated=True)
+
+
+def definitions(metrics: Sequence[RunMetric]) -> list[str]:
+    """One line per formula of ``metrics`` (a formula several metrics share, once)."""
+    return [f"- {formula}" for formula in dict.fromkeys(metric.formula for metric in metrics)]
 
 
 def eta_table(rows: list[dict[str, Any]], variants: list[str], sweep: Sweep) -> str:
@@ -95,21 +96,9 @@ def eta_table(rows: list[dict[str, Any]], variants: list[str], sweep: Sweep) -> 
     lines = [f"| {' | '.join([*by, 'method'])} | {' | '.join(f'eta={fmt(e)}' for e in etas)} |",
              "|" + "---|" * (len(by) + 1) + "---:|" * len(etas)]
     for key in dict.fromkeys(k[:-1] for k in stats):
-        cells = [_cell(stats[(*key, e)]["precision"], 100.0) for e in etas]
+        cells = [RUN_METRICS["precision"].unit.shown(stats[(*key, e)]["precision"]) for e in etas]
         lines.append(f"| {' | '.join(fmt(v) for v in key)} | {' | '.join(cells)} |")
     return "\n".join(lines)
-
-
-def _cell(value: float, scale: float) -> str:
-    return "-" if math.isnan(value) else f"{value * scale:.2f}" if scale == 1.0 else f"{value * scale:.1f}"
-
-
-def _median(values: list[float]) -> float:
-    finite = sorted(v for v in values if not math.isnan(v))
-    if not finite:
-        return math.nan
-    mid = len(finite) // 2
-    return finite[mid] if len(finite) % 2 else 0.5 * (finite[mid - 1] + finite[mid])
 
 
 def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> str:
@@ -131,13 +120,8 @@ def summary_markdown(plan: Plan, table: pl.DataFrame, timing: bool = True) -> st
                  if source.short else "")
         parts.append(f"- `{source.name}`: {len(set(frames))} frames ({_ranges(sorted(set(frames)))}){skipped}{short}")
     parts += ["", "## Association and pose (micro-averaged over all trials)", "",
-              table_one(rows, variants, timing=timing), "",
-              "Pre./Rec.: matched pairs that are true / true pairs that were matched. AD: mean true distance "
-              "between the objects of each output pair. RRE/RTE: medians over trials with an estimate. "
-              "Success: RTE < 1 m and RRE < 1 deg (at 2 and 3: RTE < 2 m and RRE < 2 deg, 3 and 3). "
-              "Abstained: trials where the method said it had not enough evidence (its pose is still scored); "
-              "success where not abstained: over the other trials. none / GNSS (init) / init (no prior): the error "
-              "before calibration; "
+              table_one(rows, variants, timing=timing), "", *definitions(run_metrics(timing)), "",
+              "none / GNSS (init) / init (no prior): the error before calibration, as the method none reports it; "
               f"{ORACLE_COLUMN}: the objects both agents see, paired by their true ids and fitted by plain least "
               "squares; a reference, not a bound: a robust fit or a pose graph over more agents can come closer to "
               "the true pose."]

@@ -29,18 +29,24 @@ from cbm.methods import METHODS
 from .detected import FALSE_POSITIVE_CLASS
 from .executors import run_tasks
 from .fusion import FUSION_COLUMNS, FUSIONS, fusion_columns, fusion_pose
-from .metrics import TrialMetrics, aggregate, evaluate, is_success, rre, rte
+from .metric_registry import TRIAL_METRICS, aggregate
+from .metrics import TrialMetrics, evaluate, is_success, rre, rte
 from .scenario import FrameInputs, ScenarioParams, Trial
 
 SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
 """Scenario parameter columns, ``seed`` included (it is the sweep's seed)."""
 TRIAL_COLUMNS = ("ego_id", "cav_id")
-METRIC_COLUMNS = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad",
-                  "rre", "rte", "margin", "estimated", "abstained", "success", "init_rre", "init_rte")
-"""Per-trial metrics (``evaluation.metrics.TrialMetrics`` without the runtime, ``is_success``, and the
-RRE/RTE of ``init``: the uncalibrated GNSS baseline)."""
 TIMING_COLUMNS = ("runtime_s",)
 """Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
+RECORD_COLUMNS = tuple(f.name for f in dataclasses.fields(TrialMetrics) if f.name not in TIMING_COLUMNS)
+
+
+def metric_columns() -> tuple[str, ...]:
+    """Per-trial metric columns: the trial's record (``evaluation.metrics.TrialMetrics`` without the
+    runtime), every other metric of ``evaluation.metric_registry.TRIAL_METRICS``, ``is_success``, and
+    the RRE/RTE of ``init`` (the pose before calibration)."""
+    return (*RECORD_COLUMNS, *(key for key in TRIAL_METRICS if key not in RECORD_COLUMNS),
+            "success", "init_rre", "init_rte")
 
 
 @dataclass(frozen=True)
@@ -115,7 +121,8 @@ class Sweep:
     def columns(self) -> list[str]:
         """Every column of a row, in order: frame, method, parameters, agents, metrics, timing."""
         fused = FUSION_COLUMNS if self.fusion else ()
-        return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *METRIC_COLUMNS, *fused, *TIMING_COLUMNS]
+        return ["frame", "method", *self.parameter_columns(), *TRIAL_COLUMNS, *metric_columns(), *fused,
+                *TIMING_COLUMNS]
 
 
 def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
@@ -221,11 +228,11 @@ def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs, peers
 def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, metrics: TrialMetrics,
          init_error: dict[str, float]) -> dict[str, Any]:
     """One table row: every column of ``sweep.columns()``, None for other methods' parameters."""
-    measured = dataclasses.asdict(metrics)
     row = dict.fromkeys(sweep.columns())
     row.update(base)
     row.update(method=method, **dataclasses.asdict(params), success=is_success(metrics), **init_error)
-    row.update({name: measured[name] for name in (*METRIC_COLUMNS, *TIMING_COLUMNS) if name in measured})
+    row.update(dataclasses.asdict(metrics))
+    row.update({key: metric.of(metrics) for key, metric in TRIAL_METRICS.items()})
     return row
 
 
@@ -234,7 +241,7 @@ def _text(value: Any) -> str | None:
 
 
 def summarise(rows: Sequence[Mapping[str, Any]], by: Sequence[str]) -> list[tuple[tuple, dict[str, float]]]:
-    """Micro-averaged aggregates (``evaluation.metrics.aggregate``) of the rows grouped by the columns
+    """The aggregates (``evaluation.metric_registry.aggregate``) of the rows grouped by the columns
     ``by``: ``(key, aggregate)`` per group, groups in order of first appearance. A column an older
     run's table lacks (``abstained``) takes its default."""
     groups: dict[tuple, list[TrialMetrics]] = {}

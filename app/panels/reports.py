@@ -6,6 +6,7 @@ from typing import Any
 
 from cbm.methods import METHODS
 from evaluation.diagnosis import Finding
+from evaluation.metric_registry import SHARE, TRIAL_METRICS, run_metrics
 from evaluation.search import all_tie
 
 from ..scene.differences import Difference, change_lines, now_words
@@ -15,7 +16,8 @@ from ..session.sequence import SequenceRun
 
 
 def sequence_markdown(run: SequenceRun) -> str:
-    """The aggregate table shown after a run."""
+    """The aggregate table shown after a run: every run metric (``evaluation.metric_registry``), the
+    frames with an estimate and the late-fusion AP."""
     s = run.summary()
     state = "cancelled after" if run.cancelled else "over"
     head = (f"**{METHODS[run.settings.method].label}**, {state} {len(run.rows)} of {run.n_frames} frames "
@@ -23,14 +25,11 @@ def sequence_markdown(run: SequenceRun) -> str:
     if not s:
         return head + "\n\nNo frame was run."
     lines = [head, "", "| | |", "|---|---|",
-             f"| success (RTE < 1 m, RRE < 1°) | {number(100 * s['success_rate'], ' %', 1)} |",
-             f"| precision / recall | {number(s['precision'])} / {number(s['recall'])} |",
-             f"| AD | {number(s['ad'], ' m')} |",
-             f"| RTE mean / median | {number(s['rte_mean'], ' m')} / {number(s['rte_median'], ' m')} |",
-             f"| RRE mean / median | {number(s['rre_mean'], '°')} / {number(s['rre_median'], '°')} |",
+             *(f"| {metric.label} | {metric.unit.shown(s[metric.key], '—', suffix=True)} |"
+               for metric in run_metrics()),
              f"| frames with an estimate | {int(s['n_estimated'])} |",
-             *(f"| late-fusion AP@{t:g} (BEV IoU) | {number(100 * ap, ' %', 1)} |" for t, ap in run.fused_ap().items()),
-             f"| median time per frame | {number(1000 * s['runtime_median_s'], ' ms', 1)} |"]
+             *(f"| late-fusion AP@{t:g} (BEV IoU) | {SHARE.shown(ap, '—', suffix=True)} |"
+               for t, ap in run.fused_ap().items())]
     if run.skipped:
         lines.append(f"\nSkipped (no ego or CAV): frames {', '.join(map(str, run.skipped))}")
     return "\n".join(lines)
@@ -70,13 +69,13 @@ def worst_markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[i
     """The worst-frames table: metrics and the diagnosis of each frame."""
     if not rows:
         return "Run the sequence first."
-    lines = [f"**Worst frames by {metric}**", "", "| frame | P / R | RTE | RRE | margin | why it failed |",
-             "|---|---|---|---|---|---|"]
+    shown = TRIAL_METRICS.values()
+    lines = [f"**Worst frames by {metric}**", "",
+             f"| frame | {' | '.join(m.label for m in shown)} | why it failed |", "|---|" + "---|" * (len(shown) + 1)]
     for row in rows:
         why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
-        lines.append(f"| {row['frame']} | {number(row['precision'])} / {number(row['recall'])} "
-                     f"| {number(row['rte'], ' m')} | {number(row['rre'], '°')} | {number(row['margin'], '', 0)} "
-                     f"| {why} |")
+        values = " | ".join(m.unit.shown(row[m.key], "—", suffix=True) for m in shown)
+        lines.append(f"| {row['frame']} | {values} | {why} |")
     return "\n".join(lines)
 
 

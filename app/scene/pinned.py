@@ -7,6 +7,7 @@ import math
 import numpy as np
 
 from cbm import se2
+from evaluation.metric_registry import TRIAL_METRICS
 
 from ..session.explorer import Outcome
 from . import geometry, planes
@@ -54,10 +55,8 @@ def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
         "",
         "| | current | pinned | current − pinned |",
         "|---|---|---|---|",
-        _row("precision", m.precision, p.precision, "", 2),
-        _row("recall", m.recall, p.recall, "", 2),
-        _row("RTE", m.rte, p.rte, " m", 2),
-        _row("RRE", m.rre, p.rre, "°", 2),
+        *(_row(metric.label, metric.unit.scale * metric.of(m), metric.unit.scale * metric.of(p), metric.unit.suffix,
+               metric.unit.digits) for metric in TRIAL_METRICS.values()),
         _row("matches", float(m.n_matched), float(p.n_matched), "", 0),
     ])
 

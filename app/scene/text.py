@@ -8,7 +8,8 @@ import numpy as np
 from cbm import MatchResult, se2
 from cbm.methods import METHODS, ORACLE_WORDS, Method
 from evaluation.clutter import is_false
-from evaluation.metrics import evaluate, is_success
+from evaluation.metric_registry import TRIAL_METRICS
+from evaluation.metrics import TrialMetrics, evaluate, is_success
 
 from ..session.explorer import Outcome
 from ..session.names import agent_name
@@ -17,6 +18,9 @@ from .words import margin_words, plural
 
 ORACLE_ROW = f"{ORACLE_WORDS} (oracle)"
 """The row of what least squares on the true pairs reaches: a reference, not a bound (a robust fit can beat it)."""
+LAID_OUT = ("precision", "recall", "ad", "rre", "rte", "margin")
+"""The trial metrics the panel's own rows show (paired, beside the pose before calibration and the
+oracle); every other metric of ``evaluation.metric_registry.TRIAL_METRICS`` gets a row of its own."""
 
 
 def number(value: float, unit: str = "", digits: int = 2) -> str:
@@ -92,6 +96,7 @@ def metrics_markdown(outcome: Outcome) -> str:
         f"| RRE / RTE | {number(m.rre, '°')} / {number(m.rte, ' m')} |",
         f"| before calibration | {number(init_rre, '°')} / {number(init_rte, ' m')} |",
         f"| {ORACLE_ROW} | {number(limit.rre, '°')} / {number(limit.rte, ' m')} |",
+        *other_metric_rows(m),
     ]
     if outcome.voted:
         margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
@@ -109,6 +114,12 @@ def metrics_markdown(outcome: Outcome) -> str:
         lines.append(findings_heading(outcome))
         lines.extend(f"- {f.message}" for f in outcome.findings)
     return "\n".join(lines)
+
+
+def other_metric_rows(m: TrialMetrics) -> list[str]:
+    """A row for each trial metric of the registry that the panel's own rows do not lay out."""
+    return [f"| {metric.label} | {metric.unit.shown(metric.of(m), '—', suffix=True)} |"
+            for key, metric in TRIAL_METRICS.items() if key not in LAID_OUT]
 
 
 EVENT_WORDS = {

@@ -67,7 +67,7 @@ class SequenceRun:
         raise KeyError(f"frame {frame} was not run")
 
     def summary(self) -> dict[str, float]:
-        """Micro-averaged metrics over the rows (``evaluation.metrics.aggregate``); empty without rows."""
+        """The run metrics over the rows (``evaluation.metric_registry.aggregate``); empty without rows."""
         return summarise(self.rows, by=("method",))[0][1] if self.rows else {}
 
     def fused_ap(self) -> dict[float, float]:

@@ -11,30 +11,23 @@ from collections.abc import Callable, Iterable, Sequence
 from typing import Any
 
 from evaluation.diagnosis import Finding
+from evaluation.metric_registry import TRIAL_METRICS, TrialMetric
 
 from .explorer import Explorer
 from .sequence import SequenceRun
 
-RANKINGS: dict[str, tuple[str, bool]] = {
-    # label: (row column, higher is worse)
-    "RTE": ("rte", True),
-    "RRE": ("rre", True),
-    "precision": ("precision", False),
-    "recall": ("recall", False),
-    "consensus margin": ("margin", False),
-}
-"""Metrics the worst frames can be ranked by. An undefined value (no estimate, no match, no anchor)
-ranks worst."""
-UNITS = {"rte": " m", "rre": "°", "precision": "", "recall": "", "margin": ""}
+RANKINGS: dict[str, TrialMetric] = {metric.label: metric for metric in TRIAL_METRICS.values()}
+"""Metrics the worst frames can be ranked by (``evaluation.metric_registry``), by label. An undefined
+value (no estimate, no match, no anchor) ranks worst."""
 
 
 def badness(row: dict[str, Any], metric: str) -> float:
     """How bad ``row`` is by ``metric``: larger is worse, undefined is worst (+inf)."""
-    column, higher_is_worse = RANKINGS[metric]
-    value = row[column]
+    ranked = RANKINGS[metric]
+    value = row[ranked.key]
     if value is None or math.isnan(float(value)):
         return math.inf
-    return float(value) if higher_is_worse else -float(value)
+    return float(value) if ranked.better == "lower" else -float(value)
 
 
 def rank(rows: Iterable[dict[str, Any]], metric: str, count: int = 10) -> list[dict[str, Any]]:
@@ -44,10 +37,8 @@ def rank(rows: Iterable[dict[str, Any]], metric: str, count: int = 10) -> list[d
 
 def label(row: dict[str, Any], metric: str) -> str:
     """One entry of the jump list, e.g. ``frame 37 · RTE 4.21 m``."""
-    column = RANKINGS[metric][0]
-    value = row[column]
-    shown = "—" if value is None or math.isnan(float(value)) else f"{float(value):.2f}{UNITS[column]}"
-    return f"frame {row['frame']} · {metric} {shown}"
+    ranked = RANKINGS[metric]
+    return f"frame {row['frame']} · {metric} {ranked.unit.shown(row[ranked.key], '—', suffix=True)}"
 
 
 def frame_of(entry: str) -> int:

@@ -10,6 +10,7 @@ import pytest
 import app.session.sequence
 from app.server import ExplorerServer
 from app.session.explorer import Explorer
+from evaluation.metric_registry import RUN_METRICS
 from support import browser as ui
 
 pytestmark = [pytest.mark.browser,
@@ -37,7 +38,7 @@ def test_sequence_run_jump_to_a_worst_frame_and_download(browser, small_server: 
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="run all frames").click()
     page.locator('[role="progressbar"]').first.wait_for(state="visible", timeout=10_000)
-    page.get_by_text("success (RTE < 1 m, RRE < 1°)").wait_for(timeout=30_000)
+    page.get_by_text(RUN_METRICS["success_rate"].label).wait_for(timeout=30_000)
     run = tab.explore.run
     assert run is not None and len(run.rows) == len(small_server.explorer) and not run.cancelled
     ui.wait_until(lambda: not page.locator('[role="progressbar"]').first.is_visible())

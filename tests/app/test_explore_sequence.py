@@ -11,6 +11,7 @@ from app.session.background import Task
 from app.session.explorer import Explorer
 from app.session.sequence import CHUNK, run_sequence, sweep_for
 from app.session.settings import Settings
+from evaluation.metric_registry import run_metrics
 
 COMPARED = ("n_ego", "n_cav", "n_true", "n_matched", "n_correct", "precision", "recall", "ad", "rre", "rte",
             "margin", "estimated")
@@ -65,8 +66,10 @@ def test_cancel_stops_at_the_next_chunk(small_explorer: Explorer) -> None:
 
 def test_summary_table_and_plot(small_explorer: Explorer) -> None:
     run = run_sequence(small_explorer, sind(), frames=range(4))
-    text = sequence_markdown(run)
-    assert "over 4 of 4 frames" in text and "precision / recall" in text and "success" in text
+    text, summary = sequence_markdown(run), run.summary()
+    assert "over 4 of 4 frames" in text
+    for metric in run_metrics():
+        assert f"| {metric.label} | {metric.unit.shown(summary[metric.key], '—', suffix=True)} |" in text
     frames, *values = run.plot_data()
     assert frames.tolist() == [0, 1, 2, 3] and [len(v) for v in values] == [4, 4, 4, 4]
     with pytest.raises(KeyError):

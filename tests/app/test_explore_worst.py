@@ -9,10 +9,11 @@ from app.session import worst
 from app.session.explorer import Explorer
 from app.session.sequence import run_sequence
 from app.session.settings import Settings
+from evaluation.metric_registry import TRIAL_METRICS
 
 
 def _row(frame: int, **values) -> dict:
-    base = {"precision": 1.0, "recall": 1.0, "rte": 0.1, "rre": 0.1, "margin": 10.0}
+    base = {"precision": 1.0, "recall": 1.0, "ad": 0.0, "rte": 0.1, "rre": 0.1, "margin": 10.0}
     return {"frame": frame, **base, **values}
 
 
@@ -28,6 +29,15 @@ def test_labels_name_their_frame() -> None:
     entry = worst.label(_row(37, rte=4.213), "RTE")
     assert entry == "frame 37 · RTE 4.21 m" and worst.frame_of(entry) == 37
     assert worst.frame_of(worst.label(_row(5, precision=math.nan), "precision")) == 5
+
+
+def test_the_rankings_and_the_table_are_the_registrys_trial_metrics() -> None:
+    assert list(worst.RANKINGS) == [metric.label for metric in TRIAL_METRICS.values()]
+    rows = worst.rank([_row(0, ad=0.5), _row(1, ad=2.0, recall=math.nan)], "AD")
+    assert [row["frame"] for row in rows] == [1, 0]
+    text = worst_markdown(rows, "AD", {})
+    assert "| frame | RTE | RRE | precision | recall | AD | consensus margin | why it failed |" in text
+    assert "| 1 | 0.10 m | 0.10° | 1.00 | — | 2.00 m | 10.0 pairs | — |" in text
 
 
 def test_jumping_to_a_worst_frame_reproduces_its_row(small_explorer: Explorer) -> None:

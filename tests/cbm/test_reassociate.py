@@ -11,7 +11,8 @@ from cbm.engine.assignment import gated_assignment
 from cbm.engine.interpreted import interpreted
 from cbm.estimate import robust_fit
 from cbm.reassociate import MAX_ROUNDS, reassociate
-from evaluation.metrics import aggregate, evaluate, is_success
+from evaluation.metric_registry import aggregate
+from evaluation.metrics import evaluate, is_success
 from evaluation.scenario import ScenarioParams, make_trial
 from support.scenes import street_scene
 

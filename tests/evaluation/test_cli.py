@@ -45,7 +45,7 @@ def test_a_run_writes_the_table_the_summary_and_the_plots(two_runs):
              "success_curve.csv", "success_curve.png"}
     assert {p.name for p in first.iterdir()} == names
     assert stdout.startswith((first / "summary.md").read_text())
-    assert "| Pre. (%) |" in stdout and "| cbm sigma2=2 | cbm sigma2=3 | icp | vips |" in stdout
+    assert "| precision (%) |" in stdout and "| cbm sigma2=2 | cbm sigma2=3 | icp | vips |" in stdout
 
 
 def test_the_table_has_one_row_per_dataset_and_trial_with_every_parameter_and_metric(two_runs):

@@ -11,7 +11,8 @@ import pytest
 
 from evaluation.clutter import false_box_count
 from evaluation.conditions import CONDITIONS, condition
-from evaluation.metrics import aggregate, evaluate
+from evaluation.metric_registry import aggregate
+from evaluation.metrics import evaluate
 from evaluation.scenario import ScenarioParams, make_trial
 
 REPO = Path(__file__).resolve().parents[2]

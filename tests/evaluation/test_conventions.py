@@ -108,9 +108,11 @@ def test_the_latex_summary_bolds_the_best_of_each_column_among_the_compared_meth
     lines = tex.splitlines()
     assert lines[1] == "\\begin{tabular}{lrrrrr}" and lines[-1] == "\\end{tabular}"
     assert {"\\toprule", "\\midrule", "\\bottomrule"} <= set(lines)
-    assert "cbm & \\textbf{95.0} & \\textbf{90.0} & \\textbf{80.0} & \\textbf{0.20} & 0.30 \\\\" in lines
-    assert "icp & 90.0 & \\textbf{90.0} & -- & 0.50 & \\textbf{0.10} \\\\" in lines
-    assert "oracle & 100.0 & 100.0 & 100.0 & 0.00 & 0.00 \\\\" in lines
+    assert lines[3] == ("Method & precision (\\%) & recall (\\%) & median RRE (deg) & median RTE (m) & "
+                        "success @ 1 m, 1 deg (\\%) \\\\")
+    assert "cbm & \\textbf{95.0} & \\textbf{90.0} & 0.30 & \\textbf{0.20} & \\textbf{80.0} \\\\" in lines
+    assert "icp & 90.0 & \\textbf{90.0} & \\textbf{0.10} & 0.50 & -- \\\\" in lines
+    assert "oracle & 100.0 & 100.0 & 0.00 & 0.00 & 100.0 \\\\" in lines
     assert "cbm top\\_k=3 & 10.0" in tex and escape("a&b%c_d") == "a\\&b\\%c\\_d"
 
 
@@ -143,6 +145,7 @@ def test_evaluate_compare_end_to_end(two_tiny_runs):
     done = subprocess.run([sys.executable, "evaluate.py", "compare", str(a), str(b)], cwd=REPO,
                           capture_output=True, text=True, timeout=120)
     assert done.returncode == 0, done.stderr
-    assert "| method | precision | recall | success_rate | median_rte | median_rre |" in done.stdout
+    header = "| method | precision | recall | ad | median_rre | median_rte | mean_rre | mean_rte | success_rate |"
+    assert header in done.stdout
     assert "| oracle | 0 | 0 |" in done.stdout and "## Success rate (percentage points" in done.stdout
     assert (b / f"compare_vs_{a.name}" / "compare.png").is_file()

@@ -3,7 +3,8 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from evaluation.metrics import aggregate, evaluate
+from evaluation.metric_registry import aggregate
+from evaluation.metrics import evaluate
 from evaluation.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
 from evaluation.search import f1, grid_size, search
 from support.scenes import street_scene

@@ -5,7 +5,8 @@ import numpy as np
 import pytest
 
 from cbm import CBMParams, match
-from evaluation.metrics import TrialMetrics, aggregate, evaluate
+from evaluation.metric_registry import aggregate
+from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, ScenarioParams, make_trial, trial_rng
 from evaluation.sweep import TIMING_COLUMNS, Sweep, run, run_task, summarise
 from support.scenes import street_scene
