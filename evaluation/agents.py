@@ -88,11 +88,11 @@ def frame_trial_inputs(frame: Frame, ego_id: str, cav_id: str) -> dict[str, Any]
     ``params`` and ``rng``): ``boxes, ids, ego_pose, cav_pose, cav_id, ego_id, visibility``; objects
     of the sequence's ``left_out_of_trials`` categories are not among them.
 
-    ``visibility`` is ``{"ego": ids, "cav": ids}`` when the dataset says what both agents see,
-    else None (then only the sind and range protocols apply).
+    ``visibility`` maps ``"ego"`` and / or ``"cav"`` to the ids that agent sees, for the agents the
+    dataset says it of (the opv2v protocol needs both; line of sight uses what there is), else None.
     """
-    seen = frame.visibility
-    both_seen = seen is not None and ego_id in seen and cav_id in seen
+    seen = frame.visibility or {}
+    said = {role: seen[agent] for role, agent in (("ego", ego_id), ("cav", cav_id)) if agent in seen}
     kept = in_trials(frame)
     return {
         "boxes": frame.boxes()[kept],
@@ -101,7 +101,7 @@ def frame_trial_inputs(frame: Frame, ego_id: str, cav_id: str) -> dict[str, Any]
         "cav_pose": agent_pose(frame, cav_id),
         "cav_id": cav_id,
         "ego_id": ego_id,
-        "visibility": {"ego": seen[ego_id], "cav": seen[cav_id]} if both_seen else None,
+        "visibility": said or None,
     }
 
 

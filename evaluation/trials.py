@@ -174,9 +174,11 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     if gap:
         note += f"; the CAV captured {1000 * gap:.0f} ms before the ego (the dataset's timestamps)"
     inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
-    if protocol == "opv2v" and inputs["visibility"] is None:
-        inputs["visibility"] = _visibility_by_range(inputs, sensor_range)
-        note += "; no per-agent visibility in this dataset: sensor range used"
+    said = inputs["visibility"] or {}
+    if protocol == "opv2v" and len(said) < 2:
+        inputs["visibility"] = {**_visibility_by_range(inputs, sensor_range), **said}
+        unsaid = " and ".join(role for role in ("ego", "cav") if role not in said)
+        note += f"; the dataset does not say what the {unsaid} sees: sensor range used"
     detected = _detections(frame, ego, chosen)
     if detected:
         note += f"; real detections of {' and '.join(detected)}"

@@ -12,7 +12,9 @@ city frame). The recording car is the agent ``"ego"``: its pose is the egovehicl
 the rear axle, which is the frame its boxes are given in), with a typical car size of
 4.9 x 2.0 x 1.6 m for drawing, since the log does not give one. Box yaw is the heading of the
 box's x axis after rotating it by its quaternion (scipy), projected on the ground plane.
-Categories keep Argoverse's own names (REGULAR_VEHICLE, PEDESTRIAN, ...).
+Categories keep Argoverse's own names (REGULAR_VEHICLE, PEDESTRIAN, ...). Where the annotations
+count each box's lidar points (``num_interior_pts``), the objects with at least one are what the
+recording car saw: its ``visibility`` (the other agents' is not said).
 """
 from __future__ import annotations
 
@@ -39,6 +41,8 @@ ANNOTATION_TYPES = {
     **{c: pl.Float64 for c in QUATERNION + TRANSLATION},
 }
 POSE_TYPES = {"timestamp_ns": pl.Int64, **{c: pl.Float64 for c in QUATERNION + TRANSLATION}}
+POINTS = "num_interior_pts"
+"""The optional column of lidar points inside each box: at least one and the recording car saw it."""
 
 
 def recognises(path: Path) -> bool:
@@ -74,7 +78,7 @@ def load(path: str | Path) -> Sequence:
         raise LoaderError(f"{folder}: no {' or '.join(ANNOTATION_FILES)} here")
     annotations_file = next(log / n for n in ANNOTATION_FILES if (log / n).is_file())
     boxes, dropped = drop_unusable(
-        annotations_file, read_arrow(annotations_file, ANNOTATION_TYPES),
+        annotations_file, read_arrow(annotations_file, {**ANNOTATION_TYPES, POINTS: pl.Int64}, optional=(POINTS,)),
         list(ANNOTATION_TYPES))
     require_rows(annotations_file, boxes)
     sweeps = np.unique(boxes["timestamp_ns"].to_numpy())
@@ -96,10 +100,20 @@ def load(path: str | Path) -> Sequence:
         frame_ids=[int(t) for t in sweeps],
         timestamps=(sweeps - sweeps[0]) * 1e-9,
         agents=_ego_agent(ego_rotation, ego_translation),
+        visibility=_seen_by_the_car(boxes, frame),
         map=_read_map(log) if has_city else None,
         ego="ego",
         dropped_rows=dropped,
     )
+
+
+def _seen_by_the_car(boxes: pl.DataFrame, frame: np.ndarray) -> pl.DataFrame | None:
+    """The recording car's visibility: the objects with a lidar point inside their box, frame by
+    frame (None without ``num_interior_pts``)."""
+    if POINTS not in boxes.columns:
+        return None
+    seen = (boxes[POINTS].fill_null(0) > 0).to_numpy()
+    return pl.DataFrame({"frame": frame[seen], "agent_id": "ego", "track_id": boxes["track_uuid"].filter(seen)})
 
 
 def _ego_poses(pose_file: Path, sweeps: np.ndarray) -> tuple[Rotation, np.ndarray]:

@@ -60,3 +60,18 @@ def test_a_trial_under_line_of_sight_pairs_only_what_both_see():
     plain = make_trial(boxes, ids, ScenarioParams(protocol="range", sensor_range=60.0, flip_prob=0.0),
                        ego_pose=ego, cav_pose=cav)
     assert len(plain.gt_pairs) == 3
+
+
+def test_on_the_shipped_log_the_recording_car_sees_what_its_lidar_saw_and_the_cav_its_line_of_sight():
+    import loaders
+    from evaluation.conditions import condition
+    from evaluation.trials import frame_inputs
+
+    frame = loaders.open("argoverse2")[30]
+    inputs = frame_inputs(frame, "range")
+    occluded = condition("occluded")
+    trial = inputs.build(occluded, seed=0)
+    open_sky = inputs.build(ScenarioParams(**{**occluded.__dict__, "sight": False}), seed=0)
+    lidar = set(frame.visibility["ego"].tolist())
+    assert set(trial.ego_ids.tolist()) <= lidar and set(trial.ego_ids.tolist()) < set(open_sky.ego_ids.tolist())
+    assert set(trial.cav_ids.tolist()) < set(open_sky.cav_ids.tolist()), "some objects hide behind others"
