@@ -67,7 +67,7 @@ def test_on_the_shipped_log_the_recording_car_sees_what_its_lidar_saw_and_the_ca
     from evaluation.conditions import condition
     from evaluation.trials import frame_inputs
 
-    frame = loaders.open("argoverse2")[30]
+    frame = loaders.open("argoverse2")[120]
     inputs = frame_inputs(frame, "range")
     occluded = condition("occluded")
     trial = inputs.build(occluded, seed=0)
