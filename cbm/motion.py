@@ -1,0 +1,158 @@
+"""What moves, and how old the CAV's message is (beyond the paper: CBM over time, step 8).
+
+A CAV's detections reach the ego some time d after capture: a parked car lies where the CAV saw
+it, a moving one has moved on by v d, and a fit that pairs it pulls the pose that way. The ego's
+own boxes, frame after frame, tell which objects move and how fast (``EgoTracks``):
+
+1. the ego's motion between two frames is the robust rigid fit (``cbm.estimate.robust_fit``) of
+   its boxes to the same boxes a frame before, paired by the gated assignment under the motion of
+   the frame before (most objects stand still: the moving ones are its outliers);
+2. a box's velocity is the least-squares slope of its positions over the last ``WINDOW`` frames,
+   each carried into the current frame by the ego's motions since (one frame's detection noise
+   over one frame period would swamp it).
+
+Then a matched pair's residual ``r = p_ego - T p_cav`` is ``v d`` plus noise, so the message's age
+is the least-squares slope of the residuals on the velocities (``message_age``), pooled over
+frames by a weighted median (``AgeEstimate``), and the pose is refitted with each ego box moved
+back by ``v d`` (``compensated_fit``): moving objects no longer pull it.
+"""
+from __future__ import annotations
+
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import se2
+from .engine.assignment import gated_assignment
+from .estimate import robust_fit
+from .result import Fit
+
+WINDOW = 10
+"""Frames whose positions give a box its velocity (1 s at 10 Hz: 0.3 m detection noise leaves
+about 0.3 m/s of it)."""
+LEAST_SPAN_S = 0.25
+"""Seconds a box must have been followed before its velocity counts."""
+LINK_GATE = 3.0
+"""Metres between one object's boxes of two frames after the ego's motion: 30 m/s at 10 Hz."""
+LINK_SIGMA = 0.5
+"""Metres: the noise the frame-to-frame assignment's cost assumes."""
+MOVING = 1.0
+"""Metres per second from which an object's motion counts towards the message's age."""
+AGE_FRAMES = 30
+"""Frames whose age estimates are pooled (3 s at 10 Hz)."""
+LEAST_WEIGHT = 200.0
+"""Least pooled sum of squared speeds (m^2/s^2) to tell the age: two cars at 10 m/s for a frame."""
+MOST_AGE_S = 1.0
+"""Seconds: the oldest message the estimate believes (an older one reads as no estimate)."""
+
+
+@dataclass
+class EgoTracks:
+    """The ego's boxes over the last ``WINDOW`` frames, carried into its current frame."""
+
+    times: deque = field(default_factory=lambda: deque(maxlen=WINDOW))
+    """Seconds of the frames followed, oldest first."""
+    positions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0, 2)))
+    """(frames, N, 2): where each current box was at each of ``times``, in the current ego frame (NaN: not seen)."""
+    boxes: np.ndarray | None = None
+    """(N, 7) the last frame's boxes."""
+    motion: np.ndarray = field(default_factory=lambda: np.eye(3))
+    """The ego's last motion, previous frame -> current (the next frame's prediction)."""
+
+    def step(self, ego: np.ndarray, time_s: float) -> np.ndarray:
+        """(N, 2) metres per second of each of ``ego`` (boxes of the frame at ``time_s``) in the
+        ego's frame, NaN where not followed for ``LEAST_SPAN_S``; the frame joins the tracks."""
+        ego = np.asarray(ego, dtype=float)
+        current = ego[:, :2][None]
+        if self.boxes is None or not self.times or time_s <= self.times[-1]:
+            self.times.clear()
+            self.positions, self.motion = current.copy(), np.eye(3)
+        else:
+            links, self.motion = ego_motion(self.boxes, ego, self.motion)
+            carried = np.full((len(self.positions), len(ego), 2), np.nan)
+            linked = links >= 0
+            for k, frame in enumerate(self.positions):
+                carried[k, linked] = se2.apply_points(self.motion, frame[links[linked]])
+            self.positions = np.concatenate([carried, current])[-WINDOW:]
+        self.boxes = ego
+        self.times.append(float(time_s))
+        return velocities(np.asarray(self.times), self.positions)
+
+
+def ego_motion(previous: np.ndarray, current: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(links, motion): for each current box the previous box of the same object (-1: none), and
+    the ego's motion, previous frame -> current (``predicted`` where fewer than 3 boxes pair)."""
+    motion = predicted
+    links = np.full(len(current), -1)
+    for _ in range(2):
+        pairs = gated_assignment(current, se2.apply_boxes(motion, previous), LINK_GATE, LINK_SIGMA)
+        if len(pairs) < 3:
+            return links, predicted
+        motion = robust_fit(previous[pairs[:, 1], :2], current[pairs[:, 0], :2], LINK_SIGMA).transform
+    links[pairs[:, 0]] = pairs[:, 1]
+    return links, motion
+
+
+def velocities(times: np.ndarray, positions: np.ndarray) -> np.ndarray:
+    """(N, 2) the least-squares slope of each box's positions (frames, N, 2) over ``times``, NaN
+    where they span less than ``LEAST_SPAN_S``."""
+    seen = ~np.isnan(positions[..., 0])
+    t = np.where(seen, times[:, None], np.nan)
+    span = np.nanmax(t, axis=0, initial=-np.inf) - np.nanmin(t, axis=0, initial=np.inf)
+    count = seen.sum(axis=0)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        t_mean = np.nansum(t, axis=0) / count
+        dt = np.where(seen, times[:, None] - t_mean, 0.0)
+        p_mean = np.nansum(positions, axis=0) / count[:, None]
+        dp = np.where(seen[..., None], positions - p_mean, 0.0)
+        slope = (dt[..., None] * dp).sum(axis=0) / (dt ** 2).sum(axis=0)[:, None]
+    slope[~(span >= LEAST_SPAN_S)] = np.nan
+    return slope
+
+
+def message_age(residuals: np.ndarray, velocity: np.ndarray) -> tuple[float, float]:
+    """(d, weight): the least-squares age of a frame's message, ``sum v.r / sum |v|^2`` over the
+    pairs whose speed is at least ``MOVING``, and the weight ``sum |v|^2`` it stands on (0: none)."""
+    speed2 = np.einsum("ij,ij->i", velocity, velocity)
+    moving = np.isfinite(speed2) & (speed2 >= MOVING ** 2)
+    weight = float(speed2[moving].sum())
+    if weight == 0.0:
+        return float("nan"), 0.0
+    return float(np.einsum("ij,ij->", velocity[moving], residuals[moving]) / weight), weight
+
+
+@dataclass
+class AgeEstimate:
+    """A message's age pooled over the last ``AGE_FRAMES`` frames: the weighted median of the
+    frames' estimates (a frame whose pairs are wrong cannot drag it), once they weigh enough."""
+
+    found: deque = field(default_factory=lambda: deque(maxlen=AGE_FRAMES))
+
+    def add(self, age: float, weight: float) -> None:
+        if weight > 0.0 and np.isfinite(age):
+            self.found.append((age, weight))
+
+    def clear(self) -> None:
+        self.found.clear()
+
+    @property
+    def seconds(self) -> float | None:
+        """The pooled age, None while the frames' weights sum to less than ``LEAST_WEIGHT``."""
+        if not self.found:
+            return None
+        ages, weights = np.array(self.found).T
+        if weights.sum() < LEAST_WEIGHT:
+            return None
+        order = np.argsort(ages)
+        middle = np.searchsorted(np.cumsum(weights[order]), weights.sum() / 2.0)
+        age = float(ages[order][middle])
+        return age if 0.0 <= age <= MOST_AGE_S else None
+
+
+def compensated_fit(ego_xy: np.ndarray, cav_xy: np.ndarray, velocity: np.ndarray, age: float,
+                    nu_floor: float) -> Fit:
+    """The robust fit of CAV centres (its own frame) to the ego's, each ego centre moved back by
+    its object's motion over the message's ``age`` (no velocity: it stands still)."""
+    back = np.where(np.isfinite(velocity), velocity, 0.0) * age
+    return robust_fit(cav_xy, ego_xy - back, nu_floor)
