@@ -39,6 +39,7 @@ ANNOTATION_TYPES = {
     **{c: pl.Float64 for c in QUATERNION + TRANSLATION},
 }
 POSE_TYPES = {"timestamp_ns": pl.Int64, **{c: pl.Float64 for c in QUATERNION + TRANSLATION}}
+EXPECTED = "an Argoverse 2 log (annotations.feather)"
 
 
 def recognises(path: Path) -> bool:
