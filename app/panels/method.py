@@ -20,6 +20,7 @@ from ..session.coalesce import Later
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
+from .registry import Panel
 
 SLIDERS = {
     # (parameter set, field): (min, max, step); the max is the parameter's own (``cbm.params.MOST``)
@@ -182,3 +183,7 @@ def typed_number(value: str, current: float, key: str, name: str) -> float:
             raise ValueError(f"{label_of(key, name)}: {value!r} is not a whole number")
         return int(number)
     return number
+
+
+PANEL = Panel("Method", 20, "the calibration method and its parameters",
+              lambda gui, tab: build(gui, tab.settings, tab.offers), bind)
