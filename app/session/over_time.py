@@ -15,10 +15,10 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from cbm import match
-from cbm.methods import METHODS
 from cbm.result import MatchResult
 from cbm.sequence import SequenceCalibrator
 from evaluation.metrics import TrialMetrics, evaluate
+from evaluation.sweep import calibrator_for
 from evaluation.trials import NoTrial
 
 from .settings import Settings, ViewOptions
@@ -106,7 +106,7 @@ class Runs:
         with self._lock:
             found = next((run for known, run in self._runs if known == key), None)
             if found is None:
-                found = Run(METHODS[settings.method].calibrator(settings.params))
+                found = Run(calibrator_for(settings.method, settings.params, settings.tracking))
             self._runs = [(known, run) for known, run in self._runs if run is not found][-(RUNS_KEPT - 1):]
             self._runs.append((key, found))
             return found
