@@ -83,8 +83,8 @@ class WalkthroughPanel:
                 self.tab.reset_camera()
                 self.nodes.view.lay_out()
 
-    def refresh(self, outcome: Outcome, _picture: object = None) -> None:
-        """Follow a recompute: the current step is redrawn for the new outcome (its drawing: the step's own)."""
+    def refresh(self, outcome: Outcome, _picture: object) -> None:
+        """Follow a recompute: the current step is redrawn for the new outcome (the step draws its own picture)."""
         with self._lock:
             if self.active:
                 self._draw(outcome)
