@@ -16,6 +16,7 @@ import time
 import loaders
 from evaluation.stop import FORCE_AFTER_S, Watchdog, force_exit, kill_descendants
 
+from .panels.registry import tabs_help
 from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
@@ -37,7 +38,9 @@ def _fail(message: str) -> int:
 
 def parse(argv: list[str]) -> argparse.Namespace:
     """The command line's options; a wrong one exits with one line on stderr and status 2."""
-    parser = _Parser(description="CBM Explorer: see and tune CBM's pose calibration live in the browser.")
+    parser = _Parser(description="CBM Explorer: see and tune CBM's pose calibration live in the browser.",
+                     epilog=f"The tabs of the control panel:\n{tabs_help()}",
+                     formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--dataset", default="argoverse2",
                         help="dataset folder or file, or a name: argoverse2 (shipped), synthetic[:count[:seed=S]]")
     parser.add_argument("--preset", default="default",

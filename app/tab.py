@@ -1,12 +1,13 @@
-"""One browser tab: its settings, the one place that changes them and recomputes, its scene, its
-panels and its play loop."""
+"""One browser tab's session: its settings, the one place that changes them and recomputes, and its
+play loop. What it shows goes to its stage (``app.stage``: the scene, the camera, the key numbers)
+and its panels, which are found (``app.panels.registry``): the session builds them and tells them
+of every change, and names none of them."""
 from __future__ import annotations
 
 import dataclasses
 import threading
 import time
 
-import numpy as np
 import viser
 
 from cbm import INTERPRETED_UP_TO, Cancelled, stoppable
@@ -14,37 +15,22 @@ from cbm.methods import METHODS
 
 from . import panels
 from .panels.actions import Edit
-from .panels.explore import ExplorePanel
-from .panels.keynumbers import GAP, WIDTH, KeyNumbers, unusable_markdown
-from .panels.plot import timeline_data
-from .scene import picking, planes, presentation
-from .scene.camera import TabCamera, key_numbers_area
+from .panels.keynumbers import unusable_markdown
+from .panels.metrics import timeline_of
 from .scene.drawing import Drawing, draw
-from .scene.framing import Area
 from .scene.pinned import with_baseline
-from .scene.view import SceneView
 from .scene.words import error_words
 from .session.baseline import Baseline
-from .session.coalesce import Coalescer, Later
-from .session.explorer import CavChoice, Explorer, Outcome
+from .session.coalesce import Coalescer
+from .session.explorer import Explorer, Outcome
 from .session.history import FrameHistory, row_over_time, settings_key, sweep_rows
 from .session.kernels import COMPILING, Kernels
 from .session.offers import offers_of
 from .session.over_time import Stopped
-from .session.presets import PresetError, discover, in_use, save_preset, skipped_markdown
 from .session.progress import announced
 from .session.recording import Recording
-from .session.settings import AUTO_CAV, Settings, ViewOptions
-from .walkthrough.panel import WalkthroughPanel
-
-TIMELINE_DELAY = 0.2
-"""Seconds after the latest result before the timeline is redrawn: the chart costs the browser more
-than the rest of a result, and while a slider moves only the last result's timeline is worth drawing."""
-
-
-def descriptions(presets: dict) -> dict[str, str]:
-    """Each preset's description by its name."""
-    return {name: preset.description for name, preset in presets.items()}
+from .session.settings import Settings
+from .stage import Stage
 
 
 class ClientSession:
@@ -65,27 +51,11 @@ class ClientSession:
         self.history = FrameHistory()
         self.recording = Recording()
         self.baseline = Baseline()
-        self._timeline_later = Later(TIMELINE_DELAY)
-        self._choices: list[CavChoice] = []
-        self._choices_frame = -1
-        self.presets, problems = discover()
-        self.view = SceneView(client)
-        self.camera = TabCamera(client)
-        self.camera.on_measured = self.reset_camera
         self._frame_for: Settings | None = None
         """Settings whose result the camera is to frame when shown (a jump to a frame)."""
-        self.caption = presentation.Caption(client)
-        self.key_numbers = KeyNumbers(client.gui)
+        self.stage = Stage(client, lambda *clicked: self.controls.call("picked", *clicked))
         self.offers = offers_of(explorer.sequence)
-        self.controls = panels.build(client.gui, settings, len(explorer), descriptions(self.presets), self.offers)
-        self.explore = ExplorePanel(client.gui, self.controls.tabs, self)
-        self.walkthrough = WalkthroughPanel(client.gui, self.controls.tabs, self)
-        panels.bind(self.controls, self)
-        panels.metrics.bind(self.controls.metrics, self)
-        self.controls.presets.skipped.content = skipped_markdown(problems)
-        self.controls.presets.in_use(in_use(self.presets, settings))
-        if problems:
-            self.notify("Preset files skipped", f"{len(problems)} file(s): see the Presets tab", "yellow")
+        self.controls = panels.build(client.gui, self)
         for warning in explorer.sequence.warnings:
             self.notify("Dataset loaded with gaps", warning, "yellow")
         for note in explorer.sequence.notes:
@@ -136,7 +106,6 @@ class ClientSession:
             self.controls.show(new)
         else:
             self.controls.reflect(new)
-        self.controls.presets.in_use(in_use(self.presets, new))
 
     def step(self, delta: int) -> None:
         self.apply(lambda s: dataclasses.replace(s, frame=(s.frame + delta) % len(self.explorer)), move_controls=True)
@@ -144,61 +113,11 @@ class ClientSession:
     def set_playing(self, playing: bool) -> None:
         (self._playing.set if playing else self._playing.clear)()
 
-    def cav_id(self, label: str) -> str:
-        return next((c.id for c in self._choices if c.label == label), AUTO_CAV)
-
-    def load_preset(self, name: str) -> None:
-        preset = self.presets.get(name)
-        if preset is None:
-            self.notify("No such preset", f"{name!r} is not among the presets", "red")
-            return
-        try:
-            loaded = preset.apply(self._settings)
-            refused = self.offers.refusal(dataclasses.replace(loaded, cavs=self._settings.cavs))
-            if refused:
-                raise ValueError(refused)
-        except (KeyError, TypeError, ValueError) as error:
-            self.notify("Preset not loaded", f"{name}: {error}", "red")
-            return
-        self.apply(lambda s: dataclasses.replace(loaded, frame=s.frame, cav=s.cav, cavs=s.cavs), move_controls=True)
-        self.notify("Preset loaded", preset.description or name, "green")
-
-    def save_preset(self, name: str) -> None:
-        try:
-            path = save_preset(name.strip(), self._settings)
-        except (PresetError, OSError) as error:
-            self.notify("Preset not saved", str(error), "red")
-            return
-        self.presets, problems = discover()
-        self.controls.presets.offer(descriptions(self.presets))
-        self.controls.presets.skipped.content = skipped_markdown(problems)
-        self.controls.presets.in_use(in_use(self.presets, self._settings))
-        self.notify("Preset saved", f"{name} -> {path.name} in your presets folder", "green")
-
     def reset_camera(self, oblique: bool = False) -> None:
-        """Frame the frame on screen from straight above (presentation mode: over the two agents);
-        ``oblique``: the 3D view, from behind and above the ego. The labels are spread apart again."""
-        outcome, picture = self.last, self.last_drawing
-        if outcome is None or picture is None:
-            return
-        self.view.lay_out(self.camera.frame(picture, outcome.settings.view, self._covered(outcome.settings.view),
-                                            oblique))
+        self.stage.reset_camera(oblique)
 
     def hide_click_label(self) -> None:
-        self.view.hide_label("picked")
-
-    def _covered(self, view: ViewOptions) -> Area | None:
-        """The part of the canvas a floating panel covers: the key numbers' (none in presentation
-        mode, whose camera frames the agents for a caption at the page's bottom left)."""
-        if view.presentation:
-            return None
-        return key_numbers_area(self.key_numbers.handle.content, self.camera.canvas, GAP, WIDTH)
-
-    def _aim(self, outcome: Outcome, picture: Drawing, reframe: bool) -> float | None:
-        """Frame the result (``reframe``: a first frame, a jump, a new layout or mode), else follow
-        it; the metres per pixel to spread its labels at (None: the camera's)."""
-        view, covered = outcome.settings.view, self._covered(outcome.settings.view)
-        return (self.camera.frame if reframe else self.camera.follow)(picture, view, covered)
+        self.stage.hide_click_label()
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""
@@ -210,24 +129,7 @@ class ClientSession:
         if settings_key(settings) != settings_key(current):
             return
         self.history.merge(settings, sweep_rows(rows))
-        self.controls.metrics.show_timeline(self._timeline(current.frame), self.history.failures(),
-                                            self.baseline.pinned, current.frame, self._over_time())
-
-    def _show_timeline_soon(self, frame: int) -> None:
-        """The timeline at ``frame``, drawn ``TIMELINE_DELAY`` after the latest result."""
-        data, failures, pinned = self._timeline(frame), self.history.failures(), self.baseline.pinned
-        over_time = self._over_time()
-        self._timeline_later.call(lambda: self._closed.is_set()  # a closed tab's client takes no update
-                                  or self.controls.metrics.show_timeline(data, failures, pinned, frame, over_time))
-
-    def _timeline(self, frame: int) -> tuple[np.ndarray, ...]:
-        rows = dict(self.history.rows) if self.history.matches(self._settings) else {}
-        return timeline_data(rows, dict(self.baseline.rows), frame, len(self.explorer), self.baseline.pinned,
-                             self._over_time())
-
-    def _over_time(self) -> bool:
-        """Whether the timeline draws a method over time beside per-frame CBM."""
-        return METHODS[self._settings.method].over_time
+        self.controls.metrics.show_timeline(*timeline_of(self, current.frame))
 
     def stop_catching_up(self) -> None:
         """Stop a method over time computing the frames before the one asked for: the frames done
@@ -240,9 +142,8 @@ class ClientSession:
     def close(self) -> None:
         self._closed.set()
         self._playing.set()
-        self.explore.close()
+        self.controls.close()
         self.worker.close()
-        self._timeline_later.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
         """The outcome of ``settings`` and its drawing. Until CBM's kernels are compiled a small
@@ -317,18 +218,11 @@ class ClientSession:
         if self._closed.is_set():
             return
         outcome, picture = computed
-        first = not self.view.meshes
-        relaid = self.last is not None and outcome.settings.view.layout != self.last.settings.view.layout
         jumped, self._frame_for = self._frame_for == outcome.settings, None
         with self.client.atomic():
-            self.key_numbers.show(outcome)
-            staged = presentation.restage(self.client, self.last and self.last.settings.view, outcome.settings.view)
-            self.view.show(picture, self._aim(outcome, picture, relaid or staged or first or jumped))
+            self.stage.show(outcome, picture, reframe=jumped)
             self.controls.metrics.show(picture.metrics_markdown, self._note)
-            self.caption.show(outcome)
-            self._refresh_cav_choices(outcome)
-            self.explore.refresh(outcome, picture)
-            self.walkthrough.refresh(outcome)
+            self.controls.refresh(outcome, picture)
         self.client.flush()
         self.history.add(outcome)
         if outcome.alone is not None:
@@ -336,11 +230,8 @@ class ClientSession:
             self.history.merge(outcome.settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
                                                   for frame, d in done.items()})
         self.recording.add(outcome)
-        self._show_timeline_soon(outcome.frame_index)
+        self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
         self._note = ""
-        if first:
-            for name in picking.NODES:
-                self.view.meshes[name].on_click(self._picked)
         self.last, self.last_drawing = outcome, picture
 
     def _failed(self, error: BaseException) -> None:
@@ -355,17 +246,8 @@ class ClientSession:
         else:
             self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
         method = METHODS[self._settings.method].label
-        self.key_numbers.problem(f"{method} cannot run on this frame: see the panel")
+        self.stage.key_numbers.problem(f"{method} cannot run on this frame: see the panel")
         self.notify(f"{method} cannot run on this frame", error_words(error), "red")
-
-    def _refresh_cav_choices(self, outcome: Outcome) -> None:
-        if outcome.frame_index == self._choices_frame:
-            return
-        self._choices_frame = outcome.frame_index
-        self._choices = self.explorer.cav_choices(outcome.frame_index)
-        cav = self.controls.frame.cav
-        cav.options = (AUTO_CAV, *[c.label for c in self._choices])
-        cav.value = next((c.label for c in self._choices if c.id == outcome.settings.cav), AUTO_CAV)
 
     def _play(self) -> None:
         while not self._closed.is_set():
@@ -374,25 +256,3 @@ class ClientSession:
                 return
             self.step(1)
             time.sleep(1.0 / max(1, int(self.controls.frame.speed.value)))
-
-    def _picked(self, event: viser.SceneNodePointerEvent) -> None:
-        """Label the object under a click (the ray meets the plane of the footprints) and, for the ego's
-        and the first CAV's (the pair CBM's inspection holds), show its context in the inspector."""
-        outcome, picture = self.last, self.last_drawing
-        origin, direction = np.asarray(event.ray_origin), np.asarray(event.ray_direction)
-        if outcome is None or picture is None or abs(direction[2]) < 1e-9:
-            return
-        point = origin + direction * (planes.EGO - origin[2]) / direction[2]
-        found = picking.pick(picture, point[:2])
-        if found is None or not outcome.settings.view.labels:
-            self.view.hide_label("picked")
-        if found is None:
-            return
-        group, index = found
-        if group in ("ego", "cav"):
-            self.explore.picked(outcome, picture, group, int(picture.objects[group][1][index]))
-        if not outcome.settings.view.labels:
-            return
-        boxes, _ = picture.objects[group]
-        self.view.label("picked", picking.describe(outcome, picture, group, index),
-                        (float(boxes[index, 0]), float(boxes[index, 1]), planes.LABELS))

@@ -99,8 +99,8 @@ def edit(session: ClientSession, k: int) -> None:
         session.apply(lambda s: s.with_params("cbm", sigma2=SIGMA2[(k // 2) % len(SIGMA2)]))
     if not session.worker.wait_idle(timeout=120):
         raise TimeoutError(f"edit {k} was not answered in 120 s")
-    session.explore.inspect_anchor()
-    session.walkthrough.go(k % 9)
+    session.controls.explore.inspect_anchor()
+    session.controls.walkthrough.go(k % 9)
 
 
 @dataclass(frozen=True)

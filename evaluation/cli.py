@@ -98,7 +98,8 @@ def build_parser() -> Parser:
     parser.add_argument("--methods", default=",".join(DEFAULT_METHODS),
                         help=f"comma list of {', '.join(METHODS)} (default: all)")
     parser.add_argument("--grid", nargs="+", default=[], metavar="NAME=V1,V2",
-                        help="scenario or method parameters and their values, e.g. eta=0.2,0.6 sigma2=2,3")
+                        help="scenario or method parameters and their values, e.g. eta=0.2,0.6 sigma2=2,3; "
+                             "tracking.<field> for CBM over time's tracking, e.g. tracking.gate=2.5,5")
     parser.add_argument("--seed", type=int, default=None, help="seed of every random draw (default: the preset's, 0)")
     parser.add_argument("--out", type=Path, default=Path("results"), help="output folder (default: results)")
     parser.add_argument("--workers", type=int, default=2, help="processes (default: 2)")
@@ -275,7 +276,7 @@ def prepare(args: argparse.Namespace) -> Plan:
         return plan(args.dataset, methods=methods, grid=grid, seed=seed, protocol=args.protocol,
                     frames=lambda n: parse_frames(args.frames, n), cav_distance=args.cav_distance,
                     detections=args.detections, fusion=args.fusion, agents=args.agents,
-                    scenario=scenario, params=preset.params)
+                    scenario=scenario, params=preset.params, tracking=preset.tracking)
     except ValueError as error:
         raise CliError(str(error)) from None
 

@@ -3,7 +3,8 @@ Explorer saves and exports them and as ``presets/`` ships them.
 
 A preset holds an optional ``description`` and ``name``, the ``method`` shown, a ``[scenario]``
 table (the fields of ``ScenarioParams``, angles in degrees), one table per method parameter set
-(``[cbm]``, ``[icp]``, ``[ricp]``, ``[vips]``: ``Method.params_key``) and the app's ``[view]``,
+(``[cbm]``, ``[icp]``, ``[ricp]``, ``[vips]``: ``Method.params_key``), ``[tracking]`` (the fields
+of ``cbm.TrackingParams``: how CBM over time follows a CAV's pose error) and the app's ``[view]``,
 which only the app reads. Keys a preset leaves out keep the values of the preset it is read over:
 the shipped ``default`` preset gives both the app and ``evaluate.py`` their defaults.
 
@@ -25,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from cbm import TrackingParams
 from cbm.methods import METHODS
 from loaders.errors import special_kind, unreadable
 from presets import SHIPPED_DIR
@@ -85,6 +87,8 @@ class PresetParams:
     scenario: ScenarioParams = ScenarioParams()
     params: Mapping[str, Any] = field(default_factory=code_defaults)
     """Parameters of every method by ``Method.params_key``."""
+    tracking: TrackingParams = TrackingParams()
+    """How a method over time (``cbm-time``) tracks the CAV's pose error from frame to frame."""
 
 
 def replaced(table: str, value: Any, changes: Any) -> Any:
@@ -115,7 +119,7 @@ def preset_params(tables: Mapping[str, Any], base: PresetParams | None = None,
     code's defaults). ``other_tables`` are known and left to their reader (the app's ``[view]``);
     ``KeyError``, ``TypeError`` or ``ValueError`` name the table and key at fault."""
     base = base or PresetParams()
-    known = {"method", "scenario", *base.params, *other_tables}
+    known = {"method", "scenario", "tracking", *base.params, *other_tables}
     for table in tables:
         if table not in known:
             raise KeyError(f"unknown table [{table}]; expected one of {sorted(known)}")
@@ -123,7 +127,8 @@ def preset_params(tables: Mapping[str, Any], base: PresetParams | None = None,
     if method not in METHODS:
         raise ValueError(f"method must be one of {', '.join(METHODS)}, got {method!r}")
     params = {key: replaced(key, value, tables[key]) if key in tables else value for key, value in base.params.items()}
-    return PresetParams(method, replaced("scenario", base.scenario, tables.get("scenario", {})), params)
+    return PresetParams(method, replaced("scenario", base.scenario, tables.get("scenario", {})), params,
+                        replaced("tracking", base.tracking, tables.get("tracking", {})))
 
 
 def nesting_depth(text: str) -> int:

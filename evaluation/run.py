@@ -15,6 +15,7 @@ from typing import Any
 import polars as pl
 
 import loaders
+from cbm import TrackingParams
 from cbm.methods import METHODS
 from evaluation import trials
 from evaluation.agents import TARGET_DISTANCE
@@ -63,7 +64,7 @@ def frame_inputs(seq: loaders.Sequence, frames: Iterable[int], protocol: str, ca
     """What the sweep needs of each frame (``evaluation.trials.frame_inputs``, as the app builds its
     trials), and the frames skipped for want of an ego or a CAV. ``ValueError`` for the OPV2V
     protocol on a dataset that does not say what each agent sees."""
-    if protocol == "opv2v" and seq.visibility is None:
+    if protocol == "opv2v" and (seq.visibility is None or seq.visibility["agent_id"].n_unique() < 2):
         raise ValueError(f"--protocol opv2v: {seq.name} does not say what each agent sees; use --protocol range")
     return trials.sequence_inputs(seq, frames, protocol, target_distance=cav_distance, agents=agents, window_s=window_s)
 
@@ -96,18 +97,20 @@ def plan(datasets: Sequence[str], *, methods: Sequence[str] = DEFAULT_METHODS,
          grid: Mapping[str, Sequence[Any]] | None = None, seed: int = 0, protocol: str | None = None,
          frames: Callable[[int], Sequence[int]] | None = None, cav_distance: float = TARGET_DISTANCE,
          detections: str | None = None, fusion: str | None = None, agents: int = 2,
-         scenario: ScenarioParams | None = None, params: Mapping[str, Any] | None = None) -> Plan:
+         scenario: ScenarioParams | None = None, params: Mapping[str, Any] | None = None,
+         tracking: TrackingParams | None = None) -> Plan:
     """Check the run and load its datasets; ``ValueError`` naming what is wrong. ``agents``: the ego
     and ``agents - 1`` CAVs, one trial row per CAV and frame (``evaluation.trials.frame_cav_inputs``).
     ``scenario`` and ``params`` (by ``Method.params_key``) are what the grid does not vary (default:
-    ``ScenarioParams()`` and each method's defaults; ``evaluation.presets`` reads them from a preset);
+    ``ScenarioParams()`` and each method's defaults; ``evaluation.presets`` reads them from a preset),
+    as is ``tracking``, how a method over time tracks (default: ``TrackingParams()``);
     ``protocol``, when given, replaces the scenario's."""
     if agents < 2:
         raise ValueError(f"--agents must be at least 2 (the ego and one CAV), got {agents}")
     scenario = scenario or ScenarioParams()
     protocol = protocol or scenario.protocol
     sweep = Sweep(methods=tuple(methods), grid=dict(grid or {}), seed=seed, fusion=fusion, params=dict(params or {}),
-                  scenario=dataclasses.replace(scenario, protocol=protocol))
+                  scenario=dataclasses.replace(scenario, protocol=protocol), tracking=tracking or TrackingParams())
     window = late_window(scenario, sweep.grid)
     return Plan(sweep, tuple(load_source(name, protocol, frames, cav_distance, detections, agents, window)
                              for name in datasets))

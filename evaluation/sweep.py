@@ -6,8 +6,10 @@ row of metrics per (frame, grid point, method).
     sweep = Sweep(methods=("cbm", "icp"), grid={"eta": [0.2, 0.6], "sigma2": [2.0, 3.0]}, seed=0)
     rows = run(sweep, [FrameInputs(0, {"boxes": boxes, "ids": ids})], workers=2)
 
-A grid name is a field of :class:`~evaluation.scenario.ScenarioParams` (it changes the trial) or a tunable
-parameter of one or more methods (``cbm.methods``; it changes only those methods' runs).
+A grid name is a field of :class:`~evaluation.scenario.ScenarioParams` (it changes the trial), a tunable
+parameter of one or more methods (``cbm.methods``; it changes only those methods' runs), or
+``tracking.<field>``, a field of ``cbm.TrackingParams`` (``tracking.gate``: it changes only the
+methods over time's runs, which record every tracking field in ``tracking.<field>`` columns).
 Every trial is built by ``FrameInputs.build`` (frame ``k`` draws from ``trial_rng(seed, k)``), as
 the app builds its trials, so any row can be reproduced there from its frame, parameters and seed.
 A method that calibrates over time (``cbm-time``: ``Method.over_time``) runs the frames of each CAV
@@ -24,6 +26,7 @@ from typing import Any
 
 import numpy as np
 
+from cbm import SequenceCalibrator, TrackingParams
 from cbm.methods import METHODS
 
 from .detected import FALSE_POSITIVE_CLASS
@@ -35,6 +38,8 @@ from .scenario import FrameInputs, ScenarioParams, Trial
 
 SCENARIO_FIELDS = tuple(f.name for f in dataclasses.fields(ScenarioParams))
 """Scenario parameter columns, ``seed`` included (it is the sweep's seed)."""
+TRACKING_FIELDS = {f"tracking.{f.name}": f.name for f in dataclasses.fields(TrackingParams)}
+"""Grid names and columns of the tracking parameters of a method over time, by their field."""
 TRIAL_COLUMNS = ("ego_id", "cav_id")
 TIMING_COLUMNS = ("runtime_s",)
 """Wall-clock seconds of the method: the only columns that differ between two runs of one sweep."""
@@ -63,6 +68,8 @@ class Sweep:
     missing here starts from its defaults."""
     fusion: str | None = None
     """``nms``: each row also holds its late-fusion detections (``evaluation.fusion.FUSION_COLUMNS``)."""
+    tracking: TrackingParams = TrackingParams()
+    """How the methods over time track where the grid does not vary it (a preset's ``[tracking]``)."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "methods", tuple(self.methods))
@@ -79,6 +86,7 @@ class Sweep:
             if not values:
                 raise ValueError(f"grid parameter {name!r} has no values")
         self.scenario_points()
+        self.tracking_points()
         for method in self.methods:
             self.method_points(method)
 
@@ -86,6 +94,12 @@ class Sweep:
         if name == "seed":
             raise ValueError("seed is the sweep's own argument, not a grid parameter")
         if name in SCENARIO_FIELDS:
+            return
+        if name in TRACKING_FIELDS:
+            if not self.over_time():
+                over_time = ", ".join(m for m in METHODS if METHODS[m].over_time)
+                raise ValueError(f"grid parameter {name!r} is a tracking parameter of a method over time "
+                                 f"({over_time}); select one")
             return
         if not any(name in METHODS[m].tunable for m in self.methods):
             owners = [m for m in METHODS if name in METHODS[m].tunable]
@@ -100,6 +114,22 @@ class Sweep:
         return [dataclasses.replace(base, **dict(zip(names, values)))
                 for values in itertools.product(*(self.grid[n] for n in names))]
 
+    def over_time(self) -> bool:
+        """Whether a selected method calibrates over time (and so reads the tracking parameters)."""
+        return any(METHODS[m].over_time for m in self.methods)
+
+    def tracking_points(self) -> list[TrackingParams]:
+        """The tracking parameters at every point of the tracking part of the grid, in grid order."""
+        names = [n for n in self.grid if n in TRACKING_FIELDS]
+        return [dataclasses.replace(self.tracking, **{TRACKING_FIELDS[n]: v for n, v in zip(names, values)})
+                for values in itertools.product(*(self.grid[n] for n in names))]
+
+    def points(self, method: str) -> list[tuple[Any, TrackingParams | None]]:
+        """``method``'s parameters and, for a method over time, its tracking parameters at every point
+        of its part of the grid, in grid order."""
+        tracking = self.tracking_points() if METHODS[method].over_time else [None]
+        return list(itertools.product(self.method_points(method), tracking))
+
     def method_points(self, method: str) -> list[Any]:
         """``method``'s parameters at every point of its part of the grid, in grid order, as it runs
         them (forced parameters applied, so the table records what ran)."""
@@ -111,12 +141,13 @@ class Sweep:
 
     def trial_count(self, n_frames: int) -> int:
         """Rows a run over ``n_frames`` frames gives."""
-        return n_frames * len(self.scenario_points()) * sum(len(self.method_points(m)) for m in self.methods)
+        return n_frames * len(self.scenario_points()) * sum(len(self.points(m)) for m in self.methods)
 
     def parameter_columns(self) -> list[str]:
-        """Scenario fields, then every field of the selected methods' parameters (first use first)."""
+        """Scenario fields, then every field of the selected methods' parameters (first use first),
+        then the tracking parameters when a method calibrates over time."""
         method_columns = dict.fromkeys(f.name for m in self.methods for f in dataclasses.fields(METHODS[m].params))
-        return [*SCENARIO_FIELDS, *method_columns]
+        return [*SCENARIO_FIELDS, *method_columns, *(TRACKING_FIELDS if self.over_time() else ())]
 
     def columns(self) -> list[str]:
         """Every column of a row, in order: frame, method, parameters, agents, metrics, timing."""
@@ -131,7 +162,15 @@ def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
     for method in methods:
         defaults.update({f.name: f.default for f in dataclasses.fields(METHODS[method].params)
                          if f.name in METHODS[method].tunable})
+        if METHODS[method].over_time:
+            defaults.update({name: getattr(TrackingParams(), field) for name, field in TRACKING_FIELDS.items()})
     return defaults
+
+
+def calibrator_for(method: str, params: Any, tracking: TrackingParams) -> SequenceCalibrator:
+    """A fresh calibrator over time for ``method`` (``over_time`` methods), with ``params`` as it runs
+    them and ``tracking``."""
+    return SequenceCalibrator(METHODS[method].resolved(params), tracking)
 
 
 def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
@@ -185,8 +224,8 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
     calibrator of its own stepping through the frames in time order."""
     number, scenario = point
     methods = [(k, m) for k, m in enumerate(sweep.methods) if METHODS[m].over_time == over_time]
-    calibrators = {(k, j): METHODS[m].calibrator(params) for k, m in methods if over_time
-                   for j, params in enumerate(sweep.method_points(m))}
+    calibrators = {(k, j): calibrator_for(m, params, tracking) for k, m in methods if over_time
+                   for j, (params, tracking) in enumerate(sweep.points(m))}
     rows = []
     for position, frame in zip(positions, frames):
         trial = frame.build(scenario, sweep.seed)
@@ -195,13 +234,13 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
         init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
         peers = frame.peer_trials(scenario, sweep.seed) if any(METHODS[m].takes_peers for _, m in methods) else []
         for k, method in methods:
-            for j, params in enumerate(sweep.method_points(method)):
+            for j, (params, tracking) in enumerate(sweep.points(method)):
                 if over_time:
                     result = calibrators[k, j].step(trial.ego_boxes, trial.cav_boxes, trial.init, frame_time(frame),
                                                     agent=frame.trial.get("cav_id"))
                 else:
                     result = run_method(method, trial, params, frame, peers)
-                row = _row(sweep, base, method, params, evaluate(result, trial), init_error)
+                row = _row(sweep, base, method, params, tracking, evaluate(result, trial), init_error)
                 if sweep.fusion:
                     row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
                 rows.append(((position, number, k, j), row))
@@ -225,12 +264,15 @@ def run_method(method: str, trial: Trial, params: Any, frame: FrameInputs, peers
                            true_pairs=trial.gt_pairs, peers=peers)
 
 
-def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, metrics: TrialMetrics,
-         init_error: dict[str, float]) -> dict[str, Any]:
-    """One table row: every column of ``sweep.columns()``, None for other methods' parameters."""
+def _row(sweep: Sweep, base: dict[str, Any], method: str, params: Any, tracking: TrackingParams | None,
+         metrics: TrialMetrics, init_error: dict[str, float]) -> dict[str, Any]:
+    """One table row: every column of ``sweep.columns()``, None for other methods' parameters (and
+    for the tracking parameters of a method that takes each frame alone)."""
     row = dict.fromkeys(sweep.columns())
     row.update(base)
     row.update(method=method, **dataclasses.asdict(params), success=is_success(metrics), **init_error)
+    if tracking is not None:
+        row.update({name: getattr(tracking, field) for name, field in TRACKING_FIELDS.items()})
     row.update(dataclasses.asdict(metrics))
     row.update({key: metric.of(metrics) for key, metric in TRIAL_METRICS.items()})
     return row

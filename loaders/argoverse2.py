@@ -41,6 +41,7 @@ ANNOTATION_TYPES = {
     **{c: pl.Float64 for c in QUATERNION + TRANSLATION},
 }
 POSE_TYPES = {"timestamp_ns": pl.Int64, **{c: pl.Float64 for c in QUATERNION + TRANSLATION}}
+EXPECTED = "an Argoverse 2 log (annotations.feather)"
 POINTS = "num_interior_pts"
 """The optional column of lidar points inside each box: at least one and the recording car saw it."""
 

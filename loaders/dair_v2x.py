@@ -65,6 +65,10 @@ FRAME_RATE = 10.0
 VEHICLE_SIZE = (4.9, 2.0, 1.6)
 INFRASTRUCTURE_SIZE = (0.6, 0.6, 5.0)
 DATA_INFO = Path("cooperative") / "data_info.json"
+EXPECTED = "a DAIR-V2X cooperative folder (cooperative/data_info.json pairing point clouds)"
+BROAD = True
+"""Recognises any ``cooperative/data_info.json``, V2X-Seq-SPD's too (``v2x_seq`` reads those): tried
+after the loaders that recognise narrowly."""
 I2V = Path("cooperative") / "calib" / "lidar_i2v"
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""

@@ -1,10 +1,18 @@
-"""``loaders.open``: a dataset by name or path, with the loader picked from what is there."""
+"""``loaders.open``: a dataset by name or path, with the loader picked from what is there.
+
+The loaders are found, not listed: every module of the ``loaders`` package that says what it reads
+(``EXPECTED``, beside its ``recognises(path)`` and ``load(path)``) is one (``registered``). A new
+dataset is one module; nothing here changes.
+"""
 from __future__ import annotations
 
+import importlib
+import pkgutil
 import re
 from pathlib import Path
+from types import ModuleType
 
-from . import argoverse2, dair_v2x, interaction, opv2v, sind, synthetic, table, tumtraf_v2x, v2x_seq, v2x_sim
+from . import argoverse2, synthetic
 from . import detections as detection_files
 from .errors import LoaderError, existing_path, unreadable
 from .scene import Sequence
@@ -74,24 +82,26 @@ def _synthetic(name: str, match: re.Match) -> Sequence:
 
 
 def _loader_for(path: Path):
-    """The ``load`` function of the dataset module that recognises ``path``."""
-    for module in _modules():
+    """The ``load`` function of the first registered loader that recognises ``path``."""
+    found = registered()
+    for module in found:
         if module.recognises(path):
             return module.load
-    raise LoaderError(f"{path}: nothing recognisable; expected {_EXPECTED}")
+    raise LoaderError(f"{path}: nothing recognisable; expected {expected(found)}")
 
 
-def _modules() -> list:
-    return [argoverse2, sind, interaction, v2x_seq, dair_v2x, tumtraf_v2x, v2x_sim, opv2v, table]
+def registered() -> list[ModuleType]:
+    """The loaders, in the order they are tried: the modules of this package that define
+    ``EXPECTED``, by name, those that recognise broadly (``BROAD``: any table file, any YAML file)
+    after the others."""
+    package = importlib.import_module(__package__)
+    modules = [importlib.import_module(f"{__package__}.{info.name}") for info in pkgutil.iter_modules(package.__path__)]
+    loaders = [module for module in modules if hasattr(module, "EXPECTED")]
+    return sorted(loaders, key=lambda module: (getattr(module, "BROAD", False), module.__name__))
 
 
-_EXPECTED = (
-    "an Argoverse 2 log (annotations.feather), a SinD recording (Veh_smoothed_tracks.csv / "
-    "Ped_smoothed_tracks.csv), an INTERACTION track file (vehicle_tracks_*.csv), an OPV2V / "
-    "V2XSet / V2V4Real / V2X-Real scenario (numbered CAV folders of .yaml files), a DAIR-V2X cooperative "
-    "folder (cooperative/data_info.json pairing point clouds), a V2X-Seq-SPD folder (cooperative/data_info.json "
-    "pairing vehicle_frame and infrastructure_frame), a TUMTraf-V2X root, split or "
-    "labels_point_clouds/s110_lidar_ouster_south_and_vehicle_lidar_robosense_registered folder, "
-    "a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> "
-    "sensors), or a generic table (.csv / .parquet with a frame column)"
-)
+def expected(loaders: list[ModuleType]) -> str:
+    """What ``loaders`` read, as one list: "a, b, or c"."""
+    names = [module.EXPECTED for module in loaders]
+    return names[0] if len(names) == 1 else f"{', '.join(names[:-1])}, or {names[-1]}"
+

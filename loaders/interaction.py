@@ -26,6 +26,7 @@ PEDESTRIAN_COLUMNS = VEHICLE_COLUMNS[:8]
 TRACK_FILE = re.compile(r"^(vehicle|pedestrian)_tracks_(\d+)\.csv$")
 COMMON = {"track_id": pl.Utf8, "frame_id": pl.Int64, "timestamp_ms": pl.Float64,
           "agent_type": pl.Utf8, "x": pl.Float64, "y": pl.Float64}
+EXPECTED = "an INTERACTION track file (vehicle_tracks_*.csv)"
 
 
 def recognises(path: Path) -> bool:

@@ -81,6 +81,9 @@ STATIC = frozenset(v2x_real.STATIC_PROPS.values())
 SPLITS = ("train", "validate", "test")
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
+EXPECTED = "an OPV2V / V2XSet / V2V4Real / V2X-Real scenario (numbered CAV folders of .yaml files)"
+BROAD = True
+"""Recognises any YAML file, and walks every subfolder of a folder: tried after the loaders that recognise narrowly."""
 
 
 def recognises(path: Path) -> bool:

@@ -39,6 +39,7 @@ PEDESTRIAN_COLUMNS = ["track_id", "frame_id", "timestamp_ms", "agent_type", "x",
 META_FILES = {VEHICLE_FILE: "Veh_tracks_meta.csv", PEDESTRIAN_FILE: "Ped_tracks_meta.csv"}
 COMMON = {"track_id": pl.Utf8, "frame_id": pl.Int64, "timestamp_ms": pl.Float64,
           "agent_type": pl.Utf8, "x": pl.Float64, "y": pl.Float64}
+EXPECTED = "a SinD recording (Veh_smoothed_tracks.csv / Ped_smoothed_tracks.csv)"
 
 
 def recognises(path: Path) -> bool:

@@ -25,6 +25,9 @@ OPTIONAL = {"category": pl.Utf8, "z": pl.Float64, "height": pl.Float64, "timesta
             "agent": pl.Utf8}
 DEFAULT_HEIGHT = 1.5
 DEFAULT_RATE = 10.0
+EXPECTED = "a generic table (.csv / .parquet with a frame column)"
+BROAD = True
+"""Recognises any CSV, Parquet or Arrow file: tried after the loaders that recognise narrowly."""
 
 
 def recognises(path: Path) -> bool:

@@ -40,6 +40,7 @@ LABELS = Path("labels_point_clouds") / REGISTERED
 TRANSFORM = "vehicle_lidar_robosense_to_s110_lidar_ouster_south"
 SENSORS = {"vehicle": "vehicle_lidar_robosense", "infrastructure": "s110_lidar_ouster_south"}
 SPLITS = ("train", "val", "test")
+EXPECTED = f"a TUMTraf-V2X root, split or {LABELS.as_posix()} folder"
 
 
 def recognises(path: Path) -> bool:

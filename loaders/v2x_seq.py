@@ -48,6 +48,7 @@ MARKER = b'"vehicle_frame"'
 """What sets a V2X-Seq-SPD pair list apart from DAIR-V2X-C's (whose pairs name point cloud paths)."""
 HEAD_BYTES = 4096
 NO_TRACK = "-1"
+EXPECTED = "a V2X-Seq-SPD folder (cooperative/data_info.json pairing vehicle_frame and infrastructure_frame)"
 
 
 @dataclass(frozen=True)

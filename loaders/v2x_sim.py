@@ -51,6 +51,7 @@ OBJECT_SCHEMA = {"frame": pl.Int64, "track_id": pl.Utf8, "category": pl.Utf8,
                  **{c: pl.Float64 for c in ("x", "y", "z", "length", "width", "height", "yaw")}}
 AGENT_SCHEMA = {"frame": pl.Int64, "agent_id": pl.Utf8,
                 **{c: pl.Float64 for c in ("x", "y", "z", "yaw", "length", "width", "height")}}
+EXPECTED = "a V2X-Sim 2.0 root (v2.0-<split>/ tables with LIDAR_TOP_id_<k> sensors)"
 
 
 def recognises(path: Path) -> bool:

@@ -1,77 +1,89 @@
-"""The GUI of one browser tab, one module per tab of the control panel (``frame``, ``scenario``,
-``method``, ``view``, ``presets``, ``explore``) and the outputs above them (``metrics``). Each
-holds its handles in a small dataclass, built once; its callbacks write one field of the tab's
-settings through ``TabActions.apply`` and never touch another panel; ``show`` moves its controls to
-given settings (the app's own updates do not re-fire callbacks, ``actions.on_user``)."""
+"""The GUI of one browser tab: the frame controls and the status line at the top (``frame``,
+``metrics``), the tab row, and under it the frame's metrics with the timeline (``metrics``) and the
+CAVs folder (``frame``). The tabs of the row register themselves (``registry``): each module defining
+``PANEL`` is one. Each panel holds its handles in a small dataclass (or a class, for a tab that keeps
+state), built once; its callbacks change the tab's settings through ``TabActions.apply`` and never
+touch another panel; ``show`` moves its controls to given settings (the app's own updates do not
+re-fire callbacks, ``actions.on_user``)."""
 from __future__ import annotations
 
-from collections.abc import Mapping
 from dataclasses import dataclass
+from typing import Any
 
 import viser
 
-from ..session.offers import Offers
+from ..scene.drawing import Drawing
+from ..session.explorer import Outcome
 from ..session.settings import Settings
-from . import frame, method, metrics, presets, scenario, view
+from . import frame, metrics
 from .actions import TabActions
+from .registry import found
 
 
 @dataclass
 class Controls:
-    """Every panel of the tab but the Explore tab (``explore.ExplorePanel``, which keeps state)."""
+    """The frame controls, the metrics and every registered tab's part."""
 
     metrics: metrics.MetricsControls
     frame: frame.FrameControls
     tabs: viser.GuiTabGroupHandle
-    scenario: scenario.ScenarioControls
-    method: method.MethodControls
-    view: view.ViewControls
-    presets: presets.PresetControls
+    parts: dict[str, Any]
+    """Each tab's part by its module's name (``registry.found``)."""
+
+    def __getattr__(self, name: str) -> Any:
+        """A tab's part by its module's name: ``controls.explore``."""
+        try:
+            return self.__dict__["parts"][name]
+        except KeyError:
+            raise AttributeError(name) from None
+
+    def call(self, hook: str, *args: Any) -> None:
+        """``part.hook(*args)`` for every part that has the hook (``registry``)."""
+        for part in self.parts.values():
+            method = getattr(part, hook, None)
+            if method is not None:
+                method(*args)
 
     def show(self, settings: Settings) -> None:
         """Move every control to ``settings`` (without re-firing callbacks)."""
-        for part in (self.frame, self.scenario, self.method, self.view):
-            part.show(settings)
+        self.frame.show(settings)
+        self.call("show", settings)
         self.reflect(settings)
 
     def reflect(self, settings: Settings) -> None:
         """Show the controls that apply to ``settings``; hide or disable the others."""
-        self.scenario.reflect(settings)
-        self.method.reflect(settings)
-        self.view.reflect(settings)
+        self.call("reflect", settings)
+
+    def refresh(self, outcome: Outcome, picture: Drawing) -> None:
+        """Follow a result shown: the CAVs it offers, and every part that follows results."""
+        self.frame.offer_cavs(outcome)
+        self.call("refresh", outcome, picture)
+
+    def close(self) -> None:
+        self.metrics.close()
+        self.call("close")
 
 
-def build(gui: viser.GuiApi, settings: Settings, n_frames: int, descriptions: Mapping[str, str],
-          offers: Offers) -> Controls:
-    """The panels of a new tab, in screen order: the frame slider and play first, the status line,
-    the tabs (Explore and Steps are added to ``Controls.tabs`` after), so that the tab row shows in
-    the first screen of a 1280x720 window; then the metrics, the timeline and the CAVs.
-    ``descriptions``: the presets by name; ``offers``: what the dataset cannot offer, and why."""
-    navigation = frame.build_navigation(gui, settings, n_frames)
+def build(gui: viser.GuiApi, tab: TabActions) -> Controls:
+    """The panels of a new tab, in screen order, bound to ``tab``: the frame slider and play first,
+    the status line, the tab row, so that it shows in the first screen of a 1280x720 window; then the
+    metrics, the timeline and the CAVs."""
+    navigation = frame.build_navigation(gui, tab.settings, len(tab.explorer))
     status = metrics.build_status(gui)
     tabs = gui.add_tab_group()
-    with tabs.add_tab("Scenario"):
-        scenario_controls = scenario.build(gui, settings, offers)
-    with tabs.add_tab("Method"):
-        method_controls = method.build(gui, settings, offers)
-    with tabs.add_tab("View"):
-        view_controls = view.build(gui, settings, offers)
-    with tabs.add_tab("Presets"):
-        preset_controls = presets.build(gui, descriptions)
+    parts = {}
+    for name, panel in found().items():
+        with tabs.add_tab(panel.title):
+            parts[name] = panel.build(gui, tab)
+        if panel.bind is not None:
+            panel.bind(parts[name], tab)
     shown = metrics.build(gui, navigation.frame, status)
-    frames = frame.build(gui, settings, navigation)
-    controls = Controls(shown, frames, tabs, scenario_controls, method_controls, view_controls, preset_controls)
-    controls.reflect(settings)
+    frames = frame.build(gui, tab.settings, navigation)
+    frame.bind(frames, tab)
+    metrics.bind(shown, tab)
+    controls = Controls(shown, frames, tabs, parts)
+    controls.reflect(tab.settings)
     return controls
 
 
-def bind(controls: Controls, tab: TabActions) -> None:
-    """Connect every control to the tab."""
-    frame.bind(controls.frame, tab)
-    scenario.bind(controls.scenario, tab)
-    method.bind(controls.method, tab)
-    view.bind(controls.view, tab)
-    presets.bind(controls.presets, tab)
-
-
-__all__ = ["Controls", "TabActions", "bind", "build"]
+__all__ = ["Controls", "TabActions", "build"]

@@ -8,6 +8,7 @@ import viser
 
 from ..scene.drawing import Drawing
 from ..session.explorer import Explorer, Outcome
+from ..session.offers import Offers
 from ..session.recording import Recording
 from ..session.settings import Settings
 
@@ -21,6 +22,8 @@ class TabActions(Protocol):
     explorer: Explorer
     recording: Recording
     """The frames shown under the current settings (for the shareable recording)."""
+    offers: Offers
+    """What the dataset cannot offer, and why."""
 
     @property
     def settings(self) -> Settings: ...
@@ -37,17 +40,13 @@ class TabActions(Protocol):
 
     def set_playing(self, playing: bool) -> None: ...
 
-    def cav_id(self, label: str) -> str:
-        """The vehicle id behind an entry of the CAV list."""
-
     def reset_camera(self, oblique: bool = False) -> None: ...
 
     def hide_click_label(self) -> None:
         """Hide the label of the object clicked last."""
 
-    def load_preset(self, name: str) -> None: ...
-
-    def save_preset(self, name: str) -> None: ...
+    def add_frames(self, settings: Settings, rows: list[dict]) -> None:
+        """A sequence run's rows (``evaluation.sweep``'s) join the timeline, if ``settings`` are the current ones."""
 
     def notify(self, title: str, body: str, color: str) -> None: ...
 

@@ -32,6 +32,7 @@ from ..session.sequence import SequenceRun, run_sequence
 from . import confirm
 from .actions import TabActions
 from .plot import add_run_plots, run_data, send
+from .registry import Panel
 from .reports import jump_markdown, search_markdown, sequence_markdown, stale_markdown, worst_markdown
 
 NO_RUN = "(run the sequence first)"
@@ -46,7 +47,7 @@ WAITING = "*waiting for another tab's job…*"
 class ExplorePanel:
     """The controls and outputs of the Explore tab of one browser tab."""
 
-    def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, tab: TabActions) -> None:
+    def __init__(self, gui: viser.GuiApi, tab: TabActions) -> None:
         self.gui, self.tab = gui, tab
         self._closed = threading.Event()
         self.runner = Runner(self._while_open(self._progress), self._while_open(self._failed),
@@ -65,48 +66,47 @@ class ExplorePanel:
         self.camera_before: tuple[tuple[float, ...], tuple[float, ...]] | None = None
         """Where the camera stood before it was moved to the inspector's panels (``clear`` goes back)."""
         self.inspector_view = SceneView(tab.client)
-        with tabs.add_tab("Explore"):
-            self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
-            self.queued = gui.add_markdown(WAITING, visible=False)
-            self.cancel = gui.add_button("cancel", color="red", visible=False)
-            with gui.add_folder("Sequence run"):
-                self.run_button = gui.add_button("run all frames", hint="the current settings on every frame")
-                self.summary = gui.add_markdown("Runs the current settings over every frame of the sequence.")
-                self.ratios, self.errors = add_run_plots(gui, RATIOS_TITLE, ERRORS_TITLE)
-            with gui.add_folder("Worst frames"):
-                self.metric = gui.add_dropdown("rank by", tuple(worst.RANKINGS))
-                self.worst = gui.add_dropdown("worst", (NO_RUN,))
-                self.jump = gui.add_button("jump there", hint=JUMP_HINT)
-                self.worst_table = gui.add_markdown("")
-            with gui.add_folder("Context inspector"):
-                self.inspect_winner = gui.add_button("inspect the winning anchor")
-                self.look = gui.add_button("look at the context panels")
-                self.clear = gui.add_button("clear")
-                self.inspector_text = gui.add_markdown("Click a box in the scene to see its context and its "
-                                                       "counterpart's, drawn left of the scene.")
-            with gui.add_folder("Parameter search"):
-                self.objective = gui.add_dropdown("objective", tuple(OBJECTIVE_LABELS), initial_value="success")
-                self.stride = gui.add_number("every k-th frame", 1, min=1, step=1)
-                self.search_button = gui.add_button("search σ1, σ2, σ3")
-                self.search_table = gui.add_markdown("")
-                self.best = gui.add_dropdown("setting", (NO_SEARCH,))
-                self.apply = gui.add_button("apply to the sliders", disabled=True, hint=APPLY_BEFORE)
-            self.calibration = CalibrationCheck(tab.explorer.sequence)
-            with gui.add_folder("Dataset calibration", expand_by_default=False):
-                self.check = gui.add_button("check the dataset's calibration", disabled=not self.calibration.usable,
-                                            hint="the shipped transform against the dataset's own labels")
-                self.check_text = gui.add_markdown(self.calibration.text)
-                self.flagged = gui.add_dropdown("flagged frame", ("(check first)",))
-                self.go = gui.add_button("go to frame", hint="that frame and CAV, under the current settings")
-            with gui.add_folder("Export"):
-                self.csv = gui.add_button("per-frame metrics (CSV)")
-                self.parquet = gui.add_button("per-frame metrics (Parquet)")
-                self.preset = gui.add_button("settings as a preset (TOML)")
-                self.screenshot = gui.add_button("screenshot of the view (PNG)")
-                self.recording = gui.add_button("recording of the frames computed (HTML)",
-                                                hint="a page that replays the frames shown, offline")
-                self.with_panel = gui.add_checkbox("include the control panel", False,
-                                                   hint="the frame's metrics drawn beside the 3D view in the PNG")
+        self.progress = gui.add_progress_bar(0.0, visible=False, animated=True)
+        self.queued = gui.add_markdown(WAITING, visible=False)
+        self.cancel = gui.add_button("cancel", color="red", visible=False)
+        with gui.add_folder("Sequence run"):
+            self.run_button = gui.add_button("run all frames", hint="the current settings on every frame")
+            self.summary = gui.add_markdown("Runs the current settings over every frame of the sequence.")
+            self.ratios, self.errors = add_run_plots(gui, RATIOS_TITLE, ERRORS_TITLE)
+        with gui.add_folder("Worst frames"):
+            self.metric = gui.add_dropdown("rank by", tuple(worst.RANKINGS))
+            self.worst = gui.add_dropdown("worst", (NO_RUN,))
+            self.jump = gui.add_button("jump there", hint=JUMP_HINT)
+            self.worst_table = gui.add_markdown("")
+        with gui.add_folder("Context inspector"):
+            self.inspect_winner = gui.add_button("inspect the winning anchor")
+            self.look = gui.add_button("look at the context panels")
+            self.clear = gui.add_button("clear")
+            self.inspector_text = gui.add_markdown("Click a box in the scene to see its context and its "
+                                                   "counterpart's, drawn left of the scene.")
+        with gui.add_folder("Parameter search"):
+            self.objective = gui.add_dropdown("objective", tuple(OBJECTIVE_LABELS), initial_value="success")
+            self.stride = gui.add_number("every k-th frame", 1, min=1, step=1)
+            self.search_button = gui.add_button("search σ1, σ2, σ3")
+            self.search_table = gui.add_markdown("")
+            self.best = gui.add_dropdown("setting", (NO_SEARCH,))
+            self.apply = gui.add_button("apply to the sliders", disabled=True, hint=APPLY_BEFORE)
+        self.calibration = CalibrationCheck(tab.explorer.sequence)
+        with gui.add_folder("Dataset calibration", expand_by_default=False):
+            self.check = gui.add_button("check the dataset's calibration", disabled=not self.calibration.usable,
+                                        hint="the shipped transform against the dataset's own labels")
+            self.check_text = gui.add_markdown(self.calibration.text)
+            self.flagged = gui.add_dropdown("flagged frame", ("(check first)",))
+            self.go = gui.add_button("go to frame", hint="that frame and CAV, under the current settings")
+        with gui.add_folder("Export"):
+            self.csv = gui.add_button("per-frame metrics (CSV)")
+            self.parquet = gui.add_button("per-frame metrics (Parquet)")
+            self.preset = gui.add_button("settings as a preset (TOML)")
+            self.screenshot = gui.add_button("screenshot of the view (PNG)")
+            self.recording = gui.add_button("recording of the frames computed (HTML)",
+                                            hint="a page that replays the frames shown, offline")
+            self.with_panel = gui.add_checkbox("include the control panel", False,
+                                               hint="the frame's metrics drawn beside the 3D view in the PNG")
         self._bind()
 
     def _bind(self) -> None:
@@ -392,3 +392,7 @@ def render(client: viser.ClientHandle, timeout: float = 20.0) -> np.ndarray:
     camera = client.camera
     width, height = camera.image_width or 1280, camera.image_height or 720
     return client.get_render(height, width, transport_format="png", timeout=timeout)
+
+
+PANEL = Panel("Explore", 50, "every frame at once: sequence run, worst frames, context inspector, parameter search, "
+              "dataset calibration, export", ExplorePanel)

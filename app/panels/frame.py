@@ -5,10 +5,12 @@ lower down, the "CAVs and playback" folder: play speed, which vehicle is the CAV
 from __future__ import annotations
 
 import dataclasses
+from collections.abc import Callable
 from dataclasses import dataclass, field
 
 import viser
 
+from ..session.explorer import CavChoice, Outcome
 from ..session.history import FAILED_MEANING
 from ..session.settings import AUTO_CAV, MAX_CAVS, Settings
 from .actions import TabActions, on_user
@@ -36,12 +38,30 @@ class FrameControls:
     scenario: viser.GuiDropdownHandle
     starts: dict[str, int] = field(default_factory=dict)
     """Scenario name -> its first frame (``Sequence.scenarios``); empty hides the scenario list."""
+    cav_choices: Callable[[int], list[CavChoice]] = lambda frame: []
+    """The vehicles of a frame that may act as the CAV (``Explorer.cav_choices``)."""
+    choices: list[CavChoice] = field(default_factory=list)
+    """Those of the frame shown, as the CAV list offers them."""
+    choices_frame: int = -1
 
     def show(self, settings: Settings) -> None:
         self.frame.value = settings.frame
         self.cavs.value = settings.cavs
         if self.starts:
             self.scenario.value = scenario_of(self.starts, settings.frame)
+
+    def offer_cavs(self, outcome: Outcome) -> None:
+        """List the vehicles that may act as the CAV in the outcome's frame (once per frame)."""
+        if outcome.frame_index == self.choices_frame:
+            return
+        self.choices_frame = outcome.frame_index
+        self.choices = self.cav_choices(outcome.frame_index)
+        self.cav.options = (AUTO_CAV, *[c.label for c in self.choices])
+        self.cav.value = next((c.label for c in self.choices if c.id == outcome.settings.cav), AUTO_CAV)
+
+    def cav_id(self, label: str) -> str:
+        """The vehicle id behind an entry of the CAV list."""
+        return next((c.id for c in self.choices if c.label == label), AUTO_CAV)
 
     def show_playing(self, playing: bool) -> None:
         """The middle button offers to pause while playing, to play otherwise."""
@@ -76,9 +96,10 @@ def build(gui: viser.GuiApi, settings: Settings, navigation: Navigation) -> Fram
 
 
 def bind(c: FrameControls, tab: TabActions) -> None:
+    c.cav_choices = tab.explorer.cav_choices
     on_user(c.frame, lambda: _slid(c, tab))
     c.step.on_click(lambda e: _stepped(c, tab, e.target.value))
-    on_user(c.cav, lambda: tab.apply(lambda s: dataclasses.replace(s, cav=tab.cav_id(c.cav.value))))
+    on_user(c.cav, lambda: tab.apply(lambda s: dataclasses.replace(s, cav=c.cav_id(c.cav.value))))
     on_user(c.cavs, lambda: tab.apply(lambda s: dataclasses.replace(s, cavs=_cav_count(c.cavs.value))))
     scenarios = tab.explorer.sequence.scenarios or {}
     if len(scenarios) > 1:

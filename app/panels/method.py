@@ -1,5 +1,6 @@
 """The Method tab: the method list and a folder per parameter set, showing the set of the selected
-method and CBM's (CBM's thresholds are the ones the app is about); a control that has no effect under
+method and CBM's (CBM's thresholds are the ones the app is about), and for a method over time an
+advanced folder of its tracking parameters (``cbm.TrackingParams``); a control that has no effect under
 the current settings is disabled, and its folder's note says why (``cbm.methods``: what a method
 tunes, what it forces, what needs what); a method that cannot run here (the joint pose graph with
 one CAV) is not offered, and a note under the list says why."""
@@ -15,11 +16,12 @@ import viser
 from cbm import MOST
 from cbm.methods import METHODS
 
-from ..scene.words import WORDS, label_of
+from ..scene.words import TRACKING, WORDS, label_of
 from ..session.coalesce import Later
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
+from .registry import Panel
 
 SLIDERS = {
     # (parameter set, field): (min, max, step); the max is the parameter's own (``cbm.params.MOST``)
@@ -34,8 +36,11 @@ TYPING_PAUSE = 0.8
 """Seconds without a keystroke after which a typed number applies."""
 ABOUT = {"cbm": "*σ1 and σ2: how alike two objects' neighbourhoods must be to match (angle, distance). σ3: how "
                 "closely matched pairs must agree to back each other in the consensus vote. Hover a control for "
-                "more.*"}
+                "more.*",
+         TRACKING: "*How CBM over time follows the CAV's pose error from frame to frame: when a frame's own answer "
+                   "joins the track, when a track starts, is lost or jumps. Hover a control for more.*"}
 """A folder's words above its controls, in plain language."""
+TRACKING_FOLDER = "CBM over time: tracking (advanced)"
 
 
 @dataclass
@@ -44,7 +49,7 @@ class MethodControls:
     folders: dict[str, viser.GuiFolderHandle]
     """A folder per parameter set (``Method.params_key``)."""
     params: dict[tuple[str, str], Any]
-    """(parameter set, field) -> its control."""
+    """(parameter set, field) -> its control; ``TRACKING``'s set is ``Settings.tracking``."""
     notes: dict[str, viser.GuiMarkdownHandle]
     """A folder's note: which of its controls are disabled, and why."""
     hints: dict[tuple[str, str], str]
@@ -61,7 +66,7 @@ class MethodControls:
     def show(self, settings: Settings) -> None:
         self.method.value = METHODS[settings.method].label
         for (key, name), control in self.params.items():
-            value = getattr(settings.method_params[key], name)
+            value = getattr(values_of(settings, key), name)
             control.value = f"{value:g}" if isinstance(control.value, str) and not isinstance(value, str) else value
 
     def reflect(self, settings: Settings) -> None:
@@ -70,7 +75,7 @@ class MethodControls:
         self._offer(settings)
         chosen = METHODS[settings.method]
         for key, folder in self.folders.items():
-            assign(folder, visible=key in (chosen.params_key, "cbm"))
+            assign(folder, visible=chosen.over_time if key == TRACKING else key in (chosen.params_key, "cbm"))
         inactive: dict[str, dict[str, list[str]]] = {key: {} for key in self.folders}
         for (key, name), control in self.params.items():
             why = inactive_reason(settings, key, name)
@@ -92,9 +97,22 @@ class MethodControls:
                visible=bool(why and graphs))
 
 
+def values_of(settings: Settings, key: str) -> Any:
+    """The parameter set ``key`` of ``settings``: a method's (``Method.params_key``), or ``TRACKING``."""
+    return settings.tracking if key == TRACKING else settings.method_params[key]
+
+
+def with_values(settings: Settings, key: str, **changes: Any) -> Settings:
+    """``settings`` with some parameters of the set ``key`` changed."""
+    return settings.with_tracking(**changes) if key == TRACKING else settings.with_params(key, **changes)
+
+
 def inactive_reason(settings: Settings, key: str, name: str) -> str | None:
-    """Why parameter ``name`` of set ``key`` has no effect under ``settings``; None when it acts."""
+    """Why parameter ``name`` of set ``key`` has no effect under ``settings``; None when it acts (the
+    tracking parameters act whenever they show: under a method over time)."""
     chosen = METHODS[settings.method]
+    if key == TRACKING:
+        return None
     if key != chosen.params_key:
         return f"{chosen.label} selected: {METHODS[key].label}'s parameters do not apply"
     if name in chosen.forced:
@@ -112,20 +130,25 @@ def _worded(value: Any) -> str:
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> MethodControls:
     method = gui.add_dropdown("method", tuple(LABELS), initial_value=METHODS[settings.method].label)
     unoffered = gui.add_markdown("", visible=False)
-    folders, params, notes, typed = {}, {}, {}, {}
+    c = MethodControls(method, {}, {}, {}, {}, unoffered, offers)
     for key, values in settings.method_params.items():
-        if not dataclasses.fields(values):
-            continue
-        with gui.add_folder(f"{METHODS[key].label} parameters") as folder:
-            folders[key] = folder
-            if key in ABOUT:
-                gui.add_markdown(ABOUT[key])
-            notes[key] = gui.add_markdown("", visible=False)
-            for f in dataclasses.fields(values):
-                params[(key, f.name)] = _control(gui, key, f.name, getattr(values, f.name))
-            typed[key] = gui.add_markdown("", visible=False)
-    return MethodControls(method, folders, params, notes, {k: c.hint or "" for k, c in params.items()}, unoffered,
-                          offers, typed)
+        if dataclasses.fields(values):
+            _folder(gui, c, key, f"{METHODS[key].label} parameters", values)
+    _folder(gui, c, TRACKING, TRACKING_FOLDER, settings.tracking, expand=False)
+    c.hints = {k: control.hint or "" for k, control in c.params.items()}
+    return c
+
+
+def _folder(gui: viser.GuiApi, c: MethodControls, key: str, title: str, values: Any, expand: bool = True) -> None:
+    """The folder of the parameter set ``key``: its words, its note, a control per field of ``values``."""
+    with gui.add_folder(title, expand_by_default=expand) as folder:
+        c.folders[key] = folder
+        if key in ABOUT:
+            gui.add_markdown(ABOUT[key])
+        c.notes[key] = gui.add_markdown("", visible=False)
+        for f in dataclasses.fields(values):
+            c.params[(key, f.name)] = _control(gui, key, f.name, getattr(values, f.name))
+        c.typed[key] = gui.add_markdown("", visible=False)
 
 
 def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
@@ -138,8 +161,8 @@ def _control(gui: viser.GuiApi, key: str, name: str, value: Any) -> Any:
         return gui.add_slider(label, low, high, step, value, hint=hint)
     if isinstance(value, bool):
         return gui.add_checkbox(label, value, hint=hint)
-    options = typing.get_args(typing.get_type_hints(METHODS[key].params)[name])
-    if isinstance(value, str) and options:
+    if isinstance(value, str):
+        options = typing.get_args(typing.get_type_hints(METHODS[key].params)[name])
         return gui.add_dropdown(label, options, initial_value=value, hint=hint)
     return gui.add_text(label, f"{value:g}", hint=hint)
 
@@ -152,22 +175,22 @@ def bind(c: MethodControls, tab: TabActions) -> None:
 
 def _edited(c: MethodControls, tab: TabActions, key: str, name: str, value: Any) -> None:
     """Apply a control's new value; a typed number once typing pauses (``MethodControls.pause``)."""
-    if isinstance(value, str) and not isinstance(getattr(tab.settings.method_params[key], name), str):
+    if isinstance(value, str) and not isinstance(getattr(values_of(tab.settings, key), name), str):
         c.pause.call(lambda: _typed(c, tab, key, name, value))
     else:
-        tab.apply(lambda s: s.with_params(key, **{name: value}))
+        tab.apply(lambda s: with_values(s, key, **{name: value}))
 
 
 def _typed(c: MethodControls, tab: TabActions, key: str, name: str, value: str) -> None:
     """Apply a typed number; text that is not a number is said under the folder, the value in use stays."""
-    current = getattr(tab.settings.method_params[key], name)
+    current = getattr(values_of(tab.settings, key), name)
     try:
         number = typed_number(value, current, key, name)
     except ValueError as error:
         assign(c.typed[key], content=f"*{error}; the value in use is {current:g}.*", visible=True)
         return
     assign(c.typed[key], visible=False)
-    tab.apply(lambda s: s.with_params(key, **{name: number}))
+    tab.apply(lambda s: with_values(s, key, **{name: number}))
 
 
 def typed_number(value: str, current: float, key: str, name: str) -> float:
@@ -182,3 +205,7 @@ def typed_number(value: str, current: float, key: str, name: str) -> float:
             raise ValueError(f"{label_of(key, name)}: {value!r} is not a whole number")
         return int(number)
     return number
+
+
+PANEL = Panel("Method", 20, "the calibration method and its parameters",
+              lambda gui, tab: build(gui, tab.settings, tab.offers), bind)

@@ -8,18 +8,24 @@ viser 1.1.1 sends no clicks on a chart; the frame slider spans the same frames."
 from __future__ import annotations
 
 import dataclasses
-from dataclasses import dataclass
-from typing import Protocol
+from dataclasses import dataclass, field
+from typing import Any, Protocol
 
 import numpy as np
 import viser
 from viser._messages import GuiSliderMark
 
+from cbm.methods import METHODS
+
 from ..session.baseline import Baseline
+from ..session.coalesce import Later
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
 from .actions import TabActions, on_user
-from .plot import add_timeline, send, timeline_series
+from .plot import add_timeline, send, timeline_data, timeline_series
 
+TIMELINE_DELAY = 0.2
+"""Seconds after the latest result before the timeline is redrawn: the chart costs the browser more
+than the rest of a result, and while a slider moves only the last result's timeline is worth drawing."""
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
 HELP, HELP_SHOWN = "? what the timeline shows", "? hide the timeline's help"
@@ -56,6 +62,9 @@ class MetricsControls:
     help: viser.GuiButtonHandle
     """The "?" that shows or hides ``legend``, the timeline's help."""
     legend: viser.GuiMarkdownHandle
+    later: Later = field(default_factory=lambda: Later(TIMELINE_DELAY))
+    """Draws the timeline of the latest result (``show_timeline_soon``)."""
+    closed: bool = False
 
     def toggle_help(self) -> None:
         """Show the timeline's help when it is folded away, fold it away when it shows."""
@@ -89,6 +98,24 @@ class MetricsControls:
         if self.failed.value != shown:
             self.failed.value = shown
         self.pin.label = UNPIN if pinned else PIN
+
+    def show_timeline_soon(self, shown: tuple[Any, ...]) -> None:
+        """``show_timeline(*shown)`` ``TIMELINE_DELAY`` after the latest result, unless closed by then."""
+        self.later.call(lambda: self.closed or self.show_timeline(*shown))
+
+    def close(self) -> None:
+        """The browser tab closed: its client takes no update."""
+        self.closed = True
+        self.later.close()
+
+
+def timeline_of(tab: TimelineTab, frame: int) -> tuple[Any, ...]:
+    """What ``show_timeline`` draws of ``tab`` at ``frame``: the frames computed under the current
+    settings, the pinned baseline's, and a method over time's per-frame CBM beside."""
+    over_time = METHODS[tab.settings.method].over_time
+    rows = dict(tab.history.rows) if tab.history.matches(tab.settings) else {}
+    data = timeline_data(rows, dict(tab.baseline.rows), frame, len(tab.explorer), tab.baseline.pinned, over_time)
+    return data, tab.history.failures(), tab.baseline.pinned, frame, over_time
 
 
 def build_status(gui: viser.GuiApi) -> tuple[viser.GuiMarkdownHandle, viser.GuiButtonHandle]:

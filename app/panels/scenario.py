@@ -14,6 +14,7 @@ from ..scene.words import SCENARIO_WORDS
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
+from .registry import Panel
 
 
 def shown(name: str) -> tuple[float, float]:
@@ -130,3 +131,7 @@ def bind(c: ScenarioControls, tab: TabActions) -> None:
     for name, slider in c.sliders.items():
         on_user(slider, lambda n=name, h=slider: tab.apply(lambda s: s.with_scenario(**{n: float(h.value)})))
     on_user(c.seed, lambda: tab.apply(lambda s: s.with_scenario(seed=max(0, int(c.seed.value)))))
+
+
+PANEL = Panel("Scenario", 10, "what the agents see: protocol, detection noise, localization error, clutter, seed",
+              lambda gui, tab: build(gui, tab.settings, tab.offers), bind)

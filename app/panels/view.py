@@ -14,6 +14,7 @@ from ..scene.colours import palette
 from ..session.offers import Offers
 from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, assign, on_user
+from .registry import Panel
 
 TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused", "follow")
 """The view options a checkbox of the same name sets."""
@@ -111,3 +112,7 @@ def bind(c: ViewControls, tab: TabActions) -> None:
     c.reset_camera.on_click(lambda e: tab.reset_camera())
     c.view_3d.on_click(lambda e: tab.reset_camera(oblique=True))
     on_user(c.points_every, lambda: tab.apply(lambda s: s.with_view(points_every=int(c.points_every.value))))
+
+
+PANEL = Panel("View", 30, "what the 3D view draws: layout, match lines, labels, camera, presentation mode, legend",
+              lambda gui, tab: build(gui, tab.settings, tab.offers), bind)

@@ -9,7 +9,7 @@ from typing import Any, NamedTuple
 from cbm.methods import METHODS
 
 from ..session.settings import Settings
-from .words import SCENARIO_WORDS, label_of
+from .words import SCENARIO_WORDS, TRACKING, label_of
 
 
 class Difference(NamedTuple):
@@ -28,15 +28,16 @@ def shown(value: Any) -> str:
 
 
 def differences(first: Settings, second: Settings) -> list[Difference]:
-    """The settings a result depends on (method, its parameters, scenario, CAV) that differ between
-    ``first`` and ``second``; the frame and the view options are not among them."""
+    """The settings a result depends on (method, its parameters and, for a method over time, its
+    tracking, scenario, CAV) that differ between ``first`` and ``second``; the frame and the view
+    options are not among them."""
     found = []
     if first.method != second.method:
         found.append(Difference("method", METHODS[first.method].label, METHODS[second.method].label))
     for key in dict.fromkeys(METHODS[m].params_key for m in (first.method, second.method)):
-        a, b = first.method_params[key], second.method_params[key]
-        found += [Difference(label_of(key, f.name), shown(getattr(a, f.name)), shown(getattr(b, f.name)))
-                  for f in dataclasses.fields(a) if getattr(a, f.name) != getattr(b, f.name)]
+        found += _differing(key, first.method_params[key], second.method_params[key])
+    if METHODS[first.method].over_time or METHODS[second.method].over_time:
+        found += _differing(TRACKING, first.tracking, second.tracking)
     found += [Difference(label, shown(getattr(first.scenario, name)), shown(getattr(second.scenario, name)))
               for name, label in SCENARIO_WORDS.items()
               if getattr(first.scenario, name) != getattr(second.scenario, name)]
@@ -45,6 +46,12 @@ def differences(first: Settings, second: Settings) -> list[Difference]:
     if first.cavs != second.cavs:
         found.append(Difference("CAVs", str(first.cavs), str(second.cavs)))
     return found
+
+
+def _differing(key: str, a: Any, b: Any) -> list[Difference]:
+    """The fields of the parameter set ``key`` whose values differ between ``a`` and ``b``."""
+    return [Difference(label_of(key, f.name), shown(getattr(a, f.name)), shown(getattr(b, f.name)))
+            for f in dataclasses.fields(a) if getattr(a, f.name) != getattr(b, f.name)]
 
 
 def now_words(found: list[Difference]) -> str:

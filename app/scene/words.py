@@ -1,8 +1,14 @@
-"""The words the app shows for every method parameter (``cbm.methods``): a label with its unit and a
-hint in plain words, so that no control, note or export shows a field's raw name."""
+"""The words the app shows for every method parameter (``cbm.methods``) and every tracking parameter
+of CBM over time (``cbm.TrackingParams``): a label with its unit and a hint in plain words, so that no
+control, note or export shows a field's raw name."""
 from __future__ import annotations
 
+import ast
+import inspect
 import math
+import textwrap
+
+from cbm import TrackingParams
 
 WORDS = {
     # (parameter set, field): (label, hint in plain words)
@@ -82,6 +88,35 @@ WORDS = {
                                  "compares every pair of boxes with every other, so its time grows fast."),
 }
 """Every method parameter's label (words and unit) and hint: no control shows a field's raw name."""
+
+
+def field_docs(cls: type) -> dict[str, str]:
+    """The docstring under each field of the dataclass ``cls``, as one line of plain text."""
+    body = ast.parse(textwrap.dedent(inspect.getsource(cls))).body[0].body
+    return {field.target.id: " ".join(doc.value.value.replace("``", "").split())
+            for field, doc in zip(body, body[1:])
+            if isinstance(field, ast.AnnAssign) and isinstance(field.target, ast.Name)
+            and isinstance(doc, ast.Expr) and isinstance(doc.value, ast.Constant) and isinstance(doc.value.value, str)}
+
+
+TRACKING = "tracking"
+"""The parameter set of CBM over time's tracking (``Settings.tracking``), beside the methods' sets."""
+TRACKING_LABELS = {
+    "gate": "agreement gate (σ)",
+    "drift_m": "error drift (m/√s)",
+    "drift_deg": "yaw error drift (°/√s)",
+    "drift_share": "persisting error spread (share)",
+    "chain": "start after (frames)",
+    "window": "chain span (frames)",
+    "lost_m": "lost past position spread (m)",
+    "lost_deg": "lost past yaw spread (°)",
+    "lost_after": "lost after misses (frames)",
+    "reacquire_after": "jump after rejections (frames)",
+    "sure_margin": "sure margin (ln)",
+    "max_gap_s": "start over after a gap (s)",
+}
+"""Each tracking parameter's label, with its unit; its hint is the field's docstring."""
+WORDS.update({(TRACKING, name): (label, field_docs(TrackingParams)[name]) for name, label in TRACKING_LABELS.items()})
 
 
 def label_of(key: str, name: str) -> str:

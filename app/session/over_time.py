@@ -15,8 +15,8 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 
 from cbm import MatchResult, SequenceCalibrator, match
-from cbm.methods import METHODS
 from evaluation.metrics import TrialMetrics, evaluate
+from evaluation.sweep import calibrator_for
 from evaluation.trials import NoTrial
 
 from .settings import Settings, ViewOptions
@@ -104,7 +104,7 @@ class Runs:
         with self._lock:
             found = next((run for known, run in self._runs if known == key), None)
             if found is None:
-                found = Run(METHODS[settings.method].calibrator(settings.params))
+                found = Run(calibrator_for(settings.method, settings.params, settings.tracking))
             self._runs = [(known, run) for known, run in self._runs if run is not found][-(RUNS_KEPT - 1):]
             self._runs.append((key, found))
             return found

@@ -36,7 +36,7 @@ def sweep_for(settings: Settings) -> Sweep:
     params = settings.params
     grid = {name: [getattr(params, name)] for name in METHODS[settings.method].tunable}
     return Sweep(methods=(settings.method,), grid=grid, seed=settings.scenario.seed, scenario=settings.scenario,
-                 fusion="nms")
+                 tracking=settings.tracking, fusion="nms")
 
 
 def frame_inputs(explorer: Explorer, settings: Settings, frames: Iterable[int]) -> tuple[list[FrameInputs], list[int]]:

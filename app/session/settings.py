@@ -1,9 +1,10 @@
 """Everything one browser tab has chosen, as one immutable value, and its preset form.
 
 A preset is the TOML form of ``Settings`` without the frame and the CAV: a table per part, keys
-named like the fields of ``evaluation.scenario.ScenarioParams``, ``cbm.CBMParams`` and the method
-parameter classes (angles in degrees, as everywhere at the edges). ``evaluation.presets`` reads the
-method and scenario tables, for the app and ``evaluate.py --preset`` alike; the app adds ``[view]``.
+named like the fields of ``evaluation.scenario.ScenarioParams``, ``cbm.CBMParams``, the method
+parameter classes and ``cbm.TrackingParams`` (angles in degrees, as everywhere at the edges).
+``evaluation.presets`` reads the method, scenario and tracking tables, for the app and ``evaluate.py
+--preset`` alike; the app adds ``[view]``.
 The defaults are the shipped ``default`` preset's (``evaluation.presets.default_preset``).
 """
 from __future__ import annotations
@@ -13,7 +14,7 @@ from collections.abc import Mapping
 from dataclasses import dataclass, field
 from typing import Any, Literal
 
-from cbm import CBMParams
+from cbm import CBMParams, TrackingParams
 from cbm.methods import METHODS
 from evaluation.presets import PresetParams, default_preset, preset_params, replaced
 from evaluation.scenario import ScenarioParams
@@ -97,6 +98,8 @@ class Settings:
     scenario: ScenarioParams = DEFAULT_SCENARIO
     method_params: Mapping[str, Any] = field(default_factory=default_method_params)
     """Parameters of every method by ``Method.params_key`` (the CBM methods share one set)."""
+    tracking: TrackingParams = default_preset().tracking
+    """How CBM over time (``cbm-time``) follows the CAV's pose error from frame to frame."""
     view: ViewOptions = ViewOptions()
 
     @property
@@ -116,6 +119,10 @@ class Settings:
         """These settings with some view options changed."""
         return dataclasses.replace(self, view=dataclasses.replace(self.view, **changes))
 
+    def with_tracking(self, **changes: Any) -> Settings:
+        """These settings with some tracking parameters changed."""
+        return dataclasses.replace(self, tracking=dataclasses.replace(self.tracking, **changes))
+
     def with_params(self, method: str, **changes: Any) -> Settings:
         """These settings with some parameters of ``method`` changed."""
         key = METHODS[method].params_key
@@ -128,13 +135,14 @@ def to_preset(settings: Settings) -> dict[str, Any]:
     """The TOML-ready form of ``settings`` (frame, CAV and CAV count left out: they belong to the dataset)."""
     params = {name: dataclasses.asdict(p) for name, p in settings.method_params.items() if dataclasses.fields(p)}
     return {"method": settings.method, "scenario": dataclasses.asdict(settings.scenario),
-            "view": dataclasses.asdict(settings.view), **params}
+            "view": dataclasses.asdict(settings.view), **params, "tracking": dataclasses.asdict(settings.tracking)}
 
 
 def from_preset(data: Mapping[str, Any], base: Settings | None = None) -> Settings:
     """Settings from a preset's tables; missing keys keep ``base``'s values. Raises ``KeyError``
     naming an unknown table or key, ``TypeError``/``ValueError`` naming a field of the wrong type."""
     base = base or Settings()
-    read = preset_params(data, PresetParams(base.method, base.scenario, base.method_params))
+    read = preset_params(data, PresetParams(base.method, base.scenario, base.method_params, base.tracking))
     return Settings(frame=base.frame, cav=base.cav, cavs=base.cavs, method=read.method, scenario=read.scenario,
-                    method_params=read.params, view=replaced("view", base.view, data.get("view", {})))
+                    method_params=read.params, tracking=read.tracking,
+                    view=replaced("view", base.view, data.get("view", {})))

@@ -24,8 +24,6 @@ SECONDS = 1.5
 """Length of an animation unless set otherwise."""
 TILT = 0.05
 """How far behind the object the camera that looks at it stands, per metre of height (x stays up)."""
-TAB = "Steps"
-"""The tab's name: short, so that the panel's six tabs fit on one row at its width (384 px)."""
 IDLE_TITLE = "**CBM in nine steps**"
 IDLE = "Walk through CBM's steps on the frame on screen: **start** (or next step ▶) shows step 1 in the scene."
 
@@ -33,7 +31,7 @@ IDLE = "Walk through CBM's steps on the frame on screen: **start** (or next step
 class WalkthroughPanel:
     """The controls of the Walkthrough tab and the state of the walkthrough of one browser tab."""
 
-    def __init__(self, gui: viser.GuiApi, tabs: viser.GuiTabGroupHandle, tab: TabActions) -> None:
+    def __init__(self, gui: viser.GuiApi, tab: TabActions) -> None:
         self.tab = tab
         self.nodes = WalkthroughNodes(tab.client)
         self.index = 0
@@ -45,18 +43,17 @@ class WalkthroughPanel:
         """Bumped by every redraw: an animation of an older step stops."""
         self._camera: tuple[tuple[float, ...], tuple[float, ...]] | None = None
         """Where the camera stood when the walkthrough started."""
-        with tabs.add_tab(TAB):
-            self.title = gui.add_markdown(IDLE_TITLE)
-            self.text = gui.add_markdown(IDLE)
-            self.start = gui.add_button("start walkthrough", hint="show CBM's steps on this frame in the scene")
-            self.prev = gui.add_button("◀ prev step")
-            self.next = gui.add_button("next step ▶")
-            self.play = gui.add_button("play animation", visible=False,
-                                       hint="the CAV's boxes glide from the wrong pose to the estimate")
-            self.seconds = gui.add_slider("animation (s)", 0.5, 8.0, 0.5, SECONDS, visible=False,
-                                          hint="how long the animation takes: slower for a lecture hall")
-            self.look = gui.add_button("look at the object", visible=False, hint="the camera over the followed object")
-            self.leave = gui.add_button("leave walkthrough", color="red", visible=False)
+        self.title = gui.add_markdown(IDLE_TITLE)
+        self.text = gui.add_markdown(IDLE)
+        self.start = gui.add_button("start walkthrough", hint="show CBM's steps on this frame in the scene")
+        self.prev = gui.add_button("◀ prev step")
+        self.next = gui.add_button("next step ▶")
+        self.play = gui.add_button("play animation", visible=False,
+                                   hint="the CAV's boxes glide from the wrong pose to the estimate")
+        self.seconds = gui.add_slider("animation (s)", 0.5, 8.0, 0.5, SECONDS, visible=False,
+                                      hint="how long the animation takes: slower for a lecture hall")
+        self.look = gui.add_button("look at the object", visible=False, hint="the camera over the followed object")
+        self.leave = gui.add_button("leave walkthrough", color="red", visible=False)
         self.start.on_click(lambda e: self.go(self.index))
         self.prev.on_click(lambda e: self.go(self.index - 1 if self.active else self.index))
         self.next.on_click(lambda e: self.go(self.index + 1 if self.active else self.index))
@@ -86,8 +83,8 @@ class WalkthroughPanel:
                 self.tab.reset_camera()
                 self.nodes.view.lay_out()
 
-    def refresh(self, outcome: Outcome) -> None:
-        """Follow a recompute: the current step is redrawn for the new outcome."""
+    def refresh(self, outcome: Outcome, _picture: object) -> None:
+        """Follow a recompute: the current step is redrawn for the new outcome (the step draws its own picture)."""
         with self._lock:
             if self.active:
                 self._draw(outcome)

@@ -167,7 +167,7 @@ def _join(ego_ids, ego, signs, grid, slot, test, count2, rows, bits, stop):
             zx, zy = vectors[u, 0], vectors[u, 1]
             k0, k1, c0, c1 = window(zx + zy, zx - zy, radius, cells)
             if sigma3 >= 0.0:
-                most = n_votes + 1 + (k1 - k0 + 1) * widest
+                most = n_votes + 1 + max(k1 - k0 + 1, 0) * widest
                 while most > len(rows):
                     rows = grown(rows, n_votes)
                 rows[n_votes] = -((np.int64(i) << bits) | member[u]) - 1

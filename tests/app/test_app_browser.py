@@ -52,7 +52,7 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     page = ui.open_page(browser, server)
     session = ui.session(server, 1)
     nodes = {"/scene/ego_vehicle", "/scene/cav_vehicle", "/scene/ego_boxes", "/scene/cav_boxes"}
-    assert nodes <= session.view.node_names
+    assert nodes <= session.stage.view.node_names
 
     first = ui.metrics(page)
     page.get_by_role("tab", name="Method").click()
@@ -72,7 +72,7 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     ui.wait_until(lambda: session.last.settings.view.layout == "before")
     ui.pick_option(page, "CAV boxes", "side by side")
     ui.wait_until(lambda: session.last.settings.view.layout == "side by side")
-    assert session.view.labels["before"].visible and session.view.labels["after"].visible
+    assert session.stage.view.labels["before"].visible and session.stage.view.labels["after"].visible
 
     second = ui.open_page(browser, server)
     other = ui.session(server, 2)

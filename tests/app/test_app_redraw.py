@@ -167,8 +167,8 @@ def test_a_sigma2_edit_shows_its_result_and_resends_only_what_changed(browser, s
     _type_into(page, "σ2 L1 (m)", "2.5")
     ui.wait_until(lambda: "σ2 2.50 m" in ui.metrics(page))
     assert session.last.settings.cbm.sigma2 == 2.5
-    assert all(session.view.updates[name] == 1 for name in STILL)
+    assert all(session.stage.view.updates[name] == 1 for name in STILL)
     ui.pick_option(page, "method", METHODS["none"].label)
     ui.wait_until(lambda: session.last.settings.method == "none" and "matches\t0 (0 right)" in ui.metrics(page))
-    assert session.view.updates["cav_boxes"] == 2 and all(session.view.updates[name] == 1 for name in STILL)
+    assert session.stage.view.updates["cav_boxes"] == 2 and all(session.stage.view.updates[name] == 1 for name in STILL)
     page.close()

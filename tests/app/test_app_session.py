@@ -178,7 +178,7 @@ def test_controls_reshown_unchanged_are_not_assigned_again_and_a_change_still_sh
     a sigma2 edit assigns nothing; a method without CBM's parameters disables them, as before."""
     import viser
 
-    from app import panels
+    from app.panels import method, scenario, view
     from app.panels.actions import assign
     from app.session.offers import offers_of
 
@@ -192,15 +192,19 @@ def test_controls_reshown_unchanged_are_not_assigned_again_and_a_change_still_sh
     sequence = loaders.open("synthetic:30")
     server = viser.ViserServer(port=0, verbose=False)
     try:
-        controls = panels.build(server.gui, Settings(), len(sequence), {}, offers_of(sequence))
+        parts = [panel.build(server.gui, Settings(), offers_of(sequence)) for panel in (scenario, method, view)]
+        for part in parts:
+            part.reflect(Settings())
         messages = []
         queue = server._websock_server.queue_message
         server._websock_server.queue_message = lambda message: (messages.append(message), queue(message))
-        controls.reflect(Settings().with_params("cbm", sigma2=2.5))
+        for part in parts:
+            part.reflect(Settings().with_params("cbm", sigma2=2.5))
         assert messages == []
-        controls.reflect(dataclasses.replace(Settings(), method="icp"))
+        for part in parts:
+            part.reflect(dataclasses.replace(Settings(), method="icp"))
         assert messages
-        sigma2 = next(c for (key, name), c in controls.method.params.items() if (key, name) == ("cbm", "sigma2"))
+        sigma2 = parts[1].params[("cbm", "sigma2")]
         assert sigma2.disabled and sigma2.hint.startswith("Disabled: ")
     finally:
         server.stop()

@@ -70,7 +70,7 @@ def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browse
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda f=frame: tab.last.frame_index == f, 60)
     ui.wait_until(lambda: {0, 1, 2, 3} <= pinned_frames(tab), 30)
-    assert tab.view.lines["pinned"].visible
+    assert tab.stage.view.lines["pinned"].visible
     run_all_frames(page, tab)
     ui.wait_until(lambda: pinned_frames(tab) == set(range(len(tab.explorer))), 30)
     page.set_viewport_size({"width": 1280, "height": 720})
@@ -80,7 +80,7 @@ def test_a_pinned_baseline_is_compared_plotted_and_ghosted_until_unpinned(browse
         page.screenshot(path=str(SCREENSHOT))
     page.get_by_role("tab", name="View").click()
     ui.label(page, "show pinned matches").click()
-    ui.wait_until(lambda: not tab.last.settings.view.pinned_lines and not tab.view.lines["pinned"].visible, 60)
+    ui.wait_until(lambda: not tab.last.settings.view.pinned_lines and not tab.stage.view.lines["pinned"].visible, 60)
     page.get_by_role("button", name="unpin").click()
     ui.wait_until(lambda: not pinned_frames(tab) and "current − pinned" not in ui.metrics(page), 60)
     page.get_by_role("button", name="pin baseline").wait_for(timeout=30_000)

@@ -61,8 +61,8 @@ def test_setting_two_cavs_shows_two_cav_colours_and_metrics_rows(browser, server
     page.get_by_text("Per CAV").first.wait_for(timeout=30_000)
     rows = page.get_by_text("Per CAV").first.locator("xpath=following::table[1]").inner_text()
     assert "CAV 1" in rows and "CAV 2" in rows and "CAV 3" not in rows
-    ui.wait_until(lambda: tab.view.meshes["cav_boxes_2"].visible, timeout=30)
-    assert tuple(tab.view.meshes["cav_boxes_2"].color) == CAV_COLOURS[0]
-    assert tuple(tab.view.meshes["cav_boxes"].color) != CAV_COLOURS[0]
-    assert not tab.view.meshes["cav_boxes_3"].visible
+    ui.wait_until(lambda: tab.stage.view.meshes["cav_boxes_2"].visible, timeout=30)
+    assert tuple(tab.stage.view.meshes["cav_boxes_2"].color) == CAV_COLOURS[0]
+    assert tuple(tab.stage.view.meshes["cav_boxes"].color) != CAV_COLOURS[0]
+    assert not tab.stage.view.meshes["cav_boxes_3"].visible
     page.close()

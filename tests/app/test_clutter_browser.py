@@ -65,5 +65,5 @@ def test_the_clutter_preset_sets_both_rates_and_the_frame_follows(browser, serve
 
 def crosses(tab) -> int:
     """How many false boxes the scene crosses out (2 segments each; 0 when hidden)."""
-    handle = tab.view.lines.get("false_marks")
+    handle = tab.stage.view.lines.get("false_marks")
     return 0 if handle is None or not handle.visible else len(handle.points) // 2

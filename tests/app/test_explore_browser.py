@@ -39,12 +39,12 @@ def test_sequence_run_jump_to_a_worst_frame_and_download(browser, small_server: 
     page.get_by_role("button", name="run all frames").click()
     page.locator('[role="progressbar"]').first.wait_for(state="visible", timeout=10_000)
     page.get_by_text(RUN_METRICS["success_rate"].label).wait_for(timeout=30_000)
-    run = tab.explore.run
+    run = tab.controls.explore.run
     assert run is not None and len(run.rows) == len(small_server.explorer) and not run.cancelled
     ui.wait_until(lambda: not page.locator('[role="progressbar"]').first.is_visible())
     page.get_by_text("Worst frames by RTE").wait_for(timeout=10_000)
 
-    target = next(option for option in tab.explore.worst.options if not option.startswith("frame 0 "))
+    target = next(option for option in tab.controls.explore.worst.options if not option.startswith("frame 0 "))
     frame = int(target.split(" · ")[0].removeprefix("frame "))
     ui.pick_option(page, "worst", target)
     page.get_by_role("button", name="jump there").click()

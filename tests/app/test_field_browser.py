@@ -23,7 +23,8 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 def run_all_frames(page, tab) -> None:
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="run all frames").click()
-    ui.wait_until(lambda: tab.explore.run is not None and len(tab.explore.run.rows) == len(tab.explorer)
+    explore = tab.controls.explore
+    ui.wait_until(lambda: explore.run is not None and len(explore.run.rows) == len(tab.explorer)
                   and tab.history.matches(tab.settings), 180)
     ui.wait_until(lambda: page.get_by_role("button", name="run all frames").is_enabled(), 60)
 
@@ -42,8 +43,8 @@ def test_v2xregpp_is_run_ranked_pinned_and_compared_with_cbm_without_a_prior(bro
 
     run_all_frames(page, tab)
     page.get_by_text("Worst frames by RTE").wait_for(timeout=30_000)
-    run = tab.explore.run
-    target = next(option for option in tab.explore.worst.options if not option.startswith("frame 0 "))
+    run = tab.controls.explore.run
+    target = next(option for option in tab.controls.explore.worst.options if not option.startswith("frame 0 "))
     frame = int(target.split(" · ")[0].removeprefix("frame "))
     ui.pick_option(page, "worst", target)
     page.get_by_role("button", name="jump there").click()

@@ -73,10 +73,10 @@ def test_a_search_says_every_setting_ties_and_apply_waits_for_it(browser, server
     stride = control(page, "every k-th frame")
     stride.fill("40")
     stride.blur()
-    ui.wait_until(lambda: tab.explore.stride.value == 40)
+    ui.wait_until(lambda: tab.controls.explore.stride.value == 40)
     page.get_by_role("button", name="search σ1, σ2, σ3").click()
-    ui.wait_until(lambda: tab.explore.searched is not None, 600)
-    candidates = tab.explore.searched.candidates
+    ui.wait_until(lambda: tab.controls.explore.searched is not None, 600)
+    candidates = tab.controls.explore.searched.candidates
     assert all_tie(candidates), "every setting succeeds on every frame searched of the shipped scene"
     assert list(candidates) == sorted(candidates, key=rank_key)
     page.get_by_text(f"All {len(candidates)} tie on success").first.wait_for(timeout=20_000)

@@ -101,11 +101,11 @@ def test_side_by_side_keeps_both_copies_left_of_the_panel(browser, server: Explo
     assert canvas["x"] == 0 and canvas["x"] + canvas["width"] <= panel_left
     camera = tab.client.camera
     ui.wait_until(lambda: camera.image_width == round(pixel_ratio * canvas["width"]))
-    after = across(camera, tab.view.labels["after"].position)
-    before = across(camera, tab.view.labels["before"].position)
+    after = across(camera, tab.stage.view.labels["after"].position)
+    before = across(camera, tab.stage.view.labels["before"].position)
     assert 0.05 < before < 0.5 < after < 0.95, (before, after)
     page.get_by_role("button", name="reset camera").click()
-    assert 0.05 < across(tab.client.camera, tab.view.labels["after"].position) < 0.95
+    assert 0.05 < across(tab.client.camera, tab.stage.view.labels["after"].position) < 0.95
     page.close()
 
 
@@ -123,8 +123,8 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
     ui.close_notifications(page)
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="inspect the winning anchor").click()
-    ui.wait_until(lambda: tab.explore.shown is not None)
-    shown = tab.explore.shown
+    ui.wait_until(lambda: tab.controls.explore.shown is not None)
+    shown = tab.controls.explore.shown
     ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
     ui.wait_until(lambda: abs(tab.client.camera.look_at[1] - shown.centre[1]) < shown.span, timeout=30)
     scene_left = max(float(boxes[:, 1].max()) for boxes, _ in tab.last_drawing.objects.values() if len(boxes))
@@ -137,7 +137,7 @@ def test_the_inspector_sits_beside_the_scene_and_is_never_blank(browser, server:
         ui.wait_until(lambda: purple_pixels(page) > 500, timeout=30)
         assert 0.25 < across(tab.client.camera, (*shown.centre, 0.0)) < 0.75, attempt
     ego_id = str(tab.last.trial.ego_ids[int(tab.last.result.anchor[0])])[:8]
-    labels = tab.explore.inspector_view.labels
+    labels = tab.controls.explore.inspector_view.labels
     assert labels["inspector_ego"].text == f"EGO {ego_id}: context in its own frame"
     assert labels["inspector_legend"].visible and labels["inspector_legend"].text.startswith("legend: blue = ")
     assert any(name.startswith("inspector_ego_tip") and label.visible for name, label in labels.items())
@@ -196,7 +196,7 @@ def test_the_screenshot_can_include_the_control_panel(browser, server: ExplorerS
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="Explore").click()
     ui.label(page, "include the control panel").click()
-    ui.wait_until(lambda: tab.explore.with_panel.value)
+    ui.wait_until(lambda: tab.controls.explore.with_panel.value)
     with page.expect_download(timeout=30_000) as download:
         page.get_by_role("button", name="screenshot of the view (PNG)").click()
     image = np.asarray(Image.open(download.value.path()).convert("RGB"))

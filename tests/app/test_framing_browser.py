@@ -32,7 +32,7 @@ def matters(name: str) -> bool:
 def label_boxes(tab, names=None, view=None) -> dict[str, tuple[float, float, float, float]]:
     """(left, top, right, bottom) page pixels of the visible labels of the tab's scene (``view``: of
     that ``SceneView``; ``names``: those only)."""
-    view = view or tab.view
+    view = view or tab.stage.view
     camera, px = tab.client.camera, view.label_px
     boxes = {}
     for name, handle in list(view.labels.items()):
@@ -76,7 +76,7 @@ def overprinted(tab, view=None) -> list[tuple[str, str]]:
 def settled(page, tab) -> None:
     """Wait until the browser has reported the canvas's size and the camera the app last sent."""
     camera = tab.client.camera
-    ui.wait_until(lambda: camera.image_width == round(ui.scene_canvas(page)["width"]) and tab.camera.arrived, 120)
+    ui.wait_until(lambda: camera.image_width == round(ui.scene_canvas(page)["width"]) and tab.stage.camera.arrived, 120)
 
 
 def assert_framed(page, tab, wanted: int) -> None:
@@ -105,7 +105,7 @@ def test_the_worst_frame_after_jump_there_shows_its_cav_and_missed_pairs_whole(b
     page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
     run_all_frames(page, tab)
-    worst = tab.explore.run.rows
+    worst = tab.controls.explore.run.rows
     frame = max(worst, key=lambda row: row["rte"])["frame"]
     page.get_by_role("button", name="jump there").click()
     ui.wait_until(lambda: tab.last.frame_index == frame, 120)
@@ -114,7 +114,7 @@ def test_the_worst_frame_after_jump_there_shows_its_cav_and_missed_pairs_whole(b
     camera = tab.client.camera
     page.mouse.move(300, 400)
     page.mouse.wheel(0, -400)
-    ui.wait_until(lambda: tab.camera.moved_by_person, 60)
+    ui.wait_until(lambda: tab.stage.camera.moved_by_person, 60)
     moved = camera.position.copy()
     page.get_by_role("button", name="next ▶").click()
     ui.wait_until(lambda: tab.last.frame_index == (frame + 1) % len(tab.explorer), 120)
@@ -185,18 +185,18 @@ def test_clear_in_the_inspector_removes_the_click_label(browser, server) -> None
     assert clear, "a box to click in view"
     row = max(clear, key=lambda k: boxes[k, 3] * boxes[k, 4])
     page.mouse.click(*where[row])
-    ui.wait_until(lambda: "picked" in tab.view.labels and tab.view.labels["picked"].visible, 60)
+    ui.wait_until(lambda: "picked" in tab.stage.view.labels and tab.stage.view.labels["picked"].visible, 60)
     assert overprinted(tab) == []
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="clear", exact=True).click()
-    ui.wait_until(lambda: not tab.view.labels["picked"].visible, 60)
+    ui.wait_until(lambda: not tab.stage.view.labels["picked"].visible, 60)
     page.close()
 
 
 def test_the_walkthroughs_vote_labels_do_not_overprint(browser, server) -> None:
     page = ui.open_first_screen(browser, server)
     tab = ui.session(server, 1)
-    walk = tab.walkthrough
+    walk = tab.controls.walkthrough
     page.get_by_role("tab", name="Steps").click()
     page.get_by_role("button", name="start walkthrough").click()
     ui.wait_until(lambda: walk.step is not None and walk.step.key == steps.NAMES[0][0], 60)

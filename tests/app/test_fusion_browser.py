@@ -22,7 +22,7 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 def outlines(tab, name: str) -> int:
     """How many box outlines node ``name`` shows (4 segments each; 0 when hidden)."""
-    handle = tab.view.lines.get(name)
+    handle = tab.stage.view.lines.get(name)
     return 0 if handle is None or not handle.visible else len(handle.points) // 4
 
 
@@ -36,12 +36,12 @@ def test_fused_view_colours_true_and_false_positives_and_the_sequence_run_report
     ui.wait_until(lambda: tab.last.settings.view.fused and outlines(tab, "fused_tp") > 0, 60)
     assert outlines(tab, "fused_fp") == 0
     wrong = palette(tab.last.settings.view).wrong.color
-    assert tuple(tab.view.lines["fused_tp"].colors[0, 0]) == palette(tab.last.settings.view).right.color
+    assert tuple(tab.stage.view.lines["fused_tp"].colors[0, 0]) == palette(tab.last.settings.view).right.color
 
     ui.pick_option(page, "CAV boxes", "before")
     ui.wait_until(lambda: tab.last.settings.view.layout == "before" and outlines(tab, "fused_fp") > 0, 60)
-    assert tuple(tab.view.lines["fused_fp"].colors[0, 0]) == wrong
-    assert np.all(tab.view.lines["fused_fp"].colors == np.array(wrong, np.uint8))
+    assert tuple(tab.stage.view.lines["fused_fp"].colors[0, 0]) == wrong
+    assert np.all(tab.stage.view.lines["fused_fp"].colors == np.array(wrong, np.uint8))
 
     ui.label(page, "fused boxes (late fusion)").click()
     ui.wait_until(lambda: not tab.last.settings.view.fused and outlines(tab, "fused_fp") == 0, 60)
@@ -50,7 +50,7 @@ def test_fused_view_colours_true_and_false_positives_and_the_sequence_run_report
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="run all frames").click()
     page.get_by_text("late-fusion AP@0.7 (BEV IoU)").wait_for(timeout=90_000)
-    run = tab.explore.run
+    run = tab.controls.explore.run
     assert run is not None and 0.0 < run.fused_ap()[0.7] <= 1.0
-    assert f"{100 * run.fused_ap()[0.7]:.1f} %" in tab.explore.summary.content
+    assert f"{100 * run.fused_ap()[0.7]:.1f} %" in tab.controls.explore.summary.content
     page.close()

@@ -2,16 +2,18 @@
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 import loaders
 from app.scene.text import metrics_markdown
-from app.scene.words import WORDS
+from app.scene.words import TRACKING, WORDS
 from app.session.explorer import Explorer
 from app.session.names import agent_name
 from app.session.offers import offers_of
 from app.session.presets import discover
 from app.session.settings import Settings, ViewOptions
+from cbm import TrackingParams
 from cbm.methods import METHODS
 
 
@@ -20,6 +22,14 @@ def test_every_parameter_has_a_label_in_words_and_a_hint() -> None:
         for name in method.params.__dataclass_fields__:
             label, hint = WORDS[(method.params_key, name)]
             assert "_" not in label and len(hint.split()) >= 4, (method.name, name)
+
+
+def test_every_tracking_parameter_has_a_label_with_its_unit_and_its_docstring_as_hint() -> None:
+    for field in dataclasses.fields(TrackingParams):
+        label, hint = WORDS[(TRACKING, field.name)]
+        assert re.fullmatch(r"[^_()]+ \([^()]+\)", label) and len(hint.split()) >= 4, field.name
+    assert WORDS[(TRACKING, "gate")][1].startswith("Mahalanobis distance (standard deviations, 3 degrees of freedom)")
+    assert "MatchResult.evidence_margin" in WORDS[(TRACKING, "sure_margin")][1], "code marks are dropped"
 
 
 def test_the_recording_car_is_named_once() -> None:

@@ -60,6 +60,18 @@ def test_other_settings_are_a_run_of_their_own_and_a_catch_up_stops_when_asked(e
     assert resumed == [6, 7, 8]
 
 
+def test_the_tabs_tracking_parameters_reach_its_calibrator(explorer, drifting):
+    """Two agreeing frames start a track when ``chain`` is 2: on the shipped log under drift-heavy,
+    frame 1 rather than frame 4 (five in a row, the default)."""
+    events = {}
+    for chain in (2, 5):
+        settings = drifting.with_tracking(chain=chain)
+        explorer.compute(at(settings, 4))
+        done = explorer.over_time.done(settings)
+        events[chain] = [done[k].result.track.event for k in range(5)]
+    assert events[2][:2] == ["per frame", "started"] and events[5][3:] == ["per frame", "started"]
+
+
 def test_the_metrics_say_how_the_answer_was_reached_and_from_which_frames(explorer, drifting):
     outcome = explorer.compute(at(drifting, 20))
     text = metrics_markdown(outcome)
@@ -81,7 +93,7 @@ def test_the_timeline_draws_per_frame_cbms_rte_and_the_marked_frames_beside(expl
 def test_the_walkthrough_ends_with_the_prediction_the_measurement_and_the_answer(explorer, drifting):
     steps = walkthrough(explorer.compute(at(drifting, 15)))
     last = steps[-1]
-    assert len(steps) == 10 and last.title == "Step 10/10 · Over time (step 8)"
+    assert len(steps) == 10 and last.title == "Step 10/10 · Over time (step 8, beyond the paper)"
     assert {"truth", "predicted", "measured"} <= set(last.lines) and "the answer" in last.text
 
 

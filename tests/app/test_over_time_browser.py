@@ -97,5 +97,5 @@ def test_the_scenario_tab_offers_the_drifting_error_and_the_steps_end_over_time(
     for _ in range(9):
         page.get_by_role("button", name="next step ▶").click()
     page.get_by_text(steps.title(9, 10), exact=True).wait_for(timeout=30_000)
-    ui.wait_until(lambda: {f"{ROOT}/predicted", f"{ROOT}/measured"} <= tab.walkthrough.nodes.visible_names, 30)
+    ui.wait_until(lambda: {f"{ROOT}/predicted", f"{ROOT}/measured"} <= tab.controls.walkthrough.nodes.visible_names, 30)
     page.close()

@@ -84,7 +84,7 @@ def test_the_run_charts_give_metres_and_degrees_an_axis_each(browser, server: Ex
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="run all frames").click()
-    ui.wait_until(lambda: tab.explore.run is not None, 180)
+    ui.wait_until(lambda: tab.controls.explore.run is not None, 180)
     every = set(range(len(tab.explorer)))
     ui.wait_until(lambda: has_values(chart(page, "pose error per frame"), "RRE (°)", every), 60)
     errors = chart(page, "pose error per frame")

@@ -25,7 +25,7 @@ def server(tmp_path_factory: pytest.TempPathFactory):
 
 
 def _cloud(session, name: str):
-    return session.view.clouds.get(name)
+    return session.stage.view.clouds.get(name)
 
 
 def _shown(session, name: str) -> int:
@@ -59,7 +59,7 @@ def test_points_toggle_and_subsampling(browser, server) -> None:
     ui.wait_until(lambda: _shown(session, "ego_points") == 4 and _shown(session, "cav_points") == 4, timeout=60)
     ui.wait_until(lambda: not every_nth_disabled(page))
     note.first.wait_for(state="hidden", timeout=20_000)
-    assert {"/scene/ego_points", "/scene/cav_points"} <= session.view.node_names
+    assert {"/scene/ego_points", "/scene/cav_points"} <= session.stage.view.node_names
     ego = np.asarray(_cloud(session, "ego_points").points, dtype=float)
     # the ego's first point: (6, 0, -1.5) in its left-handed LiDAR frame, lifted by the 1.9 m sensor height
     np.testing.assert_allclose(ego[0], [6.0, 0.0, 0.4], atol=1e-3)

@@ -29,7 +29,7 @@ def server(tmp_path_factory: pytest.TempPathFactory):
 
 
 def _shown(session, name: str) -> int:
-    handle = session.view.clouds.get(name)
+    handle = session.stage.view.clouds.get(name)
     return 0 if handle is None or not handle.visible else len(handle.points)
 
 

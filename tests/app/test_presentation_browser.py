@@ -62,8 +62,8 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     assert 0 < m.n_correct < m.n_matched < m.n_true + 2, "the frame shows right and wrong pairs"
     before = tuple(tab.client.camera.position)
     page.get_by_role("tab", name="View").click()
-    assert _colour(tab.view.lines["right"]) == colours.RIGHT
-    assert tab.view.labels["ego_after"].font_screen_scale * VISER_LABEL_PX == 14
+    assert _colour(tab.stage.view.lines["right"]) == colours.RIGHT
+    assert tab.stage.view.labels["ego_after"].font_screen_scale * VISER_LABEL_PX == 14
 
     ui.label(page, "dark theme").click()
     ui.wait_until(lambda: _scheme(page) == "dark", timeout=30)
@@ -72,9 +72,10 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     ui.label(page, "presentation mode").click()
     ui.wait_until(lambda: tab.last.settings.view.presentation, timeout=60)
     okabe = colours.OKABE_ITO
-    assert _colour(tab.view.lines["right"]) == okabe.right.color
-    assert _colour(tab.view.lines["wrong"]) == okabe.wrong.color and tab.view.lines["wrong"].thickness == 6.0
-    assert _colour(tab.view.lines["missed"]) == okabe.missed.color
+    assert _colour(tab.stage.view.lines["right"]) == okabe.right.color
+    wrong = tab.stage.view.lines["wrong"]
+    assert _colour(wrong) == okabe.wrong.color and wrong.thickness == 6.0
+    assert _colour(tab.stage.view.lines["missed"]) == okabe.missed.color
     caption = page.locator("#cbm-caption")
     caption.wait_for(timeout=20_000)
     assert caption.inner_text().splitlines() == [f"Frame {FRAME} · {'success' if is_success(m) else 'failed'}",
@@ -82,7 +83,8 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
                                                  f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°"]
     assert ui.in_first_screen(caption)
     page.locator("#cbm-key-numbers").wait_for(state="hidden", timeout=20_000)
-    assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in tab.view.labels.values() if label.visible)
+    labels = tab.stage.view.labels.values()
+    assert all(label.font_screen_scale * VISER_LABEL_PX >= 18 for label in labels if label.visible)
     agents = np.array(tab.last_drawing.agents)
     middle = (agents.min(axis=0) + agents.max(axis=0)) / 2
     ui.wait_until(lambda: tuple(tab.client.camera.position) != before)
@@ -91,7 +93,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     expand.wait_for(timeout=20_000)
     ui.label(page, "presentation mode").wait_for(state="hidden", timeout=20_000)
     assert _scheme(other) == "light" and other.locator("#cbm-caption").count() == 0
-    assert _colour(other_tab.view.lines["right"]) == colours.RIGHT
+    assert _colour(other_tab.stage.view.lines["right"]) == colours.RIGHT
 
     ui.close_notifications(page)
     shot = ui.settled_screenshot(page)
@@ -112,7 +114,7 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     ui.label(page, "presentation mode").click()
     ui.wait_until(lambda: not tab.last.settings.view.presentation, timeout=60)
     page.get_by_text("green right pair").first.wait_for(timeout=20_000)
-    assert _colour(tab.view.lines["right"]) == colours.RIGHT
+    assert _colour(tab.stage.view.lines["right"]) == colours.RIGHT
     caption.wait_for(state="hidden", timeout=20_000)
     page.locator("#cbm-key-numbers").wait_for(timeout=20_000)
     page.close()

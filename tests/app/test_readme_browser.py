@@ -37,7 +37,7 @@ def test_the_readme_picture_shows_both_halves_of_side_by_side(browser, server: E
     ui.pick_option(page, "CAV boxes", "side by side")
     ui.wait_until(lambda: tab.last.settings.view.layout == "side by side", 60)
     ui.wait_until(lambda: ui.header(page).startswith(f"Frame {FRAME}"))
-    assert tab.view.labels["before"].visible and tab.view.labels["after"].visible
+    assert tab.stage.view.labels["before"].visible and tab.stage.view.labels["after"].visible
     assert tab.last.metrics.precision == 1.0
     page.get_by_role("tab", name="Scenario").click()
     page.locator(".mantine-ScrollArea-viewport").first.evaluate("element => element.scrollTo(0, 0)")

@@ -24,7 +24,8 @@ def hard_server(explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
 
 def drawn_pairs(tab) -> int:
     """Match lines drawn for right and wrong pairs (each pair one segment; hidden nodes hold none)."""
-    return sum(len(tab.view.lines[name].points) for name in ("right", "wrong") if tab.view.lines[name].visible)
+    lines = tab.stage.view.lines
+    return sum(len(lines[name].points) for name in ("right", "wrong") if lines[name].visible)
 
 
 def test_cbm_lines_switch_between_own_and_refined_pairs(browser, hard_server: ExplorerServer) -> None:

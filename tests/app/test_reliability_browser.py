@@ -88,5 +88,5 @@ def test_a_preset_named_in_another_script_is_saved_under_its_own_letters(browser
         page.get_by_role("button", name="save current settings").click()
         page.get_by_text("配置 2 -> 配置-2.toml").first.wait_for(timeout=30_000)
         assert [p.name for p in presets.iterdir()] == ["配置-2.toml"]
-        assert "配置-2" in tab.presets and 'name = "配置 2"' in (presets / "配置-2.toml").read_text()
+        assert "配置-2" in tab.controls.presets.presets and 'name = "配置 2"' in (presets / "配置-2.toml").read_text()
         page.close()

@@ -32,8 +32,8 @@ def test_the_soak_really_uses_the_inspector_and_the_walkthrough() -> None:
         with soak.headless_tab(server) as session:
             for k in range(3):
                 soak.edit(session, k)
-            assert session.explore.inspected is not None and session.walkthrough.active
-            assert session.walkthrough.index == 2
+            assert session.controls.explore.inspected is not None and session.controls.walkthrough.active
+            assert session.controls.walkthrough.index == 2
     finally:
         server.stop()
 

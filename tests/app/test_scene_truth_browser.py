@@ -50,7 +50,7 @@ def settled_camera(tab):
     camera = tab.client.camera
     canvas = (1280 - PANEL_PX, 720)
     ui.wait_until(lambda: camera.update_timestamp and (camera.image_width, camera.image_height) == canvas
-                  and tab.last is not None and tab.camera.arrived, 60)
+                  and tab.last is not None and tab.stage.camera.arrived, 60)
     return camera
 
 
@@ -191,7 +191,7 @@ def test_a_wrong_pair_whose_boxes_overlap_is_marked_on_its_boxes(browser, explor
         perimeter = np.sum(np.linalg.norm(corners - np.roll(corners, 1, axis=0), axis=1))
         assert marked > perimeter, f"{marked} red pixels on wrong pair {i, j}, outline {perimeter:.0f} px long"
         ego_id, cav_id = str(outcome.trial.ego_ids[i])[:8], str(outcome.trial.cav_ids[j])[:8]
-        label = tab.view.labels[f"pairs_after_wrong_{i}_{j}"]
+        label = tab.stage.view.labels[f"pairs_after_wrong_{i}_{j}"]
         assert label.visible and ego_id in label.text and cav_id in label.text, label.text
         page.close()
     assert len(drawing.lines["wrong_marks"].segments) == 8 * (outcome.metrics.n_matched - outcome.metrics.n_correct)
@@ -227,7 +227,7 @@ def test_three_cavs_each_have_a_vehicle_label_lines_legend_and_key_numbers(brows
         key_numbers = page.locator("#cbm-key-numbers").inner_text()
         page.get_by_role("tab", name="View").click()
         legend = page.get_by_text("CAVs:").first.inner_text()
-        view = tab.view
+        view = tab.stage.view
         for rank, colour in ((2, CAV_COLOURS[0]), (3, CAV_COLOURS[1])):
             vehicle = view.meshes[f"cav_vehicle_{rank}"]
             assert vehicle.visible and tuple(vehicle.color) == colour
@@ -253,7 +253,7 @@ def test_a_click_on_a_third_cavs_box_names_that_cav(browser, explorer: Explorer,
         ui.close_notifications(page)
         outcome, drawing = tab.last, tab.last_drawing
         boxes, rows = drawing.objects["cav_3"]
-        picked = lambda: tab.view.labels.get("picked")  # noqa: E731
+        picked = lambda: tab.stage.view.labels.get("picked")  # noqa: E731
         for alone in (False, True):
             settled_camera(tab)
             row = largest(boxes, clickable(outcome, drawing, camera, alone))

@@ -52,14 +52,14 @@ def test_a_run_under_other_settings_is_marked_asks_before_a_jump_and_exports_the
     tab = ui.session(server, 1)
     page.get_by_role("tab", name="Explore").click()
     page.get_by_role("button", name="run all frames").click()
-    ui.wait_until(lambda: tab.explore.run is not None, 180)
+    ui.wait_until(lambda: tab.controls.explore.run is not None, 180)
     assert stale_marks(page) == 0
     load_stress(page, tab)
     ui.wait_until(lambda: stale_marks(page) >= 2, 30)
     assert f"position noise σp (m) {RUN_SIGMA_P:g} (now {STRESS_SIGMA_P:g})" in \
         page.get_by_text(STALE).first.locator("xpath=..").inner_text()
     page.get_by_text("pose error per frame (other settings)").wait_for(timeout=30_000)
-    worst_frame = worst.frame_of(tab.explore.worst.value)
+    worst_frame = worst.frame_of(tab.controls.explore.worst.value)
     if tab.settings.frame == worst_frame:
         page.get_by_role("button", name="next ▶").click()
         ui.wait_until(lambda: tab.last.frame_index == worst_frame + 1, 60)

@@ -39,7 +39,7 @@ def _title(page, k: int) -> None:
 def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small_server: ExplorerServer) -> None:
     page = ui.open_page(browser, small_server)
     tab = ui.session(small_server, 1)
-    walk = tab.walkthrough
+    walk = tab.controls.walkthrough
     page.get_by_role("tab", name="Steps").click()
     ui.wait_until(lambda: tab.client.camera.update_timestamp > 0)
     before = tuple(tab.client.camera.look_at)
@@ -98,7 +98,7 @@ def test_walk_through_every_step_animate_follow_a_frame_and_leave(browser, small
 
 def looks_at_the_object(tab) -> bool:
     """Whether the camera looks down on the walkthrough's followed object as "look at the object" puts it."""
-    step, camera = tab.walkthrough.step, tab.client.camera
+    step, camera = tab.controls.walkthrough.step, tab.client.camera
     _, look_at = camera_over(step.focus, step.span, screen_of(camera))
     return np.allclose(camera.look_at[:2], look_at[:2], atol=0.5)
 
