@@ -17,6 +17,7 @@ from cbm.params import MOST
 
 from ..scene.words import WORDS, label_of
 from ..session.coalesce import Later
+from ..session.markup import plain
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
@@ -164,7 +165,7 @@ def _typed(c: MethodControls, tab: TabActions, key: str, name: str, value: str) 
     try:
         number = typed_number(value, current, key, name)
     except ValueError as error:
-        assign(c.typed[key], content=f"*{error}; the value in use is {current:g}.*", visible=True)
+        assign(c.typed[key], content=f"*{plain(error)}; the value in use is {current:g}.*", visible=True)
         return
     assign(c.typed[key], visible=False)
     tab.apply(lambda s: s.with_params(key, **{name: number}))

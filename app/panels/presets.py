@@ -8,6 +8,7 @@ from dataclasses import dataclass, field
 
 import viser
 
+from ..session.markup import plain
 from .actions import TabActions, assign, on_user
 
 NONE = "(none)"
@@ -46,9 +47,9 @@ class PresetControls:
             assign(self.preset, value=name)
             self.describe()
         if name is not None:
-            words = f"*In use: **{name}**.*"
+            words = f"*In use: **{plain(name)}**.*"
         elif self.last is not None:
-            words = f"*In use: your own settings, changed from **{self.last}**.*"
+            words = f"*In use: your own settings, changed from **{plain(self.last)}**.*"
         else:
             words = "*In use: your own settings (no preset).*"
         assign(self.using, content=words)
@@ -56,7 +57,7 @@ class PresetControls:
     def describe(self) -> None:
         """Show what the picked preset is for."""
         text = self.descriptions.get(self.preset.value, "")
-        self.about.content = f"*{text}*" if text else ""
+        assign(self.about, content=f"*{plain(text)}*" if text else "")
 
 
 def build(gui: viser.GuiApi, descriptions: Mapping[str, str]) -> PresetControls:
