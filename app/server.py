@@ -84,8 +84,9 @@ def host_port(host: str, port: int) -> str:
 def start_viser(host: str, port: int, verbose: bool, guard: RequestGuard | None = None,
                 timeout: float = START_SECONDS) -> viser.ViserServer:
     """A viser server listening on ``host:port`` that answers only the requests ``guard`` lets
-    through (by default: those for ``host`` or a loopback name), started in a helper thread: ``AddressError`` when it is not listening within
-    ``timeout`` seconds (viser itself would wait forever)."""
+    through (by default: those for ``host`` or a loopback name), started in a helper thread:
+    ``AddressError`` when it is not listening within ``timeout`` seconds (viser itself would wait
+    forever)."""
     started: list[viser.ViserServer] = []
     failed: list[BaseException] = []
 
@@ -116,8 +117,9 @@ class ExplorerServer:
     on the first frame CBM can run on (``start_of``; ``start_note`` says when the frame moved).
 
     Only requests for this server's own names and WebSockets of its own page are answered
-    (``app.guard``; ``allowed_hosts``: more names, ``--allow-host``). The address is checked first (``AddressError``: the host does not resolve, the port is taken);
-    viser would otherwise move to the next free port without a word. CBM's compiled kernels are
+    (``app.guard``; ``allowed_hosts``: more names, ``--allow-host``). The address is checked first
+    (``AddressError``: the host does not resolve, the port is taken); viser would otherwise move to
+    the next free port without a word. CBM's compiled kernels are
     made ready in the background from the start (``kernels.prepare``); a tab's first recompute
     waits for them."""
 

@@ -89,7 +89,8 @@ def test_allow_host_adds_a_name_for_a_lan(tiny: Explorer, tmp_path: Path, monkey
     ("http://[::1]:8080", "localhost:8080", True), ("https://localhost:8080", "localhost:8080", True),
     ("http://localhost:8081", "localhost:8080", False), ("http://192.168.1.5:8080", "127.0.0.1:8080", False),
     ("http://192.168.1.5:8080", "192.168.1.5:8080", True), ("file://", "localhost:8080", False),
-    ("http://localhost.evil.example:8080", "localhost:8080", False), ("http://u@localhost:8080", "localhost:8080", False),
+    ("http://localhost.evil.example:8080", "localhost:8080", False),
+    ("http://u@localhost:8080", "localhost:8080", False),
 ])
 def test_the_origin_must_be_the_page_the_server_served(origin: str, host: str, allowed: bool) -> None:
     from app.guard import host_and_port
