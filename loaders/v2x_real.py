@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import LoaderError
+from .errors import LoaderError, shown
 
 MARKERS = ("infra", "true_ego_pose")
 """Top-level keys only V2X-Real's files have."""
@@ -51,7 +51,7 @@ def check_infra(path: Path, record: dict, agent: str) -> None:
         return
     flag, expected = record["infra"], int(agent) < 0
     if not isinstance(flag, bool):
-        raise LoaderError(f"{path}: infra: expected true or false, got {flag!r}")
+        raise LoaderError(f"{path}: infra: expected true or false, got {shown(flag)}")
     if flag != expected:
         raise LoaderError(f"{path}: infra: expected {str(expected).lower()} in agent folder {agent!r} (negative ids "
                           f"are infrastructure), got {str(flag).lower()}")
