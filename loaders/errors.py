@@ -95,9 +95,13 @@ LFS_POINTER_MAX_BYTES = 1024
 
 def nonempty_file(path: Path) -> Path:
     """``path`` after checking that it is a file with at least one byte that is not a Git LFS pointer."""
-    if not path.is_file():
-        raise LoaderError(f"{path}: expected a file")
-    size = path.stat().st_size
+    try:
+        status = path.stat()
+    except OSError as exc:
+        raise unreadable(exc, path) from None
+    if not stat.S_ISREG(status.st_mode):
+        raise LoaderError(f"{path}: {special_kind(status.st_mode)}, not a file")
+    size = status.st_size
     if size == 0:
         raise LoaderError(f"{path}: the file is empty")
     if size <= LFS_POINTER_MAX_BYTES and is_lfs_pointer(path):

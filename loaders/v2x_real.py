@@ -57,6 +57,20 @@ def check_infra(path: Path, record: dict, agent: str) -> None:
                           f"are infrastructure), got {str(flag).lower()}")
 
 
+def agent_of(folder: str, record) -> tuple[str, str | None]:
+    """The agent id of a folder not named by one (the dataset tool's example ``infra_2``), from its
+    file's ``infra`` flag: infrastructure ``-N``, a vehicle ``N``, ``N`` the digits ending the
+    folder's name (else 1 for infrastructure, 0 for a vehicle); and a note saying so (None for a
+    file that is not V2X-Real's: agent 0, as before)."""
+    flag = record.get("infra") if isinstance(record, dict) else None
+    if not isinstance(flag, bool):
+        return "0", None
+    digits = folder[len(folder.rstrip("0123456789")):].lstrip("0")
+    agent = f"-{digits or 1}" if flag else digits or "0"
+    role = "infrastructure" if flag else "a vehicle"
+    return agent, f"not an agent id; read as agent {agent} ({role}, as its files' infra flag says)"
+
+
 def left_out_note(count: int, names: set[str]) -> str:
     """The note of a V2X-Real load that left static props out of the trials (not a gap: how it is read)."""
     return f"{count} static object(s) ({', '.join(sorted(names))}) are not road users: left out of trials"
