@@ -51,16 +51,19 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], *, workers: int = 
     if workers <= 1:
         return [_finished(_call(fn, task, name), done) for task in tasks]
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        started: list[multiprocessing.process.BaseProcess] = []
         try:
             with ctrl_c_held():
+                before = set(multiprocessing.active_children())
                 futures = {pool.submit(fn, *task): i for i, task in enumerate(tasks)}
+                started = [p for p in multiprocessing.active_children() if p not in before]
             results: list[Any] = [None] * len(tasks)
             for future in as_completed(futures):
                 i = futures[future]
                 results[i] = _finished(_result(future.result, tasks[i], name), done)
             return results
         except BaseException:
-            stop_pool(pool)
+            stop_pool(pool, started)
             raise
 
 
@@ -76,27 +79,30 @@ def ctrl_c_held() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
-def stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
-    """End ``pool`` now (a stop signal or a failed task): pending tasks cancelled, every worker
-    process terminated (killed if still alive after ``grace_s``), none left orphaned, then the
-    pool's manager thread joined (for at most ``grace_s``).
+def stop_pool(pool: ProcessPoolExecutor, workers: Sequence[multiprocessing.process.BaseProcess],
+              grace_s: float = 1.0) -> None:
+    """End ``pool`` now (a stop signal or a failed task): its ``workers`` (the processes it started,
+    ``multiprocessing.active_children`` before and after its tasks were submitted) terminated,
+    killed if still alive after ``grace_s``, none left orphaned; then the pool shut down with its
+    pending tasks cancelled, waiting at most ``grace_s`` for its manager thread.
 
     The manager thread holds the last references to the pool's queues: left running, it releases
     their semaphores (unlink, then tell multiprocessing's resource tracker) while the process exits,
-    and an exit between the two makes the tracker warn of "leaked semaphore objects"."""
-    processes = list((pool._processes or {}).values())
-    manager = pool._executor_manager_thread
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
+    and an exit between the two makes the tracker warn of "leaked semaphore objects". With its
+    workers gone it finds the pool broken and ends; ``shutdown(wait=True)`` joins it (in a helper
+    thread, so that a manager that hangs cannot hold the stop). Only public API: no pool internals."""
+    for process in workers:
         process.terminate()
     deadline = time.monotonic() + grace_s
-    for process in processes:
+    for process in workers:
         process.join(max(0.0, deadline - time.monotonic()))
         if process.is_alive():
             process.kill()
             process.join()
-    if manager is not None:
-        manager.join(grace_s)
+    closing = threading.Thread(target=pool.shutdown, kwargs={"wait": True, "cancel_futures": True},
+                               name="pool-shutdown", daemon=True)
+    closing.start()
+    closing.join(grace_s)
 
 
 def _finished(result: Any, done: Callable[[Any], None]) -> Any:
@@ -133,9 +139,10 @@ def _run_on_ray(fn: Callable[..., Any], tasks: Sequence[tuple], done: Callable[[
             ready, pending = ray.wait(pending, num_returns=1)
             i = index[ready[0]]
             results[i] = _finished(_ray_result(ray, ready[0], tasks[i], name), done)
-    finally:
+    except Exception:
         for ref in pending:
             ray.cancel(ref, force=True)
+        raise
     return results
 
 
@@ -164,7 +171,16 @@ def _ray_result(ray: Any, ref: Any, task: tuple, name: Callable[[tuple], str]) -
 def ray_session(address: str | None, workers: int = 1) -> Iterator[None]:
     """Ray connected for the block (nothing when ``address`` is None): ``"local"`` starts a quiet
     local instance with ``workers`` CPUs, ``"auto"`` or ``HOST:PORT`` joins a cluster. A session
-    already open is reused and left open; one this call opened is shut down after the block."""
+    already open is reused and left open; one this call opened is shut down after the block.
+
+    Except after a stop signal (:class:`Stopped`): then no Ray call is made, neither a forced
+    cancel nor ``ray.shutdown`` (issue 50, item 7: a forced cancel whose task then completes trips
+    Ray's "Tried to complete task that was not pending" check, and a shutdown still running when
+    the stop's deadline kills the instance ends the process with status 1 and Ray's crash report;
+    the shutdown also ends the raylet first, leaving its dashboard and runtime-env agents to
+    outlive the command). The command ends at once instead (``evaluation.cli.exit_now``), killing
+    the whole local instance, its tree intact, with every other process it started; a cluster
+    ends the tasks of a driver that is gone."""
     if address is None:
         yield
         return
@@ -178,8 +194,12 @@ def ray_session(address: str | None, workers: int = 1) -> Iterator[None]:
         _connect(ray, address, workers)
     try:
         yield
-    finally:
+    except (Stopped, KeyboardInterrupt):
+        raise
+    except BaseException:
         ray.shutdown()
+        raise
+    ray.shutdown()
 
 
 @contextlib.contextmanager
