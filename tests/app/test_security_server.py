@@ -26,9 +26,9 @@ def tiny() -> Explorer:
     return Explorer(loaders.open("synthetic:4"))
 
 
-def _get(port: int, host: str) -> int:
+def _get(port: int, host: str, path: str = "/") -> int:
     connection = http.client.HTTPConnection("127.0.0.1", port, timeout=30)
-    connection.putrequest("GET", "/", skip_host=True)
+    connection.putrequest("GET", path, skip_host=True)
     connection.putheader("Host", host)
     connection.endheaders()
     status = connection.getresponse().status
@@ -66,6 +66,8 @@ def test_a_request_for_another_host_name_is_refused(tiny: Explorer, tmp_path: Pa
         assert _get(port, "") == 421
         assert _websocket(port, f"http://attacker.example:{port}", host="attacker.example") == 421
         assert [_get(port, f"{name}:{port}") for name in ("127.0.0.1", "localhost", "LOCALHOST", "[::1]")] == [200] * 4
+        assert [_get(port, f"localhost:{port}", path) for path in ("/../../etc/passwd", "/%2e%2e/%2e%2e/etc/passwd",
+                                                                 "/..%5c..%5cetc/passwd")] == [404] * 3
 
 
 def test_allow_host_adds_a_name_for_a_lan(tiny: Explorer, tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
