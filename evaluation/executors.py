@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import os
 import signal
 import socket
 import threading
@@ -125,25 +126,48 @@ def _result(get: Callable[[], Any], task: tuple, name: Callable[[tuple], str]) -
 
 def _run_on_ray(fn: Callable[..., Any], tasks: Sequence[tuple], done: Callable[[Any], None],
                 name: Callable[[tuple], str]) -> list[Any]:
-    """Submit every task, then collect them with ``ray.wait`` as they finish (progress across the cluster)."""
+    """Submit every task, then collect them with ``ray.wait`` as they finish (progress across the
+    cluster). A stop signal is raised as itself (``stop_within``) and cancels nothing (``ray_session``)."""
     import ray
 
-    remote = ray.remote(max_retries=MAX_RETRIES)(fn)
-    shared = [ray.put(arg) for arg in _shared_arguments(tasks)]
-    refs = [remote.remote(*_with_shared(task, shared)) for task in tasks]
-    index = {ref: i for i, ref in enumerate(refs)}
-    results: list[Any] = [None] * len(tasks)
-    pending = list(refs)
+    pending: list[Any] = []
     try:
+        remote = ray.remote(max_retries=MAX_RETRIES)(fn)
+        shared = [ray.put(arg) for arg in _shared_arguments(tasks)]
+        refs = [remote.remote(*_with_shared(task, shared)) for task in tasks]
+        index = {ref: i for i, ref in enumerate(refs)}
+        results: list[Any] = [None] * len(tasks)
+        pending = list(refs)
         while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            i = index[ready[0]]
-            results[i] = _finished(_ray_result(ray, ready[0], tasks[i], name), done)
-    except Exception:
+            ready, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
+            for ref in ready:
+                results[index[ref]] = _finished(_ray_result(ray, ref, tasks[index[ref]], name), done)
+    except BaseException as error:
+        stop = stop_within(error)
+        if stop is not None:
+            raise stop from None
         for ref in pending:
             ray.cancel(ref, force=True)
         raise
     return results
+
+
+WAIT_S = 0.2
+"""Seconds one ``ray.wait`` may last: a stop signal's exception surfaces from it within this."""
+
+
+def stop_within(error: BaseException) -> Stopped | None:
+    """The stop signal behind ``error``: itself, or the one Ray's compiled code turned into another
+    exception (our handler raises :class:`Stopped` from where Ray checks for signals, inside
+    ``ray.wait``, and Ray answers ``SystemError: ... returned a result with an exception set``:
+    status 1 and a traceback, issue 50, item 7)."""
+    seen: set[int] = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, Stopped):
+            return error
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return None
 
 
 def _shared_arguments(tasks: Sequence[tuple]) -> list[Any]:
@@ -219,7 +243,9 @@ def stop_handlers_kept() -> Iterator[None]:
 
 
 def import_ray() -> Any:
-    """The ``ray`` module, or :class:`ExecutorError` saying how to install it."""
+    """The ``ray`` module (imported with ``NO_CRASH_HANDLER``, which it reads once, on import), or
+    :class:`ExecutorError` saying how to install it."""
+    os.environ.update(NO_CRASH_HANDLER)
     try:
         import ray
     except ImportError:
@@ -227,9 +253,19 @@ def import_ray() -> Any:
     return ray
 
 
+NO_CRASH_HANDLER = {"RAY_DISABLE_FAILURE_SIGNAL_HANDLER": "1"}
+"""Ray's core worker otherwise installs, in the middle of ``ray.init``, a C++ handler for SIGTERM
+(among the crash signals) over Python's: a stop signal between then and the end of ``ray.init``
+printed Ray's crash report ("*** SIGTERM received ...", then its stack) and could end the process
+at once with the signal's default action, status -15 (issue 50, item 7: 5 of 16 stops reported,
+2 of 8 stops 7-8 s into a run measured here). Set for this process and so for the instance's
+processes it starts; a crash of theirs is still reported to the run as a failed task."""
+
+
 def _connect(ray: Any, address: str, workers: int) -> None:
-    """``ray.init`` for ``address``; a SIGTERM during it (Ray's own handler turns it into
-    ``SystemExit(15)``) is raised as :class:`evaluation.stop.Stopped`, the same stop as anywhere else."""
+    """``ray.init`` for ``address`` (Python's signal handlers left in place: ``NO_CRASH_HANDLER``);
+    a SIGTERM during it (Ray's own handler turns it into ``SystemExit(15)``) is raised as
+    :class:`evaluation.stop.Stopped`, the same stop as anywhere else."""
     quiet = {"log_to_driver": False, "logging_level": "ERROR"}
     try:
         if address == "local":

@@ -205,17 +205,23 @@ class FakeRay:
     def put(self, value):
         return value
 
-    def wait(self, pending, num_returns):
-        raise Stopped(signal.SIGTERM)
+    def wait(self, pending, num_returns, timeout=None):
+        """As Ray answers our handler's ``Stopped`` raised where its compiled code checks for signals."""
+        try:
+            raise Stopped(signal.SIGTERM)
+        except Stopped as stop:
+            raise SystemError("<cyfunction CoreWorker.wait> returned a result with an exception set") from stop
 
     def cancel(self, ref, force=False) -> None:
         self.calls.append("cancel")
 
 
 def test_a_stop_makes_no_ray_call_the_commands_end_kills_the_instance(monkeypatch) -> None:
-    """Issue 50, item 7: on a stop neither a forced cancel (whose task may then complete: Ray's
-    "Tried to complete task that was not pending" crash) nor ``ray.shutdown`` (racing the stop's
-    deadline, and ending the raylet before its agents) is called; ``exit_now`` kills the instance."""
+    """Issue 50, item 7: a stop inside ``ray.wait`` is raised as the stop (Ray turns it into a
+    ``SystemError``: status 1 and a traceback), and neither a forced cancel (whose task may then
+    complete: Ray's "Tried to complete task that was not pending" crash) nor ``ray.shutdown``
+    (racing the stop's deadline, and ending the raylet before its agents) is called; ``exit_now``
+    kills the instance."""
     fake = FakeRay()
     monkeypatch.setitem(sys.modules, "ray", fake)
     with pytest.raises(Stopped), executors.ray_session("local", workers=2):
@@ -225,3 +231,24 @@ def test_a_stop_makes_no_ray_call_the_commands_end_kills_the_instance(monkeypatc
     with executors.ray_session("local", workers=2):
         pass
     assert fake.calls == ["init", "init", "shutdown"]
+
+
+@pytest.mark.ray
+def test_ray_leaves_pythons_handler_of_sigterm_in_place(tmp_path) -> None:
+    """Ray's core worker installed a C++ handler of SIGTERM in the middle of ``ray.init``: a stop
+    then printed Ray's crash report ("*** SIGTERM received ...") and could end the process with
+    status -15. Here the signal comes right after ``ray.init``, before anything puts a handler back."""
+    script = ("import os, signal, time\nfrom evaluation.executors import import_ray\nray = import_ray()\n"
+              "ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False, logging_level='ERROR')\n"
+              "os.kill(os.getpid(), signal.SIGTERM)\ntime.sleep(30)\n")
+    temporary = tempfile.mkdtemp(prefix="r50", dir="/tmp")
+    try:
+        done = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=240,
+                              env={**os.environ, "RAY_TMPDIR": temporary, "PYTHONPATH": str(REPO)})
+        assert "SIGTERM received" not in done.stderr, done.stderr
+        assert done.returncode == signal.SIGTERM, done.stderr
+    finally:
+        for pid in ray_processes(temporary):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(temporary, ignore_errors=True)
