@@ -1,6 +1,6 @@
 """The ``cbm-explorer`` command (also ``python serve.py``): the live CBM calibration explorer in the browser.
 
-    cbm-explorer [--dataset PATH_OR_NAME] [--preset NAME] [--host 127.0.0.1] [--port 8080]
+    cbm-explorer [--dataset PATH_OR_NAME] [--preset NAME] [--host 127.0.0.1] [--port 8080] [--allow-host NAME]
     cbm-explorer --list-presets
 """
 from __future__ import annotations
@@ -49,6 +49,9 @@ def parse(argv: list[str]) -> argparse.Namespace:
                         help="CoAlign / HEAL stage1_boxes.json: a detector's boxes replace the simulated detections")
     parser.add_argument("--host", default="127.0.0.1", help="address to listen on (default: loopback only)")
     parser.add_argument("--port", type=int, default=8080, help="port (0: any free port)")
+    parser.add_argument("--allow-host", action="append", default=[], metavar="NAME",
+                        help="a host name the browser may use to reach the app besides localhost, IP addresses "
+                             "and --host (repeatable; to serve on a LAN by name)")
     parser.add_argument("--list-presets", action="store_true",
                         help="list the shipped presets and the ones in your presets folder, then exit")
     args = parser.parse_args(argv)
@@ -155,7 +158,7 @@ def main(argv: list[str] | None = None) -> int:
               f"missing")
     stopping = _stop_on_signals()
     try:
-        server = ExplorerServer(explorer, settings, host=args.host, port=args.port)
+        server = ExplorerServer(explorer, settings, host=args.host, port=args.port, allowed_hosts=args.allow_host)
     except OSError as error:
         return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     if starting:

@@ -7,11 +7,13 @@ import gc
 import ipaddress
 import socket
 import threading
+from collections.abc import Iterable
 
 import viser
 
 from cbm import return_memory
 
+from .guard import RequestGuard, checking_requests
 from .scene.presentation import THEME
 from .session import kernels
 from .session.explorer import Explorer
@@ -79,15 +81,19 @@ def host_port(host: str, port: int) -> str:
     return f"[{host}]:{port}" if ":" in host else f"{host}:{port}"
 
 
-def start_viser(host: str, port: int, verbose: bool, timeout: float = START_SECONDS) -> viser.ViserServer:
-    """A viser server listening on ``host:port``, started in a helper thread: ``AddressError`` when it
-    is not listening within ``timeout`` seconds (viser itself would wait forever)."""
+def start_viser(host: str, port: int, verbose: bool, guard: RequestGuard | None = None,
+                timeout: float = START_SECONDS) -> viser.ViserServer:
+    """A viser server listening on ``host:port`` that answers only the requests ``guard`` lets
+    through (by default: those for ``host`` or a loopback name), started in a helper thread:
+    ``AddressError`` when it is not listening within ``timeout`` seconds (viser itself would wait
+    forever)."""
     started: list[viser.ViserServer] = []
     failed: list[BaseException] = []
 
     def start() -> None:
         try:
-            started.append(viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose))
+            with checking_requests(guard or RequestGuard.of(host)):
+                started.append(viser.ViserServer(host=host, port=port, label=TITLE, verbose=verbose))
         except BaseException as error:  # handed to the waiting thread below
             failed.append(error)
 
@@ -110,13 +116,15 @@ class ExplorerServer:
     """Serves ``explorer`` on ``host:port`` (port 0: any free port), every tab starting from ``settings``
     on the first frame CBM can run on (``start_of``; ``start_note`` says when the frame moved).
 
-    The address is checked first (``AddressError``: the host does not resolve, the port is taken);
-    viser would otherwise move to the next free port without a word. CBM's compiled kernels are
+    Only requests for this server's own names and WebSockets of its own page are answered
+    (``app.guard``; ``allowed_hosts``: more names, ``--allow-host``). The address is checked first
+    (``AddressError``: the host does not resolve, the port is taken); viser would otherwise move to
+    the next free port without a word. CBM's compiled kernels are
     made ready in the background from the start (``kernels.prepare``); a tab's first recompute
     waits for them."""
 
     def __init__(self, explorer: Explorer, settings: Settings, host: str = "127.0.0.1", port: int = 8080,
-                 verbose: bool = False) -> None:
+                 verbose: bool = False, allowed_hosts: Iterable[str] = ()) -> None:
         check_free(host, port)
         self.explorer = explorer
         self.settings, self.start_note = start_of(explorer, settings)
@@ -125,7 +133,7 @@ class ExplorerServer:
         self._gone: set[int] = set()
         """Tabs that closed while their session was still being built."""
         self._lock = threading.Lock()
-        self.server = start_viser(host, port, verbose)
+        self.server = start_viser(host, port, verbose, RequestGuard.of(host, allowed_hosts))
         if port and self.server.get_port() != port:
             self.server.stop()
             raise AddressError(f"port {port} was taken while the server started; choose another --port")

@@ -14,7 +14,7 @@ from cbm import INTERPRETED_UP_TO, Cancelled, stoppable
 from cbm.methods import METHODS
 
 from . import panels
-from .panels.actions import Edit
+from .panels.actions import Edit, assign
 from .panels.keynumbers import unusable_markdown
 from .panels.metrics import timeline_of
 from .scene.drawing import Drawing, draw
@@ -242,7 +242,7 @@ class ClientSession:
         message = unusable_markdown(self.explorer, self._settings, error)
         if self.last is None:
             self.controls.metrics.say("")
-            self.controls.metrics.text.content = message
+            assign(self.controls.metrics.text, content=message)
         else:
             self.controls.metrics.say(f"{message}\n\n*Below: the last frame computed ({self.last.frame_index}).*")
         method = METHODS[self._settings.method].label

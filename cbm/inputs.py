@@ -2,13 +2,49 @@
 from __future__ import annotations
 
 import math
+import numbers
+import reprlib
 
 import numpy as np
+
+_SHORT = reprlib.Repr()
+_SHORT.maxstring, _SHORT.maxother, _SHORT.maxlong = 60, 60, 40
+SHOWN_CHARS = 80
+"""Longest value a message quotes (a list of a million boxes is not repeated back)."""
+
+
+def shown(value: object) -> str:
+    """``value`` as a message quotes it: its repr, long and nested parts cut, at most ``SHOWN_CHARS``."""
+    text = _SHORT.repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[:SHOWN_CHARS - 3] + "..."
+
+
+def is_number(value: object) -> bool:
+    """A real number, Python's or numpy's (``np.float32(3)``, ``np.int64(5)``), not a bool."""
+    return isinstance(value, numbers.Real) and not isinstance(value, (bool, np.bool_))
+
+
+def _plain(owner: object, name: str, value: numbers.Real, kind: type) -> None:
+    """Store a numpy number given for a field as the Python number it is (``kind``)."""
+    if isinstance(value, np.generic):
+        object.__setattr__(owner, name, kind(value))
+
+
+def _real_array(name: str, value: object) -> np.ndarray:
+    """``value`` as a float64 array, or ValueError naming ``name``: complex numbers (their imaginary
+    part would be dropped), text and other objects are refused."""
+    try:
+        array = np.asarray(value)
+    except ValueError as exc:
+        raise ValueError(f"{name} must be an array of real numbers ({exc})") from None
+    if array.dtype.kind not in "biuf":
+        raise ValueError(f"{name} must be an array of real numbers, got dtype {array.dtype}")
+    return array.astype(float)
 
 
 def checked_boxes(name: str, boxes: np.ndarray) -> np.ndarray:
     """``boxes`` as a finite (N, 7) float64 array (an empty input becomes (0, 7))."""
-    array = np.asarray(boxes, dtype=float)
+    array = _real_array(name, boxes)
     if array.size == 0:
         array = array.reshape(0, 7)
     if array.ndim != 2 or array.shape[1] != 7:
@@ -22,7 +58,7 @@ def checked_boxes(name: str, boxes: np.ndarray) -> np.ndarray:
 
 def checked_transform(name: str, T: np.ndarray) -> np.ndarray:
     """``T`` as a finite rigid (3, 3) SE(2) matrix."""
-    array = np.asarray(T, dtype=float)
+    array = _real_array(name, T)
     if array.shape != (3, 3) or not np.isfinite(array).all():
         raise ValueError(f"{name} must be a finite (3, 3) SE(2) matrix; got shape {array.shape}")
     rotation = array[:2, :2]
@@ -37,13 +73,25 @@ def check_at_most(owner: object, most: dict[str, float]) -> None:
     one range, wherever it is given (a slider, a preset, ``--grid``, a search), ends there."""
     for name, bound in most.items():
         value = getattr(owner, name)
-        if isinstance(value, (int, float)) and not isinstance(value, bool) and value > bound:
-            raise ValueError(f"{type(owner).__name__}.{name} must be at most {bound:g}, got {value!r}")
+        if is_number(value) and value > bound:
+            raise ValueError(f"{type(owner).__name__}.{name} must be at most {bound:g}, got {shown(value)}")
 
 
 def check_positive(owner: object, *names: str) -> None:
-    """ValueError unless each named field of ``owner`` is a positive finite number."""
+    """ValueError unless each named field of ``owner`` is a positive finite number (a numpy one is
+    stored as a Python float)."""
     for name in names:
         value = getattr(owner, name)
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) or value <= 0:
-            raise ValueError(f"{type(owner).__name__}.{name} must be a positive finite number, got {value!r}")
+        if not is_number(value) or not math.isfinite(value) or value <= 0:
+            raise ValueError(f"{type(owner).__name__}.{name} must be a positive finite number, got {shown(value)}")
+        _plain(owner, name, value, float)
+
+
+def check_integer(owner: object, name: str, least: int, most: int) -> None:
+    """ValueError unless the named field of ``owner`` is a whole number from ``least`` to ``most``
+    (a numpy one is stored as a Python int)."""
+    value = getattr(owner, name)
+    if not isinstance(value, numbers.Integral) or isinstance(value, (bool, np.bool_)) or not least <= value <= most:
+        raise ValueError(f"{type(owner).__name__}.{name} must be an integer from {least} to {most}, "
+                         f"got {shown(value)}")
+    _plain(owner, name, value, int)

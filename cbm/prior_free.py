@@ -13,7 +13,9 @@ selection (eq. 13). Two steps do depend on ``init``:
   one guess is within 45 degrees of it.
 
 CBM runs once per guess and the answer with the most pairs wins (one that did not abstain first, the
-stronger evidence on a tie). It costs four runs of CBM; ``docs/results.md`` measures what it gives up.
+stronger evidence on a tie). With no prior, a layout of paired objects that looks the same turned
+(evenly spaced boxes on a line) cannot tell the pose: the answer abstains
+(``cbm.baselines._common.unresolved``). It costs four runs of CBM; ``docs/results.md`` measures what it gives up.
 """
 from __future__ import annotations
 
@@ -23,6 +25,7 @@ import math
 import numpy as np
 
 from . import se2
+from .baselines._common import unresolved
 from .params import CBMParams
 from .pipeline import checked_inputs, match
 from .result import MatchResult
@@ -45,8 +48,10 @@ def match_without_prior(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.n
     runs = [match(ego, cav, se2.make(0.0, 0.0, yaw), params) for yaw in GUESSES]
     best = max(runs, key=_strength)
     timings = {name: sum(r.timings.get(name, 0.0) for r in runs) for name in best.timings}
-    return dataclasses.replace(best, init=init, transform=best.transform if best.estimated else init.copy(),
+    best = dataclasses.replace(best, init=init, transform=best.transform if best.estimated else init.copy(),
                                timings=timings)
+    why = unresolved(ego[best.pairs[:, 0]]) if best.estimated and not best.abstained else ""
+    return dataclasses.replace(best, abstained=True, reason=why) if why else best
 
 
 def _strength(result: MatchResult) -> tuple[bool, int, float]:

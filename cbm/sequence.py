@@ -26,8 +26,10 @@ Time going backwards, a gap of more than ``max_gap_s`` or another ``agent`` star
 """
 from __future__ import annotations
 
+import copy
 import dataclasses
 import math
+import numbers
 from dataclasses import dataclass
 
 import numpy as np
@@ -35,7 +37,7 @@ import numpy as np
 from . import se2
 from .engine.assignment import gated_assignment
 from .engine.fitting import WELSCH_EFFICIENT_SCALE
-from .inputs import check_positive
+from .inputs import check_at_most, check_integer, check_positive, is_number, shown
 from .params import CBMParams
 from .pipeline import checked_inputs, match
 from .result import MatchResult, TrackNote
@@ -80,19 +82,28 @@ class TrackingParams:
     """Seconds between two frames past which the calibration starts over."""
 
     def __post_init__(self) -> None:
-        check_positive(self, "gate", "drift_m", "drift_deg", "drift_share", "lost_m", "lost_deg", "max_gap_s",
-                       "sure_margin")
-        for name in ("chain", "window", "lost_after", "reacquire_after"):
-            if not isinstance(getattr(self, name), int) or getattr(self, name) < 2:
-                raise ValueError(f"TrackingParams.{name} must be an integer >= 2, got {getattr(self, name)!r}")
+        check_positive(self, *TRACKING_MOST)
+        check_at_most(self, TRACKING_MOST)
+        for name, most in TRACKING_COUNTS.items():
+            check_integer(self, name, 2, most)
+        if self.chain > self.window:
+            raise ValueError(f"TrackingParams.chain must be at most window ({self.window}), got {self.chain}")
+
+
+TRACKING_MOST = {"gate": 100.0, "drift_m": 100.0, "drift_deg": 180.0, "drift_share": 10.0, "lost_m": 1000.0,
+                 "lost_deg": 180.0, "sure_margin": 1e6, "max_gap_s": 1e6}
+"""Each of ``TrackingParams``' numbers' largest value: beyond, none means more (a gate of 100
+standard deviations accepts everything already), and their squares would overflow (issue 50)."""
+TRACKING_COUNTS = {"chain": 1000, "window": 1000, "lost_after": 100_000, "reacquire_after": 1000}
+"""The largest of ``TrackingParams``' counts (frames or measurements; each at least 2)."""
 
 
 class SequenceCalibrator:
     """CBM over time for one CAV of one sequence (see the module)."""
 
     def __init__(self, params: CBMParams | None = None, tracking: TrackingParams | None = None) -> None:
-        self.params = CBMParams() if params is None else params
-        self.tracking = TrackingParams() if tracking is None else tracking
+        self.params = CBMParams() if params is None else _of_type("params", params, CBMParams)
+        self.tracking = TrackingParams() if tracking is None else _of_type("tracking", tracking, TrackingParams)
         t = self.tracking
         self.rate = np.array([t.drift_m ** 2, t.drift_m ** 2, math.radians(t.drift_deg) ** 2])
         self.floor = self.params.welsch_floor / WELSCH_EFFICIENT_SCALE
@@ -110,10 +121,31 @@ class SequenceCalibrator:
     def step(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None, time_s: float,
              agent: object = None) -> MatchResult:
         """The calibrated result of the frame at ``time_s`` (seconds; frames in time order) of the
-        CAV ``agent`` (any label; another one starts the calibration over)."""
+        CAV ``agent`` (a string or an integer; another one starts the calibration over). A step that
+        does not complete (an error, or stopped: ``cbm.engine.threads.Cancelled``) leaves the
+        calibrator as it was, so that the same step run again answers as if it never was."""
         ego, cav, init, params = checked_inputs(ego_boxes, cav_boxes, init, self.params)
-        if not math.isfinite(time_s):
-            raise ValueError(f"time_s must be a finite number of seconds, got {time_s!r}")
+        if not is_number(time_s) or not math.isfinite(time_s):
+            raise ValueError(f"time_s must be a finite number of seconds, got {shown(time_s)}")
+        if not (agent is None or isinstance(agent, (str, numbers.Integral))) or isinstance(agent, (bool, np.bool_)):
+            raise ValueError(f"agent must be None, a string or an integer (a label of the CAV), got {shown(agent)}")
+        kept = self._state()
+        try:
+            return self._step(ego, cav, init, params, float(time_s), agent)
+        except BaseException:
+            self._restore(kept)
+            raise
+
+    def _state(self) -> tuple:
+        """What a step changes, copied (a track is updated in place)."""
+        return (copy.copy(self.track), self.persistence.copy(), list(self.rejected), self.misses, self.last_time,
+                self.agent)
+
+    def _restore(self, state: tuple) -> None:
+        self.track, self.persistence, self.rejected, self.misses, self.last_time, self.agent = state
+
+    def _step(self, ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams, time_s: float,
+              agent: object) -> MatchResult:
         event = self._reset_if_needed(time_s, agent)
         lost = self._lost(time_s)
         prior = self._trusted_prediction(time_s)
@@ -241,6 +273,12 @@ class SequenceCalibrator:
                          pooled=0 if track is None else track.pooled, predicted=predicted,
                          measured=None if found is None else found.result.transform, answer=transform)
         return dataclasses.replace(result, track=note)
+
+
+def _of_type(name: str, value: object, kind: type) -> object:
+    if not isinstance(value, kind):
+        raise ValueError(f"SequenceCalibrator's {name} must be a {kind.__name__}, got {shown(value)}")
+    return value
 
 
 def match_first_step(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray,

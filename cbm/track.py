@@ -91,10 +91,15 @@ def agree(a: Measurement, b: Measurement, rate: np.ndarray, share: float, gate: 
 @dataclass
 class Persistence:
     """The last ``window`` measurements, each with the longest chain of measurements ending at it in
-    which each agrees with the one before (``agree``): whether the error persists."""
+    which each agrees with the one before (``agree``): whether the error persists. A chain keeps its
+    last ``window`` measurements: memory stays bounded over any sequence (issue 50: 1,501 kept
+    after 1,500 frames)."""
 
     window: int
     kept: deque = field(default_factory=deque)
+
+    def copy(self) -> Persistence:
+        return Persistence(self.window, deque(self.kept))
 
     def add(self, found: Measurement | None, rate: np.ndarray, share: float, gate: float) -> list[Measurement]:
         """Keep ``found``; return the longest chain ending at it, oldest first (empty for None)."""
@@ -104,7 +109,7 @@ class Persistence:
                 longer = earlier is not None and len(earlier_chain) >= len(chain)
                 if longer and agree(found, earlier, rate, share, gate):
                     chain = earlier_chain
-            chain = [*chain, found]
+            chain = [*chain[max(0, len(chain) + 1 - self.window):], found]
         self.kept.append((found, chain))
         while len(self.kept) > self.window:
             self.kept.popleft()

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import os
 import signal
 import socket
 import threading
@@ -51,16 +52,19 @@ def run_tasks(fn: Callable[..., Any], tasks: Sequence[tuple], *, workers: int = 
     if workers <= 1:
         return [_finished(_call(fn, task, name), done) for task in tasks]
     with ProcessPoolExecutor(max_workers=workers, mp_context=multiprocessing.get_context("spawn")) as pool:
+        started: list[multiprocessing.process.BaseProcess] = []
         try:
             with ctrl_c_held():
+                before = set(multiprocessing.active_children())
                 futures = {pool.submit(fn, *task): i for i, task in enumerate(tasks)}
+                started = [p for p in multiprocessing.active_children() if p not in before]
             results: list[Any] = [None] * len(tasks)
             for future in as_completed(futures):
                 i = futures[future]
                 results[i] = _finished(_result(future.result, tasks[i], name), done)
             return results
         except BaseException:
-            stop_pool(pool)
+            stop_pool(pool, started)
             raise
 
 
@@ -76,27 +80,30 @@ def ctrl_c_held() -> Iterator[None]:
         signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
-def stop_pool(pool: ProcessPoolExecutor, grace_s: float = 1.0) -> None:
-    """End ``pool`` now (a stop signal or a failed task): pending tasks cancelled, every worker
-    process terminated (killed if still alive after ``grace_s``), none left orphaned, then the
-    pool's manager thread joined (for at most ``grace_s``).
+def stop_pool(pool: ProcessPoolExecutor, workers: Sequence[multiprocessing.process.BaseProcess],
+              grace_s: float = 1.0) -> None:
+    """End ``pool`` now (a stop signal or a failed task): its ``workers`` (the processes it started,
+    ``multiprocessing.active_children`` before and after its tasks were submitted) terminated,
+    killed if still alive after ``grace_s``, none left orphaned; then the pool shut down with its
+    pending tasks cancelled, waiting at most ``grace_s`` for its manager thread.
 
     The manager thread holds the last references to the pool's queues: left running, it releases
     their semaphores (unlink, then tell multiprocessing's resource tracker) while the process exits,
-    and an exit between the two makes the tracker warn of "leaked semaphore objects"."""
-    processes = list((pool._processes or {}).values())
-    manager = pool._executor_manager_thread
-    pool.shutdown(wait=False, cancel_futures=True)
-    for process in processes:
+    and an exit between the two makes the tracker warn of "leaked semaphore objects". With its
+    workers gone it finds the pool broken and ends; ``shutdown(wait=True)`` joins it (in a helper
+    thread, so that a manager that hangs cannot hold the stop). Only public API: no pool internals."""
+    for process in workers:
         process.terminate()
     deadline = time.monotonic() + grace_s
-    for process in processes:
+    for process in workers:
         process.join(max(0.0, deadline - time.monotonic()))
         if process.is_alive():
             process.kill()
             process.join()
-    if manager is not None:
-        manager.join(grace_s)
+    closing = threading.Thread(target=pool.shutdown, kwargs={"wait": True, "cancel_futures": True},
+                               name="pool-shutdown", daemon=True)
+    closing.start()
+    closing.join(grace_s)
 
 
 def _finished(result: Any, done: Callable[[Any], None]) -> Any:
@@ -119,24 +126,48 @@ def _result(get: Callable[[], Any], task: tuple, name: Callable[[tuple], str]) -
 
 def _run_on_ray(fn: Callable[..., Any], tasks: Sequence[tuple], done: Callable[[Any], None],
                 name: Callable[[tuple], str]) -> list[Any]:
-    """Submit every task, then collect them with ``ray.wait`` as they finish (progress across the cluster)."""
+    """Submit every task, then collect them with ``ray.wait`` as they finish (progress across the
+    cluster). A stop signal is raised as itself (``stop_within``) and cancels nothing (``ray_session``)."""
     import ray
 
-    remote = ray.remote(max_retries=MAX_RETRIES)(fn)
-    shared = [ray.put(arg) for arg in _shared_arguments(tasks)]
-    refs = [remote.remote(*_with_shared(task, shared)) for task in tasks]
-    index = {ref: i for i, ref in enumerate(refs)}
-    results: list[Any] = [None] * len(tasks)
-    pending = list(refs)
+    pending: list[Any] = []
     try:
+        remote = ray.remote(max_retries=MAX_RETRIES)(fn)
+        shared = [ray.put(arg) for arg in _shared_arguments(tasks)]
+        refs = [remote.remote(*_with_shared(task, shared)) for task in tasks]
+        index = {ref: i for i, ref in enumerate(refs)}
+        results: list[Any] = [None] * len(tasks)
+        pending = list(refs)
         while pending:
-            ready, pending = ray.wait(pending, num_returns=1)
-            i = index[ready[0]]
-            results[i] = _finished(_ray_result(ray, ready[0], tasks[i], name), done)
-    finally:
+            ready, pending = ray.wait(pending, num_returns=1, timeout=WAIT_S)
+            for ref in ready:
+                results[index[ref]] = _finished(_ray_result(ray, ref, tasks[index[ref]], name), done)
+    except BaseException as error:
+        stop = stop_within(error)
+        if stop is not None:
+            raise stop from None
         for ref in pending:
             ray.cancel(ref, force=True)
+        raise
     return results
+
+
+WAIT_S = 0.2
+"""Seconds one ``ray.wait`` may last: a stop signal's exception surfaces from it within this."""
+
+
+def stop_within(error: BaseException) -> Stopped | None:
+    """The stop signal behind ``error``: itself, or the one Ray's compiled code turned into another
+    exception (our handler raises :class:`Stopped` from where Ray checks for signals, inside
+    ``ray.wait``, and Ray answers ``SystemError: ... returned a result with an exception set``:
+    status 1 and a traceback, issue 50, item 7)."""
+    seen: set[int] = set()
+    while error is not None and id(error) not in seen:
+        if isinstance(error, Stopped):
+            return error
+        seen.add(id(error))
+        error = error.__cause__ or error.__context__
+    return None
 
 
 def _shared_arguments(tasks: Sequence[tuple]) -> list[Any]:
@@ -164,7 +195,16 @@ def _ray_result(ray: Any, ref: Any, task: tuple, name: Callable[[tuple], str]) -
 def ray_session(address: str | None, workers: int = 1) -> Iterator[None]:
     """Ray connected for the block (nothing when ``address`` is None): ``"local"`` starts a quiet
     local instance with ``workers`` CPUs, ``"auto"`` or ``HOST:PORT`` joins a cluster. A session
-    already open is reused and left open; one this call opened is shut down after the block."""
+    already open is reused and left open; one this call opened is shut down after the block.
+
+    Except after a stop signal (:class:`Stopped`): then no Ray call is made, neither a forced
+    cancel nor ``ray.shutdown`` (issue 50, item 7: a forced cancel whose task then completes trips
+    Ray's "Tried to complete task that was not pending" check, and a shutdown still running when
+    the stop's deadline kills the instance ends the process with status 1 and Ray's crash report;
+    the shutdown also ends the raylet first, leaving its dashboard and runtime-env agents to
+    outlive the command). The command ends at once instead (``evaluation.cli.exit_now``), killing
+    the whole local instance, its tree intact, with every other process it started; a cluster
+    ends the tasks of a driver that is gone."""
     if address is None:
         yield
         return
@@ -178,8 +218,12 @@ def ray_session(address: str | None, workers: int = 1) -> Iterator[None]:
         _connect(ray, address, workers)
     try:
         yield
-    finally:
+    except (Stopped, KeyboardInterrupt):
+        raise
+    except BaseException:
         ray.shutdown()
+        raise
+    ray.shutdown()
 
 
 @contextlib.contextmanager
@@ -199,7 +243,9 @@ def stop_handlers_kept() -> Iterator[None]:
 
 
 def import_ray() -> Any:
-    """The ``ray`` module, or :class:`ExecutorError` saying how to install it."""
+    """The ``ray`` module (imported with ``NO_CRASH_HANDLER``, which it reads once, on import), or
+    :class:`ExecutorError` saying how to install it."""
+    os.environ.update(NO_CRASH_HANDLER)
     try:
         import ray
     except ImportError:
@@ -207,9 +253,19 @@ def import_ray() -> Any:
     return ray
 
 
+NO_CRASH_HANDLER = {"RAY_DISABLE_FAILURE_SIGNAL_HANDLER": "1"}
+"""Ray's core worker otherwise installs, in the middle of ``ray.init``, a C++ handler for SIGTERM
+(among the crash signals) over Python's: a stop signal between then and the end of ``ray.init``
+printed Ray's crash report ("*** SIGTERM received ...", then its stack) and could end the process
+at once with the signal's default action, status -15 (issue 50, item 7: 5 of 16 stops reported,
+2 of 8 stops 7-8 s into a run measured here). Set for this process and so for the instance's
+processes it starts; a crash of theirs is still reported to the run as a failed task."""
+
+
 def _connect(ray: Any, address: str, workers: int) -> None:
-    """``ray.init`` for ``address``; a SIGTERM during it (Ray's own handler turns it into
-    ``SystemExit(15)``) is raised as :class:`evaluation.stop.Stopped`, the same stop as anywhere else."""
+    """``ray.init`` for ``address`` (Python's signal handlers left in place: ``NO_CRASH_HANDLER``);
+    a SIGTERM during it (Ray's own handler turns it into ``SystemExit(15)``) is raised as
+    :class:`evaluation.stop.Stopped`, the same stop as anywhere else."""
     quiet = {"log_to_driver": False, "logging_level": "ERROR"}
     try:
         if address == "local":

@@ -11,6 +11,7 @@ always holds one whole run. ``--out`` must be new, empty or a previous run's fol
 """
 from __future__ import annotations
 
+import io
 import os
 import shutil
 import tempfile
@@ -142,13 +143,22 @@ def stage_outputs(out: Path, plan: Plan, table: pl.DataFrame, timing: bool = Tru
     return Staged(folder, out.resolve(), summary)
 
 
+def write_table(table: pl.DataFrame, parquet: Path, csv: Path) -> None:
+    """``table`` as Parquet and CSV files. polars builds each in memory and Python writes the bytes:
+    a full disk is then ``OSError`` (ENOSPC), which the command reports in one line, instead of
+    polars' ``ComputeError: parquet: File out of specification`` (issue 50, item 8)."""
+    buffer = io.BytesIO()
+    table.write_parquet(buffer)
+    parquet.write_bytes(buffer.getbuffer())
+    csv.write_text(table.write_csv())
+
+
 def write_files(folder: Path, plan: Plan, table: pl.DataFrame, timing: bool = True, latex: bool = False) -> str:
     """Write the table, the summary, the metrics, the success curve and the plots into ``folder`` (with
     ``latex``, the summary as a LaTeX table too); return the summary. Without ``timing`` the table,
     the summary and the metrics leave the runtime out (then they are byte-identical run to run)."""
     written = table if timing else without_timing(table)
-    written.write_parquet(folder / "trials.parquet")
-    written.write_csv(folder / "trials.csv")
+    write_table(written, folder / "trials.parquet", folder / "trials.csv")
     summary = summary_markdown(plan, table, timing)
     (folder / "summary.md").write_text(summary)
     rows = table.to_dicts()

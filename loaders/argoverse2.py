@@ -19,13 +19,14 @@ recording car saw: its ``visibility`` (the other agents' is not said).
 from __future__ import annotations
 
 import json
+import warnings
 from pathlib import Path
 
 import numpy as np
 import polars as pl
 from scipy.spatial.transform import Rotation
 
-from .errors import READ_ERRORS, LoaderError, nonempty_file
+from .errors import READ_ERRORS, LoaderError, nonempty_file, shown
 from .scene import MapGeometry, Sequence
 from .tables import drop_unusable, read_arrow, require_rows
 
@@ -180,8 +181,8 @@ def _read_map(log: Path) -> MapGeometry | None:
     except (*READ_ERRORS, RecursionError) as exc:
         raise LoaderError(f"{path}: not valid JSON ({exc})") from exc
     if not isinstance(data, dict):
-        raise LoaderError(f"{path}: expected a JSON object with lane_segments, "
-                          f"pedestrian_crossings, drivable_areas")
+        raise LoaderError(f"{path}: expected a JSON object with {', '.join(MAP_SECTIONS)}")
+    _check_sections(path, data)
     polylines = []
     for key, segment in _entries(path, data, "lane_segments"):
         for side in ("left_lane_boundary", "right_lane_boundary"):
@@ -194,6 +195,22 @@ def _read_map(log: Path) -> MapGeometry | None:
         boundary = _points(path, area, f"drivable_areas[{key}]", "area_boundary")
         polylines.append(("drivable_area", np.vstack([boundary, boundary[:1]])))
     return MapGeometry(polylines)
+
+
+MAP_SECTIONS = ("lane_segments", "pedestrian_crossings", "drivable_areas")
+"""What an Argoverse 2 map holds (av2's ``ArgoverseStaticMap.from_json`` reads these three)."""
+
+
+def _check_sections(path: Path, data: dict) -> None:
+    """``LoaderError`` for a map with none of ``MAP_SECTIONS`` (it would draw as an empty map); a
+    warning naming the keys that are not read beside them."""
+    unknown = [str(key) for key in data if key not in MAP_SECTIONS]
+    if not any(key in data for key in MAP_SECTIONS):
+        raise LoaderError(f"{path}: none of {', '.join(MAP_SECTIONS)} (keys: {shown(unknown)}): "
+                          f"not an Argoverse 2 map")
+    if unknown:
+        warnings.warn(f"{path}: key(s) {shown(unknown)} not read (an Argoverse 2 map holds "
+                      f"{', '.join(MAP_SECTIONS)})", UserWarning, stacklevel=4)
 
 
 def _entries(path: Path, data: dict, key: str) -> list[tuple[str, dict]]:

@@ -41,7 +41,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import LoaderError
+from .errors import LoaderError, shown
 from .scene import Sequence
 from .structured import field, json_object_items, numbers
 
@@ -171,7 +171,7 @@ def _agent_ids(path: Path, key: str, sample, sequence: Sequence) -> list[str]:
 def _nth(path: Path, key: str, sample, name: str, index: int):
     values = field(path, sample, name, key)
     if not isinstance(values, list) or len(values) <= index:
-        raise LoaderError(f"{path}: {key}.{name}: expected one entry per agent of cav_id_list, got {values!r:.80}")
+        raise LoaderError(f"{path}: {key}.{name}: expected one entry per agent of cav_id_list, got {shown(values)}")
     return values[index]
 
 

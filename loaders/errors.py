@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import reprlib
 import stat
 from pathlib import Path
 
@@ -25,6 +26,21 @@ READ_ERRORS = (
     OverflowError,
 )
 """What third-party readers (polars, pyarrow, json, yaml) raise on malformed bytes."""
+
+
+SHOWN_CHARS = 80
+"""Longest value a message quotes: a 2 KB YAML file of nested aliases stands for a value whose
+full repr is half a gigabyte (issue 50, item 3)."""
+_SHORT = reprlib.Repr()
+_SHORT.maxlevel, _SHORT.maxstring, _SHORT.maxother, _SHORT.maxlong = 2, SHOWN_CHARS, SHOWN_CHARS, 40
+_SHORT.maxlist = _SHORT.maxtuple = _SHORT.maxdict = _SHORT.maxset = _SHORT.maxarray = 4
+
+
+def shown(value: object, limit: int = SHOWN_CHARS) -> str:
+    """``value`` as a message quotes it: its repr with nested and long parts cut (``...``), built
+    without writing the whole, and at most ``limit`` characters."""
+    text = _SHORT.repr(value)
+    return text if len(text) <= limit else text[:limit - 3] + "..."
 
 
 def existing_path(path: str | Path, what: str = "dataset path") -> Path:
@@ -79,9 +95,13 @@ LFS_POINTER_MAX_BYTES = 1024
 
 def nonempty_file(path: Path) -> Path:
     """``path`` after checking that it is a file with at least one byte that is not a Git LFS pointer."""
-    if not path.is_file():
-        raise LoaderError(f"{path}: expected a file")
-    size = path.stat().st_size
+    try:
+        status = path.stat()
+    except OSError as exc:
+        raise unreadable(exc, path) from None
+    if not stat.S_ISREG(status.st_mode):
+        raise LoaderError(f"{path}: {special_kind(status.st_mode)}, not a file")
+    size = status.st_size
     if size == 0:
         raise LoaderError(f"{path}: the file is empty")
     if size <= LFS_POINTER_MAX_BYTES and is_lfs_pointer(path):

@@ -102,7 +102,9 @@ def _is_integer(name: str) -> bool:
 
 
 def _yaml_files(folder: Path) -> list[Path]:
-    return sorted(p for p in folder.glob("*.yaml") if p.is_file() and not any(s in p.name for s in SKIPPED))
+    """Every ``*.yaml`` entry of ``folder`` but the skipped kinds, files or not: one that cannot be
+    read (a folder, a symlink loop) is refused when read, not left out with its agent (issue 50)."""
+    return sorted(p for p in folder.glob("*.yaml") if not any(s in p.name for s in SKIPPED))
 
 
 def _cav_folders(scenario: Path) -> list[Path]:
@@ -138,13 +140,10 @@ def load(path: str | Path) -> Sequence:
     agent's folder of frames or one file."""
     path = Path(path)
     if path.is_file():
-        agent = path.parent.name if _is_integer(path.parent.name) else "0"
-        parts = [_scenario(path.stem, {agent: {path.stem: path}}, 0)]
-        return _sequence(f"{path.stem}", parts, single=True)
+        return _one_agent(path.stem, path.parent, {path.stem: path})
     scenarios = _scenarios(path)
     if not scenarios and _frame_files(path):
-        agent = path.name if _is_integer(path.name) else "0"
-        return _sequence(path.name, [_scenario(path.name, {agent: _frame_files(path)}, 0)], single=True)
+        return _one_agent(path.name, path, _frame_files(path))
     if not scenarios:
         raise LoaderError(f"{path}: no scenario folders (numbered CAV folders of .yaml files), "
                           f"directly or under {', '.join(SPLITS)}")
@@ -155,6 +154,18 @@ def load(path: str | Path) -> Sequence:
         parts.append(_scenario(name, files, offset))
         offset += len(parts[-1]["stamps"])
     return _sequence(path.name, parts, single=len(parts) == 1 and scenarios[0][1] == path)
+
+
+def _one_agent(name: str, folder: Path, files: dict[str, Path]) -> Sequence:
+    """One agent's frames: its id is its folder's name (``641``, ``-1``), else read from its first
+    file's ``infra`` flag (``v2x_real.agent_of``), with a note saying which agent it became."""
+    agent, note = (folder.name, None) if _is_integer(folder.name) else \
+        v2x_real.agent_of(folder.name, read_yaml(next(iter(files.values()))))
+    sequence = _sequence(name, [_scenario(name, {agent: files}, 0)], single=True)
+    if note:
+        sequence.notes.append(f"{folder.name}: {note}")
+        warnings.warn(sequence.notes[-1], UserWarning, stacklevel=3)
+    return sequence
 
 
 def _scenario(name: str, files: dict[str, dict[str, Path]], offset: int) -> dict:

@@ -16,7 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import READ_ERRORS, LoaderError, nonempty_file
+from .errors import READ_ERRORS, LoaderError, nonempty_file, shown
 
 HEADER_KEYS = ("FIELDS", "SIZE", "TYPE", "COUNT", "WIDTH", "POINTS", "DATA")
 PCD_ERRORS = (*READ_ERRORS, RuntimeError, struct.error, KeyError, IndexError)
@@ -60,7 +60,7 @@ def _header_problem(exc) -> str:
     if missing:
         return f"missing {', '.join(missing)} (expected {', '.join(HEADER_KEYS)})"
     error = exc.errors()[0]
-    return f"{str(error['loc'][0]).upper()}: {error['msg']} (got {error.get('input')!r})"
+    return f"{str(error['loc'][0]).upper()}: {error['msg']} (got {shown(error.get('input'))})"
 
 
 def _body_problem(path: Path, exc: BaseException) -> str:

@@ -12,13 +12,50 @@ from typing import Any, BinaryIO, NoReturn
 import numpy as np
 import yaml
 
-from .errors import READ_ERRORS, LoaderError, nonempty_file
+from .errors import READ_ERRORS, LoaderError, nonempty_file, shown
+
+MAX_EXPANDED_VALUES = 1_000_000
+"""Most values a YAML document may stand for once its aliases are expanded. ``yaml.dump`` writes
+an alias where one list is shared (``&id001`` ... ``*id001``), so aliases are read; but ten nested
+levels of ten aliases each stand for 10^10 values in 2 KB (a "billion laughs"), which any reader
+walking the value never finishes (issue 50, item 3). A frame of a real dataset is a few thousand."""
+
+
+def expanded_values(root: yaml.Node) -> int:
+    """How many values ``root`` stands for with every alias expanded (a shared node counted each
+    time it is referred to), without expanding them; ``ComposerError`` past ``MAX_EXPANDED_VALUES``
+    or when an alias refers to a value that holds it."""
+    sizes: dict[int, int] = {}
+    stack: list[tuple[yaml.Node, bool]] = [(root, False)]
+    while stack:
+        node, children_done = stack.pop()
+        if id(node) in sizes:
+            continue
+        children = [part for pair in node.value for part in pair] if isinstance(node, yaml.MappingNode) else \
+            node.value if isinstance(node, yaml.SequenceNode) else []
+        if children_done:
+            sizes[id(node)] = 1 + sum(sizes[id(child)] for child in children)
+            if sizes[id(node)] > MAX_EXPANDED_VALUES:
+                raise yaml.composer.ComposerError(None, None, f"its aliases expand to more than "
+                                                  f"{MAX_EXPANDED_VALUES:,} values; not read", node.start_mark)
+            continue
+        if any(id(child) not in sizes and any(n is child for n, done in stack if done) for child in children):
+            raise yaml.composer.ComposerError(None, None, "an alias refers to a value that holds it", node.start_mark)
+        stack.append((node, True))
+        stack.extend((child, False) for child in children if id(child) not in sizes)
+    return sizes[id(root)]
 
 
 class _Loader(yaml.SafeLoader):
     """YAML 1.1 safe loader that also reads ``1e-5`` (no dot) as a float, as OpenCOOD's does, and the
     tags ``yaml.dump`` writes for numpy numbers and arrays (V2V4Real's files) as plain numbers and
-    nested lists; no other Python tag is read."""
+    nested lists; no other Python tag is read. A document whose aliases expand beyond
+    ``MAX_EXPANDED_VALUES`` values is refused before any value is built."""
+
+    def compose_document(self) -> yaml.Node:
+        node = super().compose_document()
+        expanded_values(node)
+        return node
 
 
 _Loader.add_implicit_resolver(
@@ -74,7 +111,7 @@ def _numpy_apply(loader: _Loader, suffix: str, node: yaml.Node):
 def _dtype(args: list, state: list) -> np.dtype:
     dtype = np.dtype(args[0])
     if dtype.kind not in NUMBER_KINDS:
-        raise ValueError(f"dtype {args[0]!r} is not a number type")
+        raise ValueError(f"dtype {shown(args[0])} is not a number type")
     order = state[1] if len(state) > 1 else "="
     return dtype.newbyteorder(order) if order in "<>" else dtype
 
@@ -119,24 +156,24 @@ def field(path: Path, mapping, key, where: str = ""):
 def number(path: Path, value, where: str) -> float:
     """A finite float, or a :class:`LoaderError` naming ``where``."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
-        raise LoaderError(f"{path}: {where}: expected a number, got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected a number, got {shown(value)}")
     value = float(value)
     if not math.isfinite(value):
-        raise LoaderError(f"{path}: {where}: expected a finite number, got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected a finite number, got {shown(value)}")
     return value
 
 
 def numbers(path: Path, value, where: str, count: int) -> list[float]:
     """A list of ``count`` finite floats."""
     if not isinstance(value, (list, tuple)) or len(value) < count:
-        raise LoaderError(f"{path}: {where}: expected a list of {count} numbers, got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected a list of {count} numbers, got {shown(value)}")
     return [number(path, v, f"{where}[{i}]") for i, v in enumerate(value[:count])]
 
 
 def matrix(path: Path, value, where: str, rows: int, cols: int) -> list[list[float]]:
     """A ``rows x cols`` nested list of finite floats."""
     if not isinstance(value, (list, tuple)) or len(value) != rows:
-        raise LoaderError(f"{path}: {where}: expected {rows} rows of {cols} numbers, got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected {rows} rows of {cols} numbers, got {shown(value)}")
     out = []
     for i, row in enumerate(value):
         if not isinstance(row, (list, tuple)) or len(row) != cols:

@@ -23,7 +23,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from .errors import LoaderError
+from .errors import LoaderError, shown
 
 MARKERS = ("infra", "true_ego_pose")
 """Top-level keys only V2X-Real's files have."""
@@ -51,10 +51,24 @@ def check_infra(path: Path, record: dict, agent: str) -> None:
         return
     flag, expected = record["infra"], int(agent) < 0
     if not isinstance(flag, bool):
-        raise LoaderError(f"{path}: infra: expected true or false, got {flag!r}")
+        raise LoaderError(f"{path}: infra: expected true or false, got {shown(flag)}")
     if flag != expected:
         raise LoaderError(f"{path}: infra: expected {str(expected).lower()} in agent folder {agent!r} (negative ids "
                           f"are infrastructure), got {str(flag).lower()}")
+
+
+def agent_of(folder: str, record) -> tuple[str, str | None]:
+    """The agent id of a folder not named by one (the dataset tool's example ``infra_2``), from its
+    file's ``infra`` flag: infrastructure ``-N``, a vehicle ``N``, ``N`` the digits ending the
+    folder's name (else 1 for infrastructure, 0 for a vehicle); and a note saying so (None for a
+    file that is not V2X-Real's: agent 0, as before)."""
+    flag = record.get("infra") if isinstance(record, dict) else None
+    if not isinstance(flag, bool):
+        return "0", None
+    digits = folder[len(folder.rstrip("0123456789")):].lstrip("0")
+    agent = f"-{digits or 1}" if flag else digits or "0"
+    role = "infrastructure" if flag else "a vehicle"
+    return agent, f"not an agent id; read as agent {agent} ({role}, as its files' infra flag says)"
 
 
 def left_out_note(count: int, names: set[str]) -> str:

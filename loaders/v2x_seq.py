@@ -38,7 +38,7 @@ import numpy as np
 from tqdm import tqdm
 
 from . import dair_v2x as dair
-from .errors import LfsPointer, LoaderError
+from .errors import LfsPointer, LoaderError, shown
 from .scene import AGENT_COLUMNS, BOX_COLUMNS, Sequence
 from .structured import field, read_json
 
@@ -134,7 +134,7 @@ def _pairs(root: Path, info_file: Path) -> list[Pair]:
         for side in sides:
             frame_id = _name(info_file, field(info_file, entry, f"{side}_frame", where), f"{where}.{side}_frame")
             if frame_id not in sides[side]:
-                raise LoaderError(f"{info_file}: {where}.{side}_frame: {frame_id!r} is not a frame_id of "
+                raise LoaderError(f"{info_file}: {where}.{side}_frame: {shown(frame_id)} is not a frame_id of "
                                   f"{side}-side/data_info.json")
             found[side] = sides[side][frame_id]
         sequence = str(entry.get("vehicle_sequence", found["vehicle"].get("sequence_id", "")))
@@ -158,7 +158,7 @@ def _side_frames(path: Path) -> dict[str, dict]:
 def _name(path: Path, value, where: str) -> str:
     """A frame or track id: a non-empty string of letters, digits, ``-`` and ``_`` (it names files)."""
     if not isinstance(value, str) or not value or not all(c.isalnum() or c in "-_" for c in value):
-        raise LoaderError(f"{path}: {where}: expected a frame id such as \"000009\", got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected a frame id such as \"000009\", got {shown(value)}")
     return value
 
 

@@ -36,7 +36,7 @@ from pathlib import Path
 import numpy as np
 import polars as pl
 
-from .errors import LoaderError
+from .errors import LoaderError, shown
 from .scene import Sequence
 from .structured import field, number, numbers, read_json
 
@@ -211,7 +211,7 @@ def _quaternion(path: Path, value, where: str) -> np.ndarray:
     q = np.array(numbers(path, value, where, 4))
     norm = float(np.linalg.norm(q))
     if norm < 1e-9:
-        raise LoaderError(f"{path}: {where}: expected a unit quaternion [w, x, y, z], got {value!r}")
+        raise LoaderError(f"{path}: {where}: expected a unit quaternion [w, x, y, z], got {shown(value)}")
     return q / norm
 
 

@@ -8,6 +8,7 @@ import viser
 
 from ..scene.drawing import Drawing
 from ..session.explorer import Explorer, Outcome
+from ..session.markup import no_html
 from ..session.offers import Offers
 from ..session.recording import Recording
 from ..session.settings import Settings
@@ -61,7 +62,10 @@ def on_user(handle: Any, react: Callable[[], None]) -> None:
 def assign(handle: Any, **values: Any) -> None:
     """Give ``handle`` each of ``values`` it does not hold already. viser sends nothing for a value
     equal to the one held either, but only after casting it by its type hints: a tenth of a
-    millisecond each, and a tab's controls are re-shown on every edit."""
+    millisecond each, and a tab's controls are re-shown on every edit. A markdown panel's content
+    is given with no HTML (``no_html``): viser would render it as is."""
     for name, value in values.items():
+        if name == "content" and isinstance(handle, viser.GuiMarkdownHandle):
+            value = no_html(value)
         if getattr(handle, name) != value:
             setattr(handle, name, value)

@@ -27,10 +27,11 @@ from ..session import export, worst
 from ..session.background import Runner, Task
 from ..session.calibration import CalibrationCheck
 from ..session.explorer import Outcome
+from ..session.markup import no_html
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
 from ..session.sequence import SequenceRun, run_sequence
 from . import confirm
-from .actions import TabActions
+from .actions import TabActions, assign
 from .plot import add_run_plots, run_data, send
 from .registry import Panel
 from .reports import jump_markdown, search_markdown, sequence_markdown, stale_markdown, worst_markdown
@@ -95,7 +96,7 @@ class ExplorePanel:
         with gui.add_folder("Dataset calibration", expand_by_default=False):
             self.check = gui.add_button("check the dataset's calibration", disabled=not self.calibration.usable,
                                         hint="the shipped transform against the dataset's own labels")
-            self.check_text = gui.add_markdown(self.calibration.text)
+            self.check_text = gui.add_markdown(no_html(self.calibration.text))
             self.flagged = gui.add_dropdown("flagged frame", ("(check first)",))
             self.go = gui.add_button("go to frame", hint="that frame and CAV, under the current settings")
         with gui.add_folder("Export"):
@@ -173,7 +174,7 @@ class ExplorePanel:
         if self.run is None or found == self.marked:
             return
         self.marked = found
-        self.summary.content = stale_markdown(found) + sequence_markdown(self.run)
+        assign(self.summary, content=stale_markdown(found) + sequence_markdown(self.run))
         for chart, title in ((self.ratios, RATIOS_TITLE), (self.errors, ERRORS_TITLE)):
             chart.title = f"{title} (other settings)" if found else title
         self.jump.hint = JUMP_HINT if not found else "the run used other settings: asks before setting them"
@@ -186,7 +187,8 @@ class ExplorePanel:
         rows = worst.rank(self.run.rows, metric)
         self.worst.options = tuple(worst.label(row, metric) for row in rows)
         self.worst.value = self.worst.options[0]
-        self.worst_table.content = stale_markdown(self.marked or []) + worst_markdown(rows, metric, self.findings)
+        table = worst_markdown(rows, metric, self.findings)
+        assign(self.worst_table, content=stale_markdown(self.marked or []) + table)
 
     def ask_jump(self, frame: int) -> None:
         """Show ``frame`` as the run computed it; when the controls have moved since, first ask,
@@ -209,7 +211,7 @@ class ExplorePanel:
     # dataset calibration
 
     def _checked(self) -> None:
-        self.check_text.content = self.calibration.text
+        assign(self.check_text, content=self.calibration.text)
         self.flagged.options = self.calibration.options()
         self.flagged.value = self.flagged.options[0]
 
@@ -231,7 +233,7 @@ class ExplorePanel:
 
     def _searched(self, result: SearchResult, cancelled: bool) -> None:
         self.searched = result
-        self.search_table.content = search_markdown(result)
+        assign(self.search_table, content=search_markdown(result))
         self.best.options = tuple(result.option(k) for k in range(min(10, len(result.candidates))))
         self.best.value = self.best.options[0]
         self.apply.disabled, self.apply.hint = False, APPLY_HINT
@@ -297,13 +299,13 @@ class ExplorePanel:
         self.inspected = self.shown = None
         self.tab.hide_click_label()
         self.inspector_view.show(inspector.empty())
-        self.inspector_text.content = "Click a box in the scene to see its context."
+        assign(self.inspector_text, content="Click a box in the scene to see its context.")
 
     def _inspect(self, outcome: Outcome, picture: Drawing, ego: int | None, cav: int | None) -> None:
         shown = inspector.inspect(outcome, picture, ego, cav)
         self.inspected, self.shown = (outcome.frame_index, ego, cav), shown
         self.inspector_view.show(shown.drawing())
-        self.inspector_text.content = shown.markdown
+        assign(self.inspector_text, content=shown.markdown)
 
     # export
 

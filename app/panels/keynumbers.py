@@ -21,6 +21,7 @@ from ..scene.colours import Palette, palette
 from ..scene.text import number
 from ..scene.words import error_words, times_better
 from ..session.explorer import Explorer, Outcome
+from ..session.markup import plain
 from ..session.settings import Settings
 
 ELEMENT_ID = "cbm-key-numbers"
@@ -92,7 +93,7 @@ def unusable_markdown(explorer: Explorer, settings: Settings, error: BaseExcepti
     frame = sequence[index]
     n_objects = len(frame.track_ids)
     n_vehicles = int(np.count_nonzero(is_vehicle(frame.categories)))
-    kinds = ", ".join(sorted({str(c) for c in frame.categories})) or "none"
+    kinds = ", ".join(plain(c) for c in sorted({str(c) for c in frame.categories})) or "none"
     protocol = settings.scenario.protocol
     if n_objects < 2:
         missing = (f"frame {index} has {n_objects} object(s): CBM matches objects between two agents' views and "

@@ -18,6 +18,7 @@ from cbm.methods import METHODS
 
 from ..scene.words import TRACKING, WORDS, label_of
 from ..session.coalesce import Later
+from ..session.markup import plain
 from ..session.offers import Offers
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
@@ -187,7 +188,7 @@ def _typed(c: MethodControls, tab: TabActions, key: str, name: str, value: str) 
     try:
         number = typed_number(value, current, key, name)
     except ValueError as error:
-        assign(c.typed[key], content=f"*{error}; the value in use is {current:g}.*", visible=True)
+        assign(c.typed[key], content=f"*{plain(error)}; the value in use is {current:g}.*", visible=True)
         return
     assign(c.typed[key], visible=False)
     tab.apply(lambda s: with_values(s, key, **{name: number}))

@@ -20,7 +20,7 @@ from cbm.methods import METHODS
 from ..session.baseline import Baseline
 from ..session.coalesce import Later
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
-from .actions import TabActions, on_user
+from .actions import TabActions, assign, on_user
 from .plot import add_timeline, send, timeline_data, timeline_series
 
 TIMELINE_DELAY = 0.2
@@ -73,13 +73,13 @@ class MetricsControls:
 
     def say(self, status: str) -> None:
         """Show ``status`` under the frame controls; an empty one hides the line."""
-        self.status.content = status
+        assign(self.status, content=status)
         self.status.visible = bool(status)
 
     def show(self, metrics_markdown: str, status: str = "") -> None:
         """One result's metrics, and what to say above them (the timeline follows, ``show_timeline``)."""
         self.say(status)
-        self.text.content = metrics_markdown
+        assign(self.text, content=metrics_markdown)
 
     def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int,
                       over_time: bool = False) -> None:

@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import viser
 
+from ..session.markup import plain
 from ..session.presets import Preset, PresetError, discover, in_use, save_preset, skipped_markdown
 from ..session.settings import Settings
 from .actions import TabActions, assign, on_user
@@ -57,9 +58,9 @@ class PresetControls:
             assign(self.preset, value=name)
             self.describe()
         if name is not None:
-            words = f"*In use: **{name}**.*"
+            words = f"*In use: **{plain(name)}**.*"
         elif self.last is not None:
-            words = f"*In use: your own settings, changed from **{self.last}**.*"
+            words = f"*In use: your own settings, changed from **{plain(self.last)}**.*"
         else:
             words = "*In use: your own settings (no preset).*"
         assign(self.using, content=words)
@@ -67,7 +68,7 @@ class PresetControls:
     def describe(self) -> None:
         """Show what the picked preset is for."""
         preset = self.presets.get(self.preset.value)
-        self.about.content = f"*{preset.description}*" if preset and preset.description else ""
+        assign(self.about, content=f"*{plain(preset.description)}*" if preset and preset.description else "")
 
 
 def build(gui: viser.GuiApi, presets: Mapping[str, Preset], problems: list[str]) -> PresetControls:

@@ -27,6 +27,7 @@ import tomli_w
 from evaluation.presets import PresetError, read_toml
 from presets import SHIPPED_DIR
 
+from .markup import plain
 from .settings import Settings, from_preset, to_preset
 
 ENV_VAR = "CBM_EXPLORER_PRESETS"
@@ -154,7 +155,7 @@ def skipped_markdown(problems: list[str]) -> str:
     """The Presets tab's list of skipped files and why ("" when none was)."""
     if not problems:
         return ""
-    return "**Preset files skipped:**\n\n" + "\n".join(f"- `{p[:300]}`" for p in problems)
+    return "**Preset files skipped:**\n\n" + "\n".join(f"- {plain(p[:300])}" for p in problems)
 
 
 MAX_STEM_BYTES = 200

@@ -11,7 +11,7 @@ import time
 
 import viser
 
-from ..panels.actions import TabActions
+from ..panels.actions import TabActions, assign
 from ..scene import layouts
 from ..session.explorer import Outcome
 from . import steps
@@ -96,7 +96,8 @@ class WalkthroughPanel:
             self._generation += 1
             self.active, self.step, self._facts = False, None, None
             self.nodes.hide()
-            self.title.content, self.text.content = IDLE_TITLE, IDLE
+            assign(self.title, content=IDLE_TITLE)
+            assign(self.text, content=IDLE)
             self._buttons()
             if self._camera is not None:
                 layouts.move_camera(self.tab.client, *self._camera)
@@ -136,8 +137,8 @@ class WalkthroughPanel:
         self.index = min(self.index, steps.count(self._facts) - 1)
         self.step = steps.build(self._facts, self.index)
         self.nodes.show(self.step)
-        self.title.content = f"**{self.step.title}**"
-        self.text.content = self.step.text
+        assign(self.title, content=f"**{self.step.title}**")
+        assign(self.text, content=self.step.text)
         self._buttons()
 
     def _buttons(self) -> None:

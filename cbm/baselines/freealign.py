@@ -81,7 +81,8 @@ def match_freealign(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarr
     t1 = perf_counter()
     T = weighted_procrustes(cav_boxes[pairs[:, 1], :2], ego_boxes[pairs[:, 0], :2]) if len(pairs) >= 2 else init
     t2 = perf_counter()
-    return make_result(ego_boxes, cav_boxes, pairs, T, init, {"subgraph": t1 - t0, "fit": t2 - t1, "total": t2 - t0})
+    return make_result(ego_boxes, cav_boxes, pairs, T, init, {"subgraph": t1 - t0, "fit": t2 - t1, "total": t2 - t0},
+                       layout=True)
 
 
 def nearest(boxes: np.ndarray, count: int) -> np.ndarray:

@@ -113,5 +113,75 @@ def test_a_track_nothing_confirms_is_lost_and_abstains_with_per_frame_cbms_answe
 def test_bad_time_and_tracking_settings_are_named():
     with pytest.raises(ValueError, match="time_s must be a finite number"):
         SequenceCalibrator().step(np.zeros((0, 7)), np.zeros((0, 7)), None, float("nan"))
-    with pytest.raises(ValueError, match="TrackingParams.chain must be an integer >= 2"):
+    with pytest.raises(ValueError, match="TrackingParams.chain must be an integer from 2 to 1000, got 1"):
         TrackingParams(chain=1)
+
+
+# --- issue 50, item 6 -----------------------------------------------------------------------------------------------
+
+EMPTY = np.zeros((0, 7))
+
+
+TIME = "time_s must be a finite number of seconds, got "
+
+
+@pytest.mark.parametrize("call, words", [
+    (lambda: SequenceCalibrator().step(EMPTY, EMPTY, None, None), TIME + "None"),
+    (lambda: SequenceCalibrator().step(EMPTY, EMPTY, None, "0.5"), TIME + "'0.5'"),
+    (lambda: SequenceCalibrator("fast"), "SequenceCalibrator's params must be a CBMParams, got 'fast'"),
+    (lambda: SequenceCalibrator(tracking={"chain": 3}), "SequenceCalibrator's tracking must be a TrackingParams"),
+    (lambda: SequenceCalibrator().step(EMPTY, EMPTY, None, 0.0, agent=np.array([1, 2])), "agent must be None, a"),
+    (lambda: SequenceCalibrator().step(EMPTY, EMPTY, None, 0.0, agent=float("nan")), "agent must be None, a string"),
+    (lambda: SequenceCalibrator().step(np.ones((3, 7)) * 1j, EMPTY, None, 0.0),
+     "ego_boxes must be an array of real numbers, got dtype complex128"),
+    (lambda: SequenceCalibrator().step(EMPTY, [["a"] * 7], None, 0.0), "cav_boxes must be an array of real numbers"),
+])
+def test_a_bad_argument_of_a_step_is_named(call, words):
+    with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)")):
+        call()
+
+
+@pytest.mark.parametrize("name", ["gate", "drift_m", "drift_deg", "drift_share", "lost_m", "lost_deg", "sure_margin",
+                                  "max_gap_s", "chain", "window", "lost_after", "reacquire_after"])
+def test_every_tracking_setting_has_an_upper_bound_named_in_its_message(name):
+    with pytest.raises(ValueError, match=f"TrackingParams.{name} must be (at most|an integer from 2 to) "):
+        TrackingParams(**{name: 10**300 if name in ("chain", "window", "lost_after", "reacquire_after") else 1e300})
+
+
+def test_numpy_numbers_are_numbers_and_are_kept_as_python_ones():
+    tracking = TrackingParams(chain=np.int64(5), gate=np.float32(3.5))
+    assert tracking == TrackingParams(chain=5, gate=3.5) and type(tracking.chain) is int
+    assert CBMParams(sigma2=np.float32(3)) == CBMParams(sigma2=3.0)
+    with pytest.raises(ValueError, match="CBMParams.sigma2 must be at most 10, got 300.0"):
+        CBMParams(sigma2=np.float32(300))
+    with pytest.raises(ValueError, match="TrackingParams.chain must be at most window"):
+        TrackingParams(chain=11, window=10)
+
+
+def test_the_persistence_keeps_at_most_window_measurements_over_any_sequence():
+    from cbm.track import Measurement, Persistence
+
+    persistence, rate = Persistence(10), np.array([0.25, 0.25, 3e-4])
+    chains = [persistence.add(Measurement(np.array([1.0, 2.0, 0.1]), np.eye(3) * 0.01, 0.1 * k, None), rate, 0.1, 3.5)
+              for k in range(1500)]
+    assert max(len(chain) for chain in chains) == 10 and len(chains[-1]) == 10
+    held = {id(m) for _, chain in persistence.kept for m in chain}
+    assert len(held) <= 19
+
+
+def test_a_stopped_step_run_again_answers_as_one_never_stopped():
+    from cbm.engine.threads import Cancelled, stoppable
+
+    trials = frames(30, drifting(12))
+    times = np.arange(12) * 0.1
+    times[8:] += 30.0
+    never = run(trials, SequenceCalibrator(CBMParams()), times)
+    calibrator = SequenceCalibrator(CBMParams())
+    run(trials[:8], calibrator, times[:8])
+    with pytest.raises(Cancelled), stoppable(lambda: True):
+        calibrator.step(trials[8].ego_boxes, trials[8].cav_boxes, trials[8].init, float(times[8]), agent="cav")
+    again = run(trials[8:], calibrator, times[8:])
+    assert never[8].track.event.startswith("reset: a gap")
+    assert [r.track.event for r in again] == [r.track.event for r in never[8:]]
+    for a, b in zip(again, never[8:]):
+        np.testing.assert_array_equal(a.transform, b.transform)

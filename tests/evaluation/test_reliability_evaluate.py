@@ -5,6 +5,7 @@ import os
 import signal
 import subprocess
 import sys
+import threading
 import time
 from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
@@ -174,11 +175,13 @@ def test_a_binary_file_given_as_a_csv_is_named_in_one_line(tmp_path, capsys):
 def test_stopping_the_pool_ends_its_manager_thread_before_the_process_may_exit():
     """The manager thread holds the pool's queues: were it still running when a stopped run exits,
     it could be cut between unlinking a semaphore and telling the resource tracker ("leaked semaphore")."""
+    threads, children = set(threading.enumerate()), set(multiprocessing.active_children())
     pool = ProcessPoolExecutor(max_workers=2, mp_context=multiprocessing.get_context("spawn"))
     for _ in range(3):
         pool.submit(time.sleep, 60)
-    wait_for(lambda: len(pool._processes or {}) == 2, 60, "the pool's two workers")
-    manager = pool._executor_manager_thread
-    processes = list(pool._processes.values())
-    stop_pool(pool)
-    assert not manager.is_alive() and not any(process.is_alive() for process in processes)
+    processes = [p for p in multiprocessing.active_children() if p not in children]
+    wait_for(lambda: all(p.pid for p in processes) and len(processes) == 2, 60, "the pool's two workers")
+    started = [thread for thread in threading.enumerate() if thread not in threads]
+    assert started, "the pool's manager thread"
+    stop_pool(pool, processes)
+    assert not any(thread.is_alive() for thread in started) and not any(p.is_alive() for p in processes)

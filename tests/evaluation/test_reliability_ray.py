@@ -3,6 +3,7 @@ listens is refused in one line, the port range is checked, and a stop signal dur
 instance's start-up ends the run with one line and no Ray process left behind."""
 from __future__ import annotations
 
+import contextlib
 import os
 import shutil
 import signal
@@ -18,8 +19,10 @@ from pathlib import Path
 
 import pytest
 
+from evaluation import executors
 from evaluation.cli import main
 from evaluation.executors import ExecutorError, check_reachable
+from evaluation.stop import Stopped
 from support.processes import alive, descendants, wait_for
 
 REPO = Path(__file__).resolve().parents[2]
@@ -141,4 +144,111 @@ def test_a_stop_signal_during_ray_local_start_up_leaves_no_process(signum: int) 
         assert took < 10.0, f"stopped after {took:.1f} s: it waited for Ray's start-up to finish"
         wait_for(lambda: not ray_processes(temporary), 10, "Ray's processes to be gone")
     finally:
+        shutil.rmtree(temporary, ignore_errors=True)
+
+
+def running_a_task(pid: int) -> bool:
+    """Whether a Ray worker descended from ``pid`` runs a task (Ray names such a worker ``ray::<task>``)."""
+    names = []
+    for child in descendants(pid):
+        with contextlib.suppress(OSError):
+            names.append(Path(f"/proc/{child}/cmdline").read_bytes())
+    return any(name.startswith(b"ray::") and not name.startswith(b"ray::IDLE") for name in names)
+
+
+@pytest.mark.ray
+@pytest.mark.parametrize("signum, group", [(signal.SIGTERM, False), (signal.SIGINT, True)] * 2,
+                         ids=["SIGTERM", "Ctrl-C", "SIGTERM again", "Ctrl-C again"])
+def test_a_stop_signal_while_ray_runs_tasks_is_one_line_and_leaves_no_process(signum: int, group: bool) -> None:
+    """Issue 50, item 7 (was: status 1 and Ray's C++ crash report in 5 of 16 tries, its dashboard
+    and runtime-env agents left running)."""
+    temporary = tempfile.mkdtemp(prefix="r50", dir="/tmp")
+    try:
+        process = subprocess.Popen([sys.executable, "evaluate.py", "--dataset", "synthetic:100", "--workers", "2",
+                                    "--ray", "local", "--out", str(Path(temporary) / "out")], cwd=REPO,
+                                   stderr=subprocess.PIPE, text=True, start_new_session=True,
+                                   env={**os.environ, "RAY_TMPDIR": temporary})
+        wait_for(lambda: running_a_task(process.pid) or process.poll() is not None, 240, "a Ray task to run")
+        assert process.poll() is None, process.stderr.read()
+        os.killpg(process.pid, signum) if group else process.send_signal(signum)
+        stderr = process.communicate(timeout=120)[1]
+        assert process.returncode == 128 + signum, stderr
+        assert stderr == f"evaluate.py: stopped by {signal.Signals(signum).name}; nothing written\n"
+        wait_for(lambda: not ray_processes(temporary), 10, "Ray's processes to be gone")
+    finally:
+        for pid in ray_processes(temporary):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
+        shutil.rmtree(temporary, ignore_errors=True)
+
+
+class FakeRay:
+    """Ray's calls that ``evaluation.executors`` makes, recorded; ``wait`` is where a stop lands."""
+
+    def __init__(self) -> None:
+        self.calls: list[str] = []
+        self.initialized = False
+
+    def init(self, **_) -> None:
+        self.calls.append("init")
+        self.initialized = True
+
+    def is_initialized(self) -> bool:
+        return self.initialized
+
+    def shutdown(self) -> None:
+        self.calls.append("shutdown")
+
+    def remote(self, **_):
+        return lambda fn: type("Remote", (), {"remote": staticmethod(lambda *args: object())})
+
+    def put(self, value):
+        return value
+
+    def wait(self, pending, num_returns, timeout=None):
+        """As Ray answers our handler's ``Stopped`` raised where its compiled code checks for signals."""
+        try:
+            raise Stopped(signal.SIGTERM)
+        except Stopped as stop:
+            raise SystemError("<cyfunction CoreWorker.wait> returned a result with an exception set") from stop
+
+    def cancel(self, ref, force=False) -> None:
+        self.calls.append("cancel")
+
+
+def test_a_stop_makes_no_ray_call_the_commands_end_kills_the_instance(monkeypatch) -> None:
+    """Issue 50, item 7: a stop inside ``ray.wait`` is raised as the stop (Ray turns it into a
+    ``SystemError``: status 1 and a traceback), and neither a forced cancel (whose task may then
+    complete: Ray's "Tried to complete task that was not pending" crash) nor ``ray.shutdown``
+    (racing the stop's deadline, and ending the raylet before its agents) is called; ``exit_now``
+    kills the instance."""
+    fake = FakeRay()
+    monkeypatch.setitem(sys.modules, "ray", fake)
+    with pytest.raises(Stopped), executors.ray_session("local", workers=2):
+        executors.run_tasks(pow, [(2, 3), (2, 4)], ray="local")
+    assert fake.calls == ["init"]
+    fake.initialized = False
+    with executors.ray_session("local", workers=2):
+        pass
+    assert fake.calls == ["init", "init", "shutdown"]
+
+
+@pytest.mark.ray
+def test_ray_leaves_pythons_handler_of_sigterm_in_place(tmp_path) -> None:
+    """Ray's core worker installed a C++ handler of SIGTERM in the middle of ``ray.init``: a stop
+    then printed Ray's crash report ("*** SIGTERM received ...") and could end the process with
+    status -15. Here the signal comes right after ``ray.init``, before anything puts a handler back."""
+    script = ("import os, signal, time\nfrom evaluation.executors import import_ray\nray = import_ray()\n"
+              "ray.init(num_cpus=1, include_dashboard=False, log_to_driver=False, logging_level='ERROR')\n"
+              "os.kill(os.getpid(), signal.SIGTERM)\ntime.sleep(30)\n")
+    temporary = tempfile.mkdtemp(prefix="r50", dir="/tmp")
+    try:
+        done = subprocess.run([sys.executable, "-c", script], cwd=REPO, capture_output=True, text=True, timeout=240,
+                              env={**os.environ, "RAY_TMPDIR": temporary, "PYTHONPATH": str(REPO)})
+        assert "SIGTERM received" not in done.stderr, done.stderr
+        assert done.returncode == signal.SIGTERM, done.stderr
+    finally:
+        for pid in ray_processes(temporary):
+            with contextlib.suppress(OSError):
+                os.kill(pid, signal.SIGKILL)
         shutil.rmtree(temporary, ignore_errors=True)

@@ -1,3 +1,4 @@
+import json
 import shutil
 
 import numpy as np
@@ -132,3 +133,23 @@ def test_a_folder_of_several_logs_asks_for_one(tmp_path, copy_fixture):
     shutil.copytree(log, tmp_path / "second")
     with pytest.raises(loaders.LoaderError, match="holds 2 Argoverse 2 logs"):
         loaders.open(tmp_path)
+
+
+def test_a_map_with_none_of_its_sections_is_refused_not_empty(copy_fixture):
+    """Issue 50, item 9: the shipped map with its three sections renamed (was: an empty map, no word)."""
+    log = copy_fixture("argoverse2/adcf7d18-0510-35b0-a2fa-b4cea13a6d76")
+    map_file = next((log / "map").glob("*.json"))
+    data = json.loads(map_file.read_text())
+    map_file.write_text(json.dumps({f"{key}_v3": value for key, value in data.items()}))
+    with pytest.raises(loaders.LoaderError, match=r"none of lane_segments, pedestrian_crossings, drivable_areas "
+                                                  r"\(keys: \['pedestrian_crossings_v3', .*\]\): not an Argoverse 2"):
+        loaders.open(log)
+
+
+def test_a_map_key_beside_its_sections_is_named_in_a_warning(copy_fixture):
+    log = copy_fixture("argoverse2/adcf7d18-0510-35b0-a2fa-b4cea13a6d76")
+    map_file = next((log / "map").glob("*.json"))
+    map_file.write_text(json.dumps({**json.loads(map_file.read_text()), "stop_lines": []}))
+    with pytest.warns(UserWarning, match=r"key\(s\) \['stop_lines'\] not read"):
+        seq = loaders.open(log)
+    assert seq.map is not None and len(seq.map.polylines) > 0
