@@ -7,17 +7,21 @@ own boxes, frame after frame, tell which objects move and how fast (``EgoTracks`
 1. the ego's motion between two frames is the robust rigid fit (``cbm.estimate.robust_fit``) of
    its boxes to the same boxes a frame before, paired by the gated assignment under the motion of
    the frame before (most objects stand still: the moving ones are its outliers);
-2. a box's velocity is the least-squares slope of its positions over the last ``WINDOW`` frames,
+2. a box's velocity is the least-squares slope of its positions over the ``WINDOW`` frames before,
    each carried into the current frame by the ego's motions since (one frame's detection noise
-   over one frame period would swamp it).
+   over one frame period would swamp it; the frame's own would correlate with its residual).
 
 Then a matched pair's residual ``r = p_ego - T p_cav`` is ``v d`` plus noise, so the message's age
-is the least-squares slope of the residuals on the velocities (``message_age``), pooled over
-frames by a weighted median (``AgeEstimate``), and the pose is refitted with each ego box moved
-back by ``v d`` (``compensated_fit``): moving objects no longer pull it.
+is the least-squares slope of the residuals on the velocities (``message_age``). Pooled over
+frames by a weighted median (``AgeEstimate``) it is the typical age; a frame's own slope, as sure as
+its moving pairs make it, moves it towards the frame's age, which jitters with the network
+(``AgeEstimate.of_frame``). The pose is then refitted with each ego box moved back by ``v d``
+(``compensated``): moving objects no longer pull it.
 """
 from __future__ import annotations
 
+import copy
+import dataclasses
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -25,10 +29,10 @@ import numpy as np
 
 from . import se2
 from .engine.assignment import gated_assignment
-from .estimate import robust_fit
-from .result import Fit
+from .estimate import robust_fit, weighted_procrustes
+from .result import MatchResult
 
-WINDOW = 10
+WINDOW = 11
 """Frames whose positions give a box its velocity (1 s at 10 Hz: 0.3 m detection noise leaves
 about 0.3 m/s of it)."""
 LEAST_SPAN_S = 0.25
@@ -45,6 +49,15 @@ LEAST_WEIGHT = 200.0
 """Least pooled sum of squared speeds (m^2/s^2) to tell the age: two cars at 10 m/s for a frame."""
 MOST_AGE_S = 1.0
 """Seconds: the oldest message the estimate believes (an older one reads as no estimate)."""
+AGE_ROUNDS = 4
+"""Rounds of the pose and the age fitted in turn (``frame_age``): the age moves by less than a
+millisecond after the third on the shipped log."""
+LEAST_PAIRS = 3
+"""Fewest pairs of a frame whose residuals count towards the age."""
+MOST_ERROR_S = 0.03
+"""Seconds: the largest standard error of the pooled age that still tells it."""
+LEAST_JITTER_S = 0.005
+"""Seconds: the least jitter of the messages' age assumed (a frame's slope never counts alone)."""
 
 
 @dataclass
@@ -62,7 +75,8 @@ class EgoTracks:
 
     def step(self, ego: np.ndarray, time_s: float) -> np.ndarray:
         """(N, 2) metres per second of each of ``ego`` (boxes of the frame at ``time_s``) in the
-        ego's frame, NaN where not followed for ``LEAST_SPAN_S``; the frame joins the tracks."""
+        ego's frame, from the frames before it (its own detection's noise would correlate with its
+        residuals), NaN where not followed for ``LEAST_SPAN_S``; the frame joins the tracks."""
         ego = np.asarray(ego, dtype=float)
         current = ego[:, :2][None]
         if self.boxes is None or not self.times or time_s <= self.times[-1]:
@@ -77,7 +91,7 @@ class EgoTracks:
             self.positions = np.concatenate([carried, current])[-WINDOW:]
         self.boxes = ego
         self.times.append(float(time_s))
-        return velocities(np.asarray(self.times), self.positions)
+        return velocities(np.asarray(self.times)[:-1], self.positions[:-1])
 
 
 def ego_motion(previous: np.ndarray, current: np.ndarray, predicted: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -111,15 +125,19 @@ def velocities(times: np.ndarray, positions: np.ndarray) -> np.ndarray:
     return slope
 
 
-def message_age(residuals: np.ndarray, velocity: np.ndarray) -> tuple[float, float]:
-    """(d, weight): the least-squares age of a frame's message, ``sum v.r / sum |v|^2`` over the
-    pairs whose speed is at least ``MOVING``, and the weight ``sum |v|^2`` it stands on (0: none)."""
+def message_age(residuals: np.ndarray, velocity: np.ndarray) -> tuple[float, float, float]:
+    """(d, weight, noise): the least-squares age of a frame's message, ``sum v.r / sum |v|^2`` over
+    the pairs whose speed is at least ``MOVING``, the weight ``sum |v|^2`` it stands on (0: none),
+    and the residuals' variance per axis among the pairs standing still (m^2; NaN with none), so
+    that the age's own variance is ``noise / weight``."""
     speed2 = np.einsum("ij,ij->i", velocity, velocity)
     moving = np.isfinite(speed2) & (speed2 >= MOVING ** 2)
+    still = np.isfinite(speed2) & ~moving
+    noise = float(np.mean(residuals[still] ** 2)) if still.any() else float("nan")
     weight = float(speed2[moving].sum())
     if weight == 0.0:
-        return float("nan"), 0.0
-    return float(np.einsum("ij,ij->", velocity[moving], residuals[moving]) / weight), weight
+        return float("nan"), 0.0, noise
+    return float(np.einsum("ij,ij->", velocity[moving], residuals[moving]) / weight), weight, noise
 
 
 @dataclass
@@ -129,30 +147,92 @@ class AgeEstimate:
 
     found: deque = field(default_factory=lambda: deque(maxlen=AGE_FRAMES))
 
-    def add(self, age: float, weight: float) -> None:
-        if weight > 0.0 and np.isfinite(age):
-            self.found.append((age, weight))
+    def add(self, age: float, weight: float, noise: float = float("nan")) -> None:
+        if weight > 0.0 and np.isfinite(age) and np.isfinite(noise):
+            self.found.append((age, weight, noise))
 
     def clear(self) -> None:
         self.found.clear()
 
     @property
     def seconds(self) -> float | None:
-        """The pooled age, None while the frames' weights sum to less than ``LEAST_WEIGHT``."""
+        """The pooled age, None while the frames' weights sum to less than ``LEAST_WEIGHT`` or its
+        standard error, ``sqrt(mean noise / sum weight)``, exceeds ``MOST_ERROR_S``."""
         if not self.found:
             return None
-        ages, weights = np.array(self.found).T
-        if weights.sum() < LEAST_WEIGHT:
+        ages, weights, noises = np.array(self.found).T
+        if weights.sum() < LEAST_WEIGHT or np.mean(noises) / weights.sum() > MOST_ERROR_S ** 2:
             return None
         order = np.argsort(ages)
         middle = np.searchsorted(np.cumsum(weights[order]), weights.sum() / 2.0)
         age = float(ages[order][middle])
         return age if 0.0 <= age <= MOST_AGE_S else None
 
+    def of_frame(self, age: float, weight: float, noise: float) -> float | None:
+        """The age of one frame's message: the pooled age (``seconds``) and the frame's own slope
+        ``age`` weighed by their variances -- the frame's ``noise / weight``, the pooled one's the
+        spread of the frames' slopes about it less their own noise (the network's jitter)."""
+        pooled = self.seconds
+        if pooled is None or weight == 0.0 or not np.isfinite(noise):
+            return pooled
+        ages, weights, _ = np.array(self.found).T
+        spread = float(np.average((ages - pooled) ** 2, weights=weights))
+        jitter = max(spread - noise * len(ages) / weights.sum(), LEAST_JITTER_S ** 2)
+        own = noise / weight
+        blended = (age / own + pooled / jitter) / (1.0 / own + 1.0 / jitter)
+        return float(min(max(blended, 0.0), MOST_AGE_S))
 
-def compensated_fit(ego_xy: np.ndarray, cav_xy: np.ndarray, velocity: np.ndarray, age: float,
-                    nu_floor: float) -> Fit:
-    """The robust fit of CAV centres (its own frame) to the ego's, each ego centre moved back by
-    its object's motion over the message's ``age`` (no velocity: it stands still)."""
+
+def frame_age(transform: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray,
+              velocity: np.ndarray) -> tuple[float, float, float]:
+    """``message_age`` of one frame's pairs, the pose and the age fitted together: a pose fitted
+    to every pair has taken up part of the moving pairs' offsets, so the age is read again from the
+    residuals of the pose ``compensated`` by it, ``AGE_ROUNDS`` times (least squares in both)."""
+    found = message_age(ego_xy - se2.apply_points(transform, cav_xy), velocity)
+    for _ in range(AGE_ROUNDS):
+        if found[1] == 0.0:
+            break
+        moved = compensated(transform, ego_xy, cav_xy, velocity, found[0])
+        found = message_age(ego_xy - se2.apply_points(moved, cav_xy), velocity)
+    return found
+
+
+def compensated(transform: np.ndarray, ego_xy: np.ndarray, cav_xy: np.ndarray, velocity: np.ndarray,
+                age: float) -> np.ndarray:
+    """``transform`` (CAV->ego, fitted to the pairs ``cav_xy`` -> ``ego_xy``) moved as much as the
+    pairs' least-squares fit moves once each ego centre is moved back by its object's motion over
+    the message's ``age`` (no velocity: it stands still); ``transform`` itself at age 0."""
+    if age == 0.0:
+        return transform
     back = np.where(np.isfinite(velocity), velocity, 0.0) * age
-    return robust_fit(cav_xy, ego_xy - back, nu_floor)
+    shift = weighted_procrustes(cav_xy, ego_xy - back) @ se2.inverse(weighted_procrustes(cav_xy, ego_xy))
+    return shift @ transform
+
+
+@dataclass
+class LateMessages:
+    """The message's age as CBM over time follows it: the ego's tracks, the pooled age."""
+
+    tracks: EgoTracks = field(default_factory=EgoTracks)
+    age: AgeEstimate = field(default_factory=AgeEstimate)
+
+    def copy(self) -> LateMessages:
+        return copy.deepcopy(self)
+
+    def corrected(self, ego: np.ndarray, cav: np.ndarray, result: MatchResult, time_s: float) -> MatchResult:
+        """``result`` (CBM's on the frame at ``time_s``) with the message's age (``latency_s``, None
+        while it cannot tell) and, once known, its pose refitted with the ego's boxes moved back by
+        their objects' motion over it (``compensated``); the ego's boxes join the tracks."""
+        velocity = self.tracks.step(ego, time_s)
+        if not result.estimated or len(result.pairs) < LEAST_PAIRS:
+            return dataclasses.replace(result, latency_s=self.age.seconds)
+        e, c = result.pairs[:, 0], result.pairs[:, 1]
+        frame = frame_age(result.transform, ego[e, :2], cav[c, :2], velocity[e])
+        self.age.add(*frame)
+        age = self.age.of_frame(*frame)
+        if age is None:
+            return dataclasses.replace(result, latency_s=None)
+        transform = compensated(result.transform, ego[e, :2], cav[c, :2], velocity[e], age)
+        back = np.where(np.isfinite(velocity[e]), velocity[e], 0.0) * age
+        residuals = np.hypot(*(ego[e, :2] - back - se2.apply_points(transform, cav[c, :2])).T)
+        return dataclasses.replace(result, transform=transform, residuals=residuals, latency_s=age)

@@ -95,6 +95,9 @@ class MatchResult:
     unless another anchor's hypothesis won the verification."""
     track: TrackNote | None = None
     """How CBM over time reached this answer (``cbm.SequenceCalibrator``); None for a single frame."""
+    latency_s: float | None = None
+    """Seconds: how old CBM over time finds the CAV's message (``cbm.motion``: moving objects' offsets
+    against their speeds); None where it cannot tell (a single frame, nothing moving yet)."""
     explanation: Any = field(default=None, repr=False, compare=False)
     """``cbm.Explanation`` of this very run (its sets, fit and selection: why each anchor scored as
     it did), when ``cbm.match`` was asked to ``explain``; None otherwise."""

@@ -22,7 +22,10 @@ Each frame (the model and the filter: ``cbm.track``; equations: docs/algorithm.m
    ``lost_after`` frames in a row brought it nothing: that frame answers per-frame CBM, never the
    stale prediction (abstained where CBM alone is not sure), and watching starts again.
 
-Time going backwards, a gap of more than ``max_gap_s`` or another ``agent`` starts it over.
+Every frame, before its measurement is taken, the CAV's message's age is followed and moving
+objects are moved back by it (``cbm.motion``): a late message's moving pairs pull the pose no more,
+and ``MatchResult.latency_s`` says how old the messages are. Time going backwards, a gap of more
+than ``max_gap_s`` or another ``agent`` starts it over.
 """
 from __future__ import annotations
 
@@ -38,6 +41,7 @@ from . import se2
 from .engine.assignment import gated_assignment
 from .engine.fitting import WELSCH_EFFICIENT_SCALE
 from .inputs import check_at_most, check_integer, check_positive, is_number, shown
+from .motion import LateMessages
 from .params import CBMParams
 from .pipeline import checked_inputs, match
 from .result import MatchResult, TrackNote
@@ -117,6 +121,7 @@ class SequenceCalibrator:
         self.misses = 0
         self.last_time: float | None = None
         self.agent: object = None
+        self.late = LateMessages()
 
     def step(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None, time_s: float,
              agent: object = None) -> MatchResult:
@@ -139,10 +144,10 @@ class SequenceCalibrator:
     def _state(self) -> tuple:
         """What a step changes, copied (a track is updated in place)."""
         return (copy.copy(self.track), self.persistence.copy(), list(self.rejected), self.misses, self.last_time,
-                self.agent)
+                self.agent, self.late.copy())
 
     def _restore(self, state: tuple) -> None:
-        self.track, self.persistence, self.rejected, self.misses, self.last_time, self.agent = state
+        self.track, self.persistence, self.rejected, self.misses, self.last_time, self.agent, self.late = state
 
     def _step(self, ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams, time_s: float,
               agent: object) -> MatchResult:
@@ -153,6 +158,7 @@ class SequenceCalibrator:
             result = match(ego, cav, init, params)
         else:
             result = match(ego, cav, init @ as_matrix(prior[0]), self._tightened(params, prior[1], cav))
+        result = self.late.corrected(ego, cav, result, time_s)
         found = measurement(result, init, cav, self.floor, time_s)
         chain = self.persistence.add(found, self.rate, self.tracking.drift_share, self.tracking.gate)
         self.last_time = time_s

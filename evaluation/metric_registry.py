@@ -167,6 +167,16 @@ class Margin(TrialMetric):
         return m.margin
 
 
+class LatencyError(TrialMetric):
+    """latency error = |d_told - d| (ms): how far the age of the CAV's message a method tells (CBM over
+    time) lies from its true age d (a late message, ``evaluation.delay``); NaN where it tells none."""
+
+    key, label, unit, better = "latency_error", "latency error", MILLISECONDS, "lower"
+
+    def of(self, m: TrialMetrics) -> float:
+        return m.latency_error_s
+
+
 class PooledPrecision(RunMetric):
     """precision = sum |M_hat n M| / sum |M_hat| over all trials: micro-averaged, every output pair
     weighs the same whatever its trial (paper Table I); NaN when nothing was matched."""
@@ -334,5 +344,6 @@ for _metric in (RTE(), RRE(), Precision(), Recall(), AverageDistance(), Margin()
                 Median(RTE(), headline=True), Mean(RRE()), Mean(RTE()),
                 *(m for t in SUCCESS_LEVELS for m in (SuccessRate(t), MeanOfSuccesses(RRE(), t),
                                                       MeanOfSuccesses(RTE(), t))),
-                AbstainRate(), ReturnedSuccess(), Median(Margin()), MedianRuntime()):
+                AbstainRate(), ReturnedSuccess(), Median(Margin()), MedianRuntime(), LatencyError(),
+                Median(LatencyError())):
     register(_metric)

@@ -94,6 +94,9 @@ class TrialMetrics:
     abstained: bool = False
     """The method said its pose has not enough evidence (``cbm.MatchResult.abstained``); its pose
     is still scored, and counted apart (``evaluation.metric_registry.AbstainRate``)."""
+    latency_error_s: float = math.nan
+    """Seconds between the message's age the method tells (``cbm.MatchResult.latency_s``) and the
+    trial's (``Trial.message_age_s``); NaN where it tells none."""
 
 
 def evaluate(result: Any, trial: Trial) -> TrialMetrics:
@@ -120,7 +123,12 @@ def evaluate(result: Any, trial: Trial) -> TrialMetrics:
         margin=float(getattr(result, "margin", math.nan)),
         estimated=estimated,
         abstained=bool(getattr(result, "abstained", False)),
+        latency_error_s=_latency_error(getattr(result, "latency_s", None), trial.message_age_s),
     )
+
+
+def _latency_error(told: float | None, age: float) -> float:
+    return math.nan if told is None else abs(float(told) - float(age))
 
 
 def is_success(m: TrialMetrics, *, rte_max: float = 1.0, rre_max: float = 1.0) -> bool:
