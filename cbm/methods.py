@@ -34,7 +34,8 @@ from .pipeline import match
 from .posegraph import match_graph
 from .prior_free import PRIOR_FREE, match_without_prior
 from .result import MatchResult
-from .sequence import SequenceCalibrator, match_first_step
+from .sequence import SequenceCalibrator, TrackingParams, match_first_step
+from .smooth import Smoother
 
 
 @dataclass(frozen=True)
@@ -66,6 +67,9 @@ class Method:
     over_time: bool = False
     """Calibrates a sequence frame after frame (``calibrator``): its frames run in time order, per
     CAV; called on one frame alone it is that frame's first step."""
+    offline: bool = False
+    """Over time, and answers only once every frame is in (``cbm.smooth``: the frames after a frame
+    count too): a whole recording's method, for runs over every frame."""
 
     @property
     def params_key(self) -> str:
@@ -94,11 +98,12 @@ class Method:
             raise TypeError(f"params of {self.name} must be {self.params.__name__}, got {type(params).__name__}")
         return dataclasses.replace(params, **self.forced) if self.forced else params
 
-    def calibrator(self, params: Any = None) -> SequenceCalibrator:
-        """A fresh calibrator over time with ``params`` (``over_time`` methods only)."""
+    def calibrator(self, params: Any = None, tracking: TrackingParams | None = None) -> SequenceCalibrator | Smoother:
+        """A fresh calibrator over time with ``params`` and ``tracking`` (``over_time`` methods only);
+        an offline method's is a ``cbm.smooth.Smoother``, whose ``smoothed()`` answers at the end."""
         if not self.over_time:
             raise ValueError(f"{self.name} calibrates every frame alone; it has no calibrator over time")
-        return SequenceCalibrator(self.resolved(params))
+        return (Smoother if self.offline else SequenceCalibrator)(self.resolved(params), tracking)
 
     def __call__(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, params: Any = None, *,
                  labels: tuple[np.ndarray, np.ndarray] | None = None,
@@ -132,6 +137,8 @@ METHODS: dict[str, Method] = {m.name: m for m in (
            requires=CBM_REQUIRES, takes_peers=True),
     Method("cbm-time", "CBM over time", CBMParams, match_first_step, shares="cbm", requires=CBM_REQUIRES,
            over_time=True),
+    Method("cbm-smooth", "CBM over a whole recording (smoothed)", CBMParams, match_first_step, shares="cbm",
+           requires=CBM_REQUIRES, over_time=True, offline=True),
     Method("cbm-no-prior", "CBM without a prior", CBMParams, match_without_prior, forced=PRIOR_FREE, shares="cbm",
            requires=CBM_REQUIRES),
     Method("icp", "ICP", ICPParams, match_icp),

@@ -32,8 +32,10 @@ class TrackNote:
     event: str
     """``per frame`` (the error does not persist: per-frame CBM's answer), ``started``,
     ``accepted`` (the frame's measurement joined the track), ``rejected`` (it disagreed: the
-    prediction stands), ``no measurement``, ``re-acquired`` (after a real jump), ``lost`` (per-frame
-    CBM's answer, abstained), or ``reset: ...`` (time went backwards, a gap, another CAV)."""
+    prediction stands), ``no measurement``, ``re-acquired`` (after a real jump), ``sure, not yet
+    confirmed`` (CBM was sure of a measurement the settled track rejected: the frame answers it, the
+    track waits for the next frame to agree), ``lost`` (per-frame CBM's answer, abstained), or
+    ``reset: ...`` (time went backwards, a gap, another CAV)."""
     persists: bool
     """The error was seen to persist from frame to frame (else every frame stands alone)."""
     since_s: float
@@ -46,6 +48,9 @@ class TrackNote:
     """(3, 3) the frame's own measurement (CBM's answer), None when CBM found too few pairs."""
     answer: np.ndarray
     """(3, 3) the transform answered."""
+    covariance: np.ndarray | None = None
+    """(3, 3) covariance of the answer's pose error (x, y in m^2, yaw in rad^2): the track's, or the
+    frame's own measurement's; None without either (``cbm.smooth`` weighs answers by it)."""
 
 
 @dataclass(frozen=True)

@@ -14,13 +14,16 @@ Each frame (the model and the filter: ``cbm.track``; equations: docs/algorithm.m
    limit as tight as the prediction allows: pairs that persist keep matching, coincidences far
    from the prediction are turned away;
 3. **gate** the frame's measurement against the prediction: accepted, it joins the track and the
-   answer pools it with the frames before; one CBM stands by firmly (``sure_margin``) moves the
-   track onto itself (the track lagged behind a fast drift); any other is rejected, and the
-   prediction is the answer;
-4. **re-acquire** also when ``reacquire_after`` rejected measurements in a row agree with one
-   another (a real jump), and call the track **lost** when its prediction grows too uncertain or
-   ``lost_after`` frames in a row brought it nothing: that frame answers per-frame CBM, never the
-   stale prediction (abstained where CBM alone is not sure), and watching starts again.
+   answer pools it with the frames before; while the track is young, one CBM stands by firmly
+   (``sure_margin``) moves the track onto itself (the track lagged behind a fast drift); any other
+   is rejected, and the prediction, with its uncertainty, is the answer: through stretches where
+   single frames are thin, the track holds;
+4. **re-acquire** when ``reacquire_after`` rejected measurements in a row agree with one another
+   (a real jump), or two when the first was sure: a wrong anchor can be sure too, so one frame
+   never moves a settled track (the sure frame answers its own measurement meanwhile); and call
+   the track **lost** when its prediction grows too uncertain or ``lost_after`` frames in a row
+   brought a measurement, not abstained, that it rejected: that frame answers per-frame CBM, never
+   the stale prediction (abstained where CBM alone is not sure), and watching starts again.
 
 Every frame, before its measurement is taken, the CAV's message's age is followed and moving
 objects are moved back by it (``cbm.motion``): a late message's moving pairs pull the pose no more,
@@ -75,7 +78,8 @@ class TrackingParams:
     lost_deg: float = 1.5
     """Degrees. The same for the yaw."""
     lost_after: int = 6
-    """Frames in a row without an accepted measurement after which the track is lost."""
+    """Frames in a row whose measurement (not abstained) the track rejected, after which it is lost;
+    frames with none, or an abstained one, count nothing (the prediction stands)."""
     reacquire_after: int = 3
     """Rejected measurements in a row, agreeing with one another, after which the track jumps to them."""
     sure_margin: float = 16.0
@@ -189,7 +193,7 @@ class SequenceCalibrator:
 
     def _lost(self, time_s: float) -> np.ndarray | None:
         """The track's last prediction (as a pose error) when it is lost at ``time_s`` -- too
-        uncertain, or ``lost_after`` frames without an accepted measurement -- and then dropped; else None."""
+        uncertain, or ``lost_after`` rejected measurements in a row -- and then dropped; else None."""
         if self.track is None:
             return None
         g, P = self.track.predicted(time_s)
@@ -238,30 +242,46 @@ class SequenceCalibrator:
             answer = self.track.update(found, self.rate)
             self.rejected, self.misses = [], 0
             event = event or "accepted"
-        elif found is not None and (self._sure(found) or self._jumped(found)):
-            self.track = self.track.restarted(found) if self._sure(found) else Track.started(self.rejected, self.rate)
+        elif found is not None and self._sure(found) and not self._settled():
+            self.track = self.track.restarted(found)
             answer = self.track.g
             self.rejected, self.misses = [], 0
             event = event or "re-acquired"
+        elif found is not None and self._jumped(found):
+            self.track = Track.started(self.rejected, self.rate)
+            answer = self.track.g
+            self.rejected, self.misses = [], 0
+            event = event or "re-acquired"
+        elif found is not None and self._sure(found):
+            answer = found.g
+            event = event or "sure, not yet confirmed"
         else:
-            self.misses += 1
+            self.misses += found is not None and not found.result.abstained
             event = event or ("rejected" if found is not None else "no measurement")
-        return self._answer(ego, cav, init, result, init @ as_matrix(answer), found, event, predicted)
+        spread = self.track.predicted(time_s)[1] + np.diag(self.track.W)
+        return self._answer(ego, cav, init, result, init @ as_matrix(answer), found, event, predicted, spread)
 
     def _sure(self, found: Measurement) -> bool:
         """Whether CBM stands firmly by the measurement: its answer explains the scene at least
         ``sure_margin`` (log-likelihood) better than any other pose."""
         return not found.result.abstained and found.result.evidence_margin >= self.tracking.sure_margin
 
+    def _settled(self) -> bool:
+        """Whether the track has pooled a chain's worth of measurements: then one frame, however
+        sure, cannot move it (a wrong anchor can be sure too)."""
+        return self.track is not None and self.track.pooled >= self.tracking.chain
+
     def _jumped(self, found: Measurement) -> bool:
         """Whether ``found`` and the rejected measurements before it agree with one another: the
-        error jumped (``reacquire_after`` of them in a row)."""
+        error jumped (``reacquire_after`` of them in a row; two, the first sure, ``sure_margin``)."""
         t = self.tracking
         self.rejected = [m for m in self.rejected if agree(found, m, self.rate, t.drift_share, t.gate)] + [found]
-        return len(self.rejected) >= t.reacquire_after
+        needed = 2 if any(self._sure(m) for m in self.rejected[:-1]) else t.reacquire_after
+        return len(self.rejected) >= needed
 
     def _answer(self, ego: np.ndarray, cav: np.ndarray, init: np.ndarray, result: MatchResult,
-                transform: np.ndarray, found: Measurement | None, event: str, predicted: np.ndarray) -> MatchResult:
+                transform: np.ndarray, found: Measurement | None, event: str, predicted: np.ndarray,
+                spread: np.ndarray) -> MatchResult:
         """``result`` carrying the track's pose; its pairs those under that pose (a gated assignment)."""
         moved = se2.apply_boxes(transform, cav)
         noise = math.sqrt(float(np.mean(result.residuals ** 2)) / 2) if len(result.residuals) else 0.0
@@ -270,14 +290,18 @@ class SequenceCalibrator:
         residuals = np.hypot(*(ego[pairs[:, 0], :2] - moved[pairs[:, 1], :2]).T) if len(pairs) else np.zeros(0)
         answered = dataclasses.replace(result, pairs=pairs, transform=transform, init=init, estimated=True,
                                        residuals=residuals, abstained=False, reason="")
-        return self._noted(answered, event, found, transform, True, predicted)
+        return self._noted(answered, event, found, transform, True, predicted, spread)
 
     def _noted(self, result: MatchResult, event: str, found: Measurement | None, transform: np.ndarray,
-               persists: bool, predicted: np.ndarray | None = None) -> MatchResult:
+               persists: bool, predicted: np.ndarray | None = None, spread: np.ndarray | None = None) -> MatchResult:
+        """``result`` with its ``TrackNote``; ``spread``: the answer's covariance (the track's, else
+        the frame's own measurement's, None without either)."""
         track = self.track
+        spread = spread if spread is not None else (None if found is None else found.R)
         note = TrackNote(event=event, persists=persists, since_s=math.nan if track is None else track.since_s,
                          pooled=0 if track is None else track.pooled, predicted=predicted,
-                         measured=None if found is None else found.result.transform, answer=transform)
+                         measured=None if found is None else found.result.transform, answer=transform,
+                         covariance=spread)
         return dataclasses.replace(result, track=note)
 
 

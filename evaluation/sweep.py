@@ -169,8 +169,8 @@ def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
 
 def calibrator_for(method: str, params: Any, tracking: TrackingParams) -> SequenceCalibrator:
     """A fresh calibrator over time for ``method`` (``over_time`` methods), with ``params`` as it runs
-    them and ``tracking``."""
-    return SequenceCalibrator(METHODS[method].resolved(params), tracking)
+    them and ``tracking`` (an offline method's answers at the end: ``cbm.smooth.Smoother``)."""
+    return METHODS[method].calibrator(params, tracking)
 
 
 def run(sweep: Sweep, frames: Sequence[FrameInputs], *, workers: int = 1,
@@ -221,12 +221,13 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
     """The rows of one task, each with the key that puts it in the sweep's order: the frame's
     position, the scenario point, the method and its grid point. A frame alone runs every method that
     takes frames alone; a chain of frames runs the methods over time, each grid point with a
-    calibrator of its own stepping through the frames in time order."""
+    calibrator of its own stepping through the frames in time order (an offline method's answers,
+    ``cbm-smooth``'s, come once every frame is in)."""
     number, scenario = point
     methods = [(k, m) for k, m in enumerate(sweep.methods) if METHODS[m].over_time == over_time]
     calibrators = {(k, j): calibrator_for(m, params, tracking) for k, m in methods if over_time
                    for j, (params, tracking) in enumerate(sweep.points(m))}
-    rows = []
+    made = []
     for position, frame in zip(positions, frames):
         trial = frame.build(scenario, sweep.seed)
         base = {"frame": frame.index, **dataclasses.asdict(scenario),
@@ -240,10 +241,17 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
                                                     agent=frame.trial.get("cav_id"))
                 else:
                     result = run_method(method, trial, params, frame, peers)
-                row = _row(sweep, base, method, params, tracking, evaluate(result, trial), init_error)
-                if sweep.fusion:
-                    row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
-                rows.append(((position, number, k, j), row))
+                made.append(((position, number, k, j), (base, method, params, tracking, init_error, trial, frame,
+                                                        result)))
+    final = {key: iter(calibrator.smoothed()) for key, calibrator in calibrators.items()
+             if METHODS[sweep.methods[key[0]]].offline}
+    rows = []
+    for key, (base, method, params, tracking, init_error, trial, frame, result) in made:
+        result = next(final[key[2:]]) if key[2:] in final else result
+        row = _row(sweep, base, method, params, tracking, evaluate(result, trial), init_error)
+        if sweep.fusion:
+            row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
+        rows.append((key, row))
     return rows
 
 

@@ -3,7 +3,8 @@ method and CBM's (CBM's thresholds are the ones the app is about), and for a met
 advanced folder of its tracking parameters (``cbm.TrackingParams``); a control that has no effect under
 the current settings is disabled, and its folder's note says why (``cbm.methods``: what a method
 tunes, what it forces, what needs what); a method that cannot run here (the joint pose graph with
-one CAV) is not offered, and a note under the list says why."""
+one CAV) is not offered, and a note under the list says why. A method over a whole recording
+(``cbm-smooth``) answers only once every frame is in: it is not among the live frame's methods."""
 from __future__ import annotations
 
 import dataclasses
@@ -32,7 +33,7 @@ SLIDERS = {
     ("cbm", "distance_limit"): (1.0, MOST["distance_limit"], 1.0),
     ("cbm", "refine_gate"): (1.0, MOST["refine_gate"], 0.25),
 }
-LABELS = {m.label: m.name for m in METHODS.values()}
+LABELS = {m.label: m.name for m in METHODS.values() if not m.offline}
 TYPING_PAUSE = 0.8
 """Seconds without a keystroke after which a typed number applies."""
 ABOUT = {"cbm": "*σ1 and σ2: how alike two objects' neighbourhoods must be to match (angle, distance). σ3: how "

@@ -129,6 +129,8 @@ EVENT_WORDS = {
     "rejected": "this frame's own answer disagreed with the track and was set aside: the track's prediction stands",
     "no measurement": "CBM paired too few objects in this frame: the track's prediction stands",
     "re-acquired": "the error jumped: the track moved onto this frame's answer",
+    "sure, not yet confirmed": "CBM was sure of this frame's answer, which the settled track rejected: it is the "
+                               "answer, and the track moves onto it only if the next frame agrees",
     "lost": "lost: no frame agreed with the track for too long; per-frame CBM's answer, without confidence",
 }
 """How a method over time reached a frame's answer, in words (``cbm.result.TrackNote.event``)."""

@@ -51,6 +51,8 @@ class Offers:
         if settings.scenario.localization == "dataset" and self.reported_poses:
             return f"localization 'dataset' is not offered: {self.reported_poses}"
         method = METHODS[settings.method]
+        if method.offline:
+            return f"{method.label} answers once every frame is in: it runs over a whole recording, not frame by frame"
         why = self.pose_graph(settings.cavs) if method.takes_peers else None
         return None if why is None else f"{method.label} is not offered with {settings.cavs} CAV: {why}"
 

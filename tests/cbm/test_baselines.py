@@ -238,8 +238,8 @@ def test_bad_parameters_raise_value_error_naming_the_field(cls: type, field: str
 
 
 def test_registry_runs_each_method_with_its_defaults() -> None:
-    assert set(METHODS) == set(NAMES) | {"cbm", "cbm-no-consensus", "cbm-graph", "cbm-time", "cbm-no-prior", "none",
-                                         "oracle"}
+    assert set(METHODS) == set(NAMES) | {"cbm", "cbm-no-consensus", "cbm-graph", "cbm-time", "cbm-smooth",
+                                         "cbm-no-prior", "none", "oracle"}
     ego, cav, init, _, pairs = make_scene(0, n=10)
     for name, method in METHODS.items():
         truth = {"true_pairs": np.array(sorted(pairs))} if method.takes_truth else {}

@@ -97,17 +97,22 @@ def test_time_going_backwards_a_long_gap_or_another_cav_start_over(change):
     assert results[8].track.event.startswith("reset: ") and results[8].track.pooled == 0
 
 
-def test_a_track_nothing_confirms_is_lost_and_abstains_with_per_frame_cbms_answer():
+def test_a_track_holds_through_frames_without_measurements_until_its_prediction_is_too_uncertain():
+    """Frames where CBM alone cannot answer cost the track nothing: its prediction, surer than a
+    per-frame guess, is the answer; once the prediction grows too uncertain the track is lost and
+    the frame abstains with per-frame CBM's answer."""
     trials = frames(30, drifting(8))
     calibrator = SequenceCalibrator(CBMParams(), TrackingParams(lost_after=2))
     run(trials, calibrator)
     empty = np.zeros((0, 7))
-    results = [calibrator.step(empty, empty, trials[0].init, 0.8 + 0.1 * k, agent="cav") for k in range(3)]
-    assert [r.track.event for r in results] == ["no measurement", "no measurement", "lost"]
-    lost = results[-1]
+    results = [calibrator.step(empty, empty, trials[0].init, 0.7 + 1.0 * k, agent="cav") for k in range(1, 8)]
+    events = [r.track.event for r in results]
+    held = events.index("lost")
+    assert held >= 2 and set(events[:held]) == {"no measurement"}
+    assert all(r.estimated and not r.abstained for r in results[:held]), "the prediction answers"
+    lost = results[held]
     assert lost.abstained and lost.reason.startswith("lost: ") and not lost.estimated
     np.testing.assert_array_equal(lost.transform, trials[0].init)
-    assert calibrator.track is None
 
 
 def test_bad_time_and_tracking_settings_are_named():
