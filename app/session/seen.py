@@ -77,8 +77,15 @@ def sights(inputs: FrameInputs, trial: Trial, params: ScenarioParams, seed: int)
     for role in ROLES:
         shadows = params.sight and role not in said
         boxes = se2.apply_boxes(se2.inverse(poses[role]), world[role]) if shadows else np.zeros((0, 7))
-        found[role] = Sight(sight_outline(boxes, np.zeros(2), params.sensor_range), shadows, role in said)
+        found[role] = Sight(sight_outline(within(boxes, params.sensor_range), np.zeros(2), params.sensor_range),
+                            shadows, role in said)
     return found
+
+
+def within(boxes: np.ndarray, sensor_range: float) -> np.ndarray:
+    """The boxes (in the agent's frame) some part of whose footprint may lie within ``sensor_range``:
+    the others cannot cut a ray the range already ends."""
+    return boxes[np.linalg.norm(boxes[:, :2], axis=1) <= sensor_range + np.hypot(boxes[:, 3], boxes[:, 4]) / 2]
 
 
 def late(inputs: FrameInputs, trial: Trial, params: ScenarioParams, seed: int, gap_s: float | None) -> Late | None:
