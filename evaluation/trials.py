@@ -173,6 +173,8 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     gap = capture_gap(frame, ego, chosen)
     if gap:
         note += f"; the CAV captured {1000 * gap:.0f} ms before the ego (the dataset's timestamps)"
+    if (gap or window_s) and not frame.sequence.tracked:
+        note += "; the dataset's frames are samples whose objects are not tracked: no late message is made"
     inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
     said = inputs["visibility"] or {}
     if protocol == "opv2v" and len(said) < 2:
@@ -200,11 +202,15 @@ def capture_gap(frame: Frame, ego: str, cav: str) -> float:
 
 def _history(frame: Frame, cav: str, ids: np.ndarray, window_s: float) -> History:
     """The frames from ``window_s`` seconds (and one frame more) before ``frame`` up to it, as the CAV
-    saw them: the boxes of ``frame``'s objects ``ids`` in each, and the CAV's pose (``evaluation.delay``)."""
+    saw them: the boxes of ``frame``'s objects ``ids`` in each, and the CAV's pose (``evaluation.delay``).
+    Never beyond the start of ``frame``'s scenario, nor beyond ``frame`` itself where the sequence's
+    track ids do not follow objects from frame to frame (``Sequence.tracked``)."""
     sequence, index = frame.sequence, frame.index
     times, boxes, poses = [], [], []
     for j in range(index, -1, -1):
         earlier = sequence[j]
+        if earlier.scenario != frame.scenario or (j < index and not sequence.tracked):
+            break
         try:
             pose = agent_pose(earlier, cav)
         except KeyError:

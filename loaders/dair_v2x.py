@@ -4,7 +4,14 @@ Open the ``cooperative-vehicle-infrastructure`` folder (or its ``cooperative/dat
 Each entry of ``cooperative/data_info.json`` pairs a vehicle frame with an infrastructure frame
 (frame ids: the stems of ``vehicle_pointcloud_path`` / ``infrastructure_pointcloud_path``, or of
 the image paths) and is one frame here; frame id = the vehicle frame id; timestamps are
-index / 10 (the pairs are samples, not a continuous recording).
+index / 10 (the pairs are samples, not a continuous recording, and their label indices are no track
+ids: ``Sequence.tracked`` is False).
+
+Capture times: ``<side>-side/data_info.json`` lists a side's frames, ``pointcloud_path`` (``velodyne/
+<id>.pcd``) with ``pointcloud_timestamp`` (microseconds, a string; the labels are the LiDAR's). Where
+both sides list a pair's frames, ``Sequence.agent_times`` keeps each agent's capture: the vehicle at
+the frame's timestamp, the infrastructure its sweep's time apart (e.g. 40 ms earlier). Without those
+files, none; a timestamp that is no number is a :class:`LoaderError` naming the file and entry.
 
 Per frame, read:
 
@@ -72,6 +79,7 @@ after the loaders that recognise narrowly."""
 I2V = Path("cooperative") / "calib" / "lidar_i2v"
 PROGRESS_DELAY = 1.0
 """Seconds a load runs before its progress bar appears."""
+SIDES = ("vehicle", "infrastructure")
 
 
 class MissingFile(LoaderError):
@@ -97,6 +105,7 @@ def load(path: str | Path) -> Sequence:
     if not isinstance(pairs, list) or not pairs:
         raise LoaderError(f"{info_file}: expected a non-empty list of vehicle/infrastructure pairs")
     objects, agents, seen, frame_ids, missing, clouds, relative, views = [], [], [], [], [], {}, [], {}
+    sweeps, times = {side: side_sweeps(root, side) for side in SIDES}, {}
     for k, pair in enumerate(tqdm(pairs, desc="DAIR-V2X pairs", unit="pair", delay=PROGRESS_DELAY, leave=False)):
         try:
             rows = _pair_rows(root, info_file, pair, k, len(frame_ids))
@@ -109,6 +118,10 @@ def load(path: str | Path) -> Sequence:
             relative.append(rows[0])
         views.update(rows[5])
         clouds.update(_point_files(root, pair, len(frame_ids)))
+        gap = capture_gap(root, sweeps, {side: _frame_id(info_file, pair, side, f"[{k}]") for side in SIDES})
+        if gap is not None:
+            times[len(frame_ids)] = {"vehicle": len(frame_ids) / FRAME_RATE,
+                                     "infrastructure": len(frame_ids) / FRAME_RATE + gap}
         frame_ids.append(rows[0])
     if not frame_ids:
         raise LoaderError(f"{info_file}: no pair could be loaded; {len(missing)} lack a label or calibration "
@@ -126,7 +139,32 @@ def load(path: str | Path) -> Sequence:
     )
     sequence.point_clouds = clouds
     sequence.agent_views = views
+    sequence.agent_times = times
+    sequence.tracked = False
     return sequence
+
+
+def side_sweeps(root: Path, side: str) -> dict[str, tuple[int, dict]]:
+    """``frame id -> (index, entry)`` of a side's ``data_info.json`` by ``pointcloud_path`` (none without it)."""
+    path = root / f"{side}-side" / "data_info.json"
+    if not path.is_file():
+        return {}
+    entries = read_json(path)
+    if not isinstance(entries, list):
+        raise LoaderError(f"{path}: expected a list of frames (pointcloud_path, pointcloud_timestamp)")
+    return {Path(entry["pointcloud_path"]).stem: (k, entry) for k, entry in enumerate(entries)
+            if isinstance(entry, dict) and isinstance(entry.get("pointcloud_path"), str)}
+
+
+def capture_gap(root: Path, sweeps: dict[str, dict], frames: dict[str, str]) -> float | None:
+    """Seconds from the vehicle's sweep to the infrastructure's (negative: the infrastructure's came
+    first) of a pair whose two frames both sides' ``data_info.json`` list; None otherwise."""
+    found = {side: sweeps[side].get(frames[side]) for side in SIDES}
+    if None in found.values():
+        return None
+    stamps = {side: _number(root / f"{side}-side" / "data_info.json", found[side][1].get("pointcloud_timestamp"),
+                            f"[{found[side][0]}].pointcloud_timestamp") for side in SIDES}
+    return (stamps["infrastructure"] - stamps["vehicle"]) / 1e6
 
 
 def _pair_rows(root: Path, info_file: Path, pair, k: int, frame: int) -> tuple[str, list, list, list, bool, dict]:

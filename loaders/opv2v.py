@@ -10,7 +10,11 @@ folder name) to its first frame, ``Frame.scenario`` names a frame's scenario, fr
 ``<scenario name>/<timestamp>`` (just ``<timestamp>`` for one scenario), and each frame's ego is
 its scenario's (``Sequence.frame_egos``). Frames are the timestamps of the ego's files, at 10 Hz
 (``Sequence.timestamps`` = index / 10 over the whole sequence); a CAV missing a timestamp is
-absent from that frame. Loads over a second show a progress bar (tqdm, on stderr).
+absent from that frame. No agent's own capture time is kept (``Sequence.agent_times`` stays
+empty): the files carry none, and a file's name is the frame's counter, the same for every agent
+(OpenCOOD's loaders and V2V4Real's and V2X-Real's, which build on them, pair the agents' files by it
+and simulate a late message by taking an older file); a late message is the scenario's delay alone.
+Loads over a second show a progress bar (tqdm, on stderr).
 
 - The ego is chosen as OpenCOOD does: CAV folders in string order, the first one, except that
   roadside units (V2XSet, Adver-City; negative ids) never lead -- all of them move to the end.

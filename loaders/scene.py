@@ -160,6 +160,9 @@ class Sequence:
         """``frame index -> agent id -> seconds``: when that agent captured its part of the frame, on
         the clock of ``timestamps``, where the dataset keeps each agent's own time (DAIR-V2X's vehicle
         and infrastructure frames, the OPV2V family's per-CAV files); a late message starts from it."""
+        self.tracked = True
+        """Whether a track id names the same object in every frame (DAIR-V2X-C's pairs are samples whose
+        ids are label indices: False); a late message follows its objects back only where it does."""
         self.detections: dict[int, dict] = {}
         """``frame index -> agent id -> loaders.detections.DetectedBoxes``: a real detector's boxes,
         when a detections file is attached (``loaders.open(path, detections=...)``)."""

@@ -12,7 +12,9 @@ Keys: ``lidar_pose`` and ``true_ego_pose`` (not OPV2V's ``true_ego_pos``), six n
 roll, yaw, pitch]`` in metres and degrees; ``vehicles: {id: {location, center, extent, angle,
 obj_type}}`` in the world frame, as OPV2V's (``location + center``, half ``extent``), but from real
 sensors: right-handed, nothing mirrored. Object ids are shared by the agents (OpenCOOD merges the
-agents' boxes by id). ``attribute: static`` marks parked objects; they stay road users.
+agents' boxes by id). ``attribute: static`` marks parked objects; they stay road users. The files keep no capture time
+of an agent: the ``<timestamp>`` of a file name is the frame's, shared by the agents (its code pairs
+their files by it), so ``Sequence.agent_times`` stays empty, as for OPV2V.
 
 ``obj_type`` -> our categories by :data:`CATEGORY_NAMES` (part of ``loaders.opv2v.CATEGORY_NAMES``;
 an unknown name is kept as written); the static props of

@@ -11,7 +11,8 @@ per side (as ``AIR-THU/DAIR-V2X-Seq``'s ``dataset/v2x-seq-spd/README.md`` gives 
   vehicle frame; each vehicle sequence is a scenario (``Sequence.scenarios``);
 - ``vehicle-side/data_info.json`` and ``infrastructure-side/data_info.json``: one entry per frame
   with ``frame_id``, ``pointcloud_path`` (relative to the side folder) and ``pointcloud_timestamp``
-  (microseconds, a string): the frame's time (seconds from the first frame) and LiDAR points;
+  (microseconds, a string): the frame's time (seconds from the first frame: the vehicle's sweep), each
+  agent's capture time (``Sequence.agent_times``: the infrastructure's sweep) and LiDAR points;
 - ``vehicle-side/label/lidar/<frame>.json`` and ``infrastructure-side/label/virtuallidar/<frame>.json``:
   DAIR-V2X labels with a ``track_id`` per object, kept across the frames of a sequence;
 - ``cooperative/label/<vehicle frame>.json``: the fused objects, in the vehicle LiDAR frame, each
@@ -84,6 +85,7 @@ def load(path: str | Path) -> Sequence:
     pairs = _pairs(root, info_file)
     rows = {"objects": [], "seen": [], "agents": []}
     frame_ids, times, scenarios, missing, derived, clouds, views = [], [], {}, [], [], {}, {}
+    infra_times = []
     for pair in tqdm(pairs, desc="V2X-Seq-SPD pairs", unit="pair", delay=dair.PROGRESS_DELAY, leave=False):
         frame = len(frame_ids)
         try:
@@ -97,8 +99,8 @@ def load(path: str | Path) -> Sequence:
         clouds.update(_point_files(root, pair, frame))
         scenarios.setdefault(pair.sequence, frame)
         frame_ids.append(pair.vehicle["frame_id"])
-        times.append(dair._number(root / "vehicle-side" / "data_info.json", pair.vehicle.get("pointcloud_timestamp"),
-                                  f"frame {pair.vehicle['frame_id']}.pointcloud_timestamp"))
+        times.append(_sweep_time(root, "vehicle", pair.vehicle))
+        infra_times.append(_sweep_time(root, "infrastructure", pair.infrastructure))
         if not fused:
             derived.append(pair.vehicle["frame_id"])
     if not frame_ids:
@@ -118,7 +120,15 @@ def load(path: str | Path) -> Sequence:
     )
     sequence.point_clouds = clouds
     sequence.agent_views = views
+    sequence.agent_times = {k: {"vehicle": (vehicle - times[0]) / 1e6, "infrastructure": (infra - times[0]) / 1e6}
+                            for k, (vehicle, infra) in enumerate(zip(times, infra_times))}
     return sequence
+
+
+def _sweep_time(root: Path, side: str, entry: dict) -> float:
+    """Microseconds: a side frame's ``pointcloud_timestamp``."""
+    return dair._number(root / f"{side}-side" / "data_info.json", entry.get("pointcloud_timestamp"),
+                        f"frame {entry['frame_id']}.pointcloud_timestamp")
 
 
 def _pairs(root: Path, info_file: Path) -> list[Pair]:

@@ -1,4 +1,5 @@
-"""The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, camera,
+"""The View tab: layout, ghosts, match lines (and, for CBM, its own pairs or all), labels, the agents'
+sight (disabled, with the reason, unless the range protocol decides what each agent sees), camera,
 presentation mode and the dark theme, and the legend of the palette in use. LiDAR points are
 disabled, with the reason, on a dataset without point clouds; their subsampling also while they are off."""
 from __future__ import annotations
@@ -16,12 +17,21 @@ from ..session.settings import LAYOUTS, LINE_PAIRS, Settings
 from .actions import TabActions, assign, on_user
 from .registry import Panel
 
-TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused", "follow")
+TOGGLES = ("ghosts", "lines", "labels", "presentation", "dark", "pinned_lines", "points", "fused", "follow", "sight")
 """The view options a checkbox of the same name sets."""
 LINE_PAIR_KEYS = {label: key for key, label in LINE_PAIRS.items()}
 POINTS_HINT = "The ego's and the CAV's LiDAR points (datasets with .pcd files), the CAV's placed like its boxes"
 EVERY_HINT = "Draw every Nth LiDAR point (1: all of them)"
 POINTS_OFF = "LiDAR points are off: tick LiDAR points to draw them"
+SIGHT_HINT = ("What the ego and the CAV see, a translucent fill in each one's colour: within the sensor range, and "
+              "with Scenario > line of sight on, the shadows behind the boxes (an object in the CAV's shadow is "
+              "not co-visible)")
+
+
+def sight_unread(settings: Settings) -> str | None:
+    """Why the agents' sight is not drawn under ``settings`` (None: it is)."""
+    protocol = settings.scenario.protocol
+    return None if protocol == "range" else f"the {protocol} protocol does not decide by geometry what each agent sees"
 
 
 def points_note(unavailable: str | None, idle: str | None) -> str:
@@ -48,6 +58,7 @@ class ViewControls:
     points_every: viser.GuiSliderHandle
     legend: viser.GuiMarkdownHandle
     fused: viser.GuiCheckboxHandle
+    sight: viser.GuiCheckboxHandle
     note: viser.GuiMarkdownHandle
     """Why the LiDAR points or their subsampling are disabled (hidden when they are not)."""
     offers: Offers = field(default_factory=Offers)
@@ -69,6 +80,9 @@ class ViewControls:
                hint=EVERY_HINT if idle is None else f"Disabled: {idle}. {EVERY_HINT}")
         assign(self.note, content=points_note(why, idle), visible=idle is not None)
         assign(self.legend, content=palette(settings.view).legend + cavs_legend(settings.cavs))
+        unread = sight_unread(settings)
+        assign(self.sight, disabled=unread is not None,
+               hint=SIGHT_HINT if unread is None else f"Disabled: {unread}. {SIGHT_HINT}")
 
 
 def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls:
@@ -81,6 +95,7 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
                                     initial_value=LINE_PAIRS[view.line_pairs],
                                     hint="CBM's own pairs (eq. 14), or all pairs after the guided re-association"),
         labels=gui.add_checkbox("label clicked objects", view.labels),
+        sight=gui.add_checkbox("agents' sight", view.sight, hint=SIGHT_HINT),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
         reset_camera=gui.add_button("reset camera", hint="Straight down on the scene, framing the agents and every "

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from evaluation.metrics import is_success
 
 from ..session.settings import ViewOptions
+from .seen import caption_line
 from .text import number
 
 if TYPE_CHECKING:
@@ -35,7 +36,7 @@ def caption_lines(outcome: Outcome) -> list[str]:
     which = f"CAV 1 of {len(outcome.others) + 1} · " if outcome.others else ""
     return [f"Frame {outcome.frame_index} · {which}{'success' if is_success(m) else 'failed'}",
             f"precision {number(m.precision)} · recall {number(m.recall)}",
-            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}"]
+            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}", *caption_line(outcome)]
 
 
 def caption_html(outcome: Outcome) -> str:

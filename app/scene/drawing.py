@@ -16,7 +16,7 @@ from loaders import Frame, is_roadside
 
 from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS
-from . import captions, cavs, colours, geometry, pairs, planes
+from . import captions, cavs, colours, geometry, pairs, planes, seen
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .memo import ByContent
 from .points import PointCloud, clouds, problems_markdown
@@ -107,8 +107,11 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
                    for pose in (*parts.ego_poses, *(p for poses in parts.cav_poses.values() for p in poses)))
     points = clouds(frame if view.points else None, (outcome.ego_id, outcome.cav_id),
                     (parts.ego_poses, parts.cav_poses[1]), view.points_every, (palette.ego_boxes, palette.cav_boxes))
-    labels = {**parts.labels, **{k: v for shapes in parts.shapes for k, v in shapes.labels.items()}}
-    return Drawing(meshes=_meshes(parts, ego, palette), lines=lines, labels=labels,
+    moved, moved_labels = seen.motion(outcome, panels)
+    sights = _sights(seen.sight_fans(outcome, panels), palette)
+    lines.update({**sights[1], "moved": Lines(moved, palette.cav_vehicle, 2.0)})
+    labels = {**parts.labels, **{k: v for shapes in parts.shapes for k, v in shapes.labels.items()}, **moved_labels}
+    return Drawing(meshes={**_meshes(parts, ego, palette), **sights[0]}, lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
                    agents=agents, label_px=captions.label_px(view), points=points)
@@ -187,6 +190,15 @@ def _meshes(parts: _Parts, ego: np.ndarray, palette: colours.Palette) -> dict[st
         meshes[cavs.node("cav_vehicle", rank)] = Mesh(*_vehicle_mesh(parts.cav_poses[rank], *_body(parts, rank)),
                                                       cavs.vehicle_colour(rank, palette))
     return meshes
+
+
+def _sights(fans: dict[str, seen.Fan], palette: colours.Palette) -> tuple[dict[str, Mesh], dict[str, Lines]]:
+    """Each agent's sight as a translucent fill and its edge, in the agent's colour."""
+    colour = {"ego": palette.ego_boxes, "cav": palette.cav_boxes}
+    return ({seen.sight_node(role): Mesh(v, f, colour[role], opacity=seen.SIGHT_OPACITY)
+             for role, (v, f, _) in fans.items()},
+            {seen.sight_node(role, "sight_edge"): Lines(edge, colour[role], 1.5)
+             for role, (_, _, edge) in fans.items()})
 
 
 def _body(parts: _Parts, rank: int) -> tuple[float, ...]:

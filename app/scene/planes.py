@@ -8,6 +8,8 @@ STEP = 0.03
 """Metres between two layers of the plane."""
 MAP = 0.0
 """The map's lines, on the ground under everything."""
+SIGHT = STEP / 3
+"""The agents' sight, translucent fills just above the map: the ego's at this height, the CAV's at twice it."""
 EGO = STEP
 """The ego's filled footprints."""
 OUTLINES = 9 * STEP

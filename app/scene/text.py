@@ -14,6 +14,7 @@ from evaluation.metrics import TrialMetrics, evaluate, is_success
 from ..session.explorer import Outcome
 from ..session.names import agent_name
 from .cavs import per_cav_rows
+from .seen import late_rows
 from .words import margin_words, plural
 
 ORACLE_ROW = f"{ORACLE_WORDS} (oracle)"
@@ -88,6 +89,7 @@ def metrics_markdown(outcome: Outcome) -> str:
         "|---|---|",
         f"| objects (ego / CAV) | {m.n_ego} / {m.n_cav} |",
         *clutter_rows(outcome),
+        *late_rows(outcome),
         f"| co-visible | {m.n_true} |",
         *thresholds(outcome),
         f"| matches | {m.n_matched} ({m.n_correct} right){own_pairs(result)} |",

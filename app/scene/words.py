@@ -172,6 +172,10 @@ SCENARIO_WORDS = {
     "miss_rate": "missed detections (share)",
     "false_rate": "false boxes (per detection)",
     "min_score": "detector score at least",
+    "sight": "line of sight",
+    "sight_share": "visible share at least",
+    "delay_ms": "message delay (ms)",
+    "jitter_ms": "delay jitter ± (ms)",
     "seed": "seed",
 }
 """Every scenario field's label (words and unit), as the Scenario tab shows it."""

@@ -23,10 +23,11 @@ from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
 from evaluation.sweep import run_method
 from evaluation.trials import frame_cav_inputs, frame_inputs
-from loaders import Sequence, is_roadside, is_vehicle
+from loaders import Frame, Sequence, is_roadside, is_vehicle
 
 from .names import agent_name
 from .over_time import Runs
+from .seen import Late, Sight, late, sights
 from .settings import MAX_CAVS, Settings
 
 TRIALS_KEPT = 8
@@ -95,6 +96,11 @@ class Outcome:
     """A method over time: per-frame CBM's answer on the same trial, to compare (None otherwise)."""
     pooled_from: int | None = None
     """A method over time: the first frame whose evidence the answer pools (None: this frame alone)."""
+    inputs: FrameInputs | None = None
+    """The inputs the trial was made from (``evaluation.scenario.FrameInputs``), for what each agent saw."""
+    capture_gap_s: float | None = None
+    """Seconds by which the CAV captured before the ego in the dataset's own timestamps (negative:
+    after; ``loaders.Sequence.agent_times``); None where the dataset has one time per frame."""
     _kept: dict[str, object] = field(default_factory=dict, repr=False, compare=False)
     """What the views computed from this outcome on their first ask (fusion, CBM's sets), kept."""
 
@@ -120,6 +126,22 @@ class Outcome:
                                               self.settings.scenario.seed, self.frame_index)
             self._kept[key] = Fused(boxes.boxes, hits)
         return self._kept[key]
+
+    def sights(self) -> dict[str, Sight] | None:
+        """The ego's and the CAV's sight (``app.session.seen.sights``), computed on the first ask, then kept."""
+        if "sights" not in self._kept:
+            scenario = self.settings.scenario
+            self._kept["sights"] = None if self.inputs is None else sights(self.inputs, self.trial, scenario,
+                                                                            scenario.seed)
+        return self._kept["sights"]
+
+    def late(self) -> Late | None:
+        """Where the CAV saw its objects when its message is late (``app.session.seen.late``), kept."""
+        if "late" not in self._kept:
+            scenario = self.settings.scenario
+            self._kept["late"] = None if self.inputs is None else late(self.inputs, self.trial, scenario,
+                                                                        scenario.seed, self.capture_gap_s)
+        return self._kept["late"]
 
     def cbm(self) -> MatchResult:
         """CBM's result on this trial, with its explanation (``cbm.Explanation``), under the thresholds
@@ -237,7 +259,8 @@ class Explorer:
                        cav_note=inputs.note, trial=trial, world_boxes=se2.apply_boxes(world_to_ego, objects["boxes"]),
                        world_ids=np.asarray(objects["ids"]), result=result, metrics=metrics, limit=limit,
                        findings=findings, seconds=time.perf_counter() - started, others=others, alone=alone,
-                       pooled_from=pooled_from,
+                       pooled_from=pooled_from, inputs=inputs,
+                       capture_gap_s=signed_gap(self.sequence[index], objects.get("ego_id"), objects.get("cav_id")),
                        _kept={} if result.explanation is None else {"cbm": result})
 
     def _timed_trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, float]:
@@ -272,6 +295,13 @@ def _run(settings: Settings, trial: Trial, frame: FrameInputs, peers: list[Trial
     result = match(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse=reuse,
                    explain=True)
     return result, diagnose(result, trial, result.explanation)
+
+
+def signed_gap(frame: Frame, ego: str | None, cav: str | None) -> float | None:
+    """Seconds by which ``cav`` captured ``frame`` before ``ego`` in the dataset's own timestamps
+    (negative: after); None where the dataset keeps no time of either."""
+    times = frame.agent_times()
+    return times[ego] - times[cav] if ego in times and cav in times else None
 
 
 def _map_segments(sequence: Sequence) -> dict[str, np.ndarray]:

@@ -59,6 +59,9 @@ class ViewOptions:
     follow: bool = True
     """While stepping or playing, the camera moves only when something that matters (an agent, a
     wrong or missed pair) would leave the view; off: it stays still."""
+    sight: bool = False
+    """Each agent's sight (range protocol): the area its sensor sees, a translucent fill in its colour,
+    with the shadows behind the boxes under line of sight (``app.session.seen``)."""
     fused: bool = False
     """Late fusion (``evaluation.fusion``): outlines of the fused boxes, green a true positive, red a false
     one (BEV IoU 0.7 against what either agent sees), at each panel's CAV pose."""

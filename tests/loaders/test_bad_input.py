@@ -25,7 +25,8 @@ CASES = {
     "dair_v2x": (DAIR, "", ["cooperative/data_info.json", "vehicle-side/label/lidar/000010.json",
                             "infrastructure-side/label/virtuallidar/000020.json",
                             "vehicle-side/calib/lidar_to_novatel/000010.json",
-                            "infrastructure-side/calib/virtuallidar_to_world/000020.json"]),
+                            "infrastructure-side/calib/virtuallidar_to_world/000020.json",
+                            "vehicle-side/data_info.json", "infrastructure-side/data_info.json"]),
     "table": ("table", "boxes.csv", ["boxes.csv"]),
 }
 TOKENS = ["", ",", "\n", "nan", "inf", "-inf", "1e309", "abc", '"', "-", "{", "]", ":", "null", "\x00",

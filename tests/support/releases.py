@@ -228,6 +228,11 @@ def v2x_real_root(root: Path) -> Path:
 # --- DAIR-V2X-C ------------------------------------------------------------------------------------------------
 
 DAIR_OFFSET = {"delta_x": -0.52, "delta_y": 0.31}
+DAIR_START_US = 1626155150098000
+"""The first vehicle sweep's ``pointcloud_timestamp`` (microseconds); pairs follow every 100 ms."""
+DAIR_INFRA_US = (-40123, 23877, -98000)
+"""Microseconds from each pair's vehicle sweep to its infrastructure sweep (the roadside unit first,
+then after, then almost a frame before)."""
 DAIR_TYPES = {"car": "Car", "van": "Van", "truck": "Truck", "pedestrian": "Pedestrian"}
 
 
@@ -264,7 +269,7 @@ def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_err
     DAIR-V2X's ``calib_i2v.py`` writes it). ``infra_error`` shifts the last pair's shipped
     ``virtuallidar_to_world`` by (x, y) metres, as a wrong release calibration would. ``offset=""``:
     every pair's ``system_error_offset`` an empty string, the shipped calibration then exact."""
-    info = []
+    info, sides = [], {"vehicle": [], "infrastructure": []}
     delta = (0.0, 0.0) if offset == "" else (offset["delta_x"], offset["delta_y"])
     for k in range(pairs):
         vehicle_id, infra_id = f"{10 + k:06d}", f"{20 + k:06d}"
@@ -301,8 +306,34 @@ def dair_release(root: Path, pairs: int = 3, world_calib: bool = True, infra_err
                      "vehicle_pointcloud_path": f"vehicle-side/velodyne/{vehicle_id}.pcd",
                      "cooperative_label_path": f"cooperative/label_world/{vehicle_id}.json",
                      "system_error_offset": offset})
+        stamp = DAIR_START_US + 100_000 * k
+        sides["vehicle"].append(_dair_frame_info("vehicle", vehicle_id, stamp))
+        sides["infrastructure"].append(_dair_frame_info("infrastructure", infra_id,
+                                                        stamp + DAIR_INFRA_US[k % len(DAIR_INFRA_US)]))
     write_json(root / "cooperative" / "data_info.json", info)
+    for side, entries in sides.items():
+        write_json(root / f"{side}-side" / "data_info.json", entries)
     return root
+
+
+def _dair_frame_info(side: str, frame: str, stamp: int) -> dict:
+    """One entry of DAIR-V2X-C's ``<side>-side/data_info.json``, keys in the release's order, numbers
+    as strings (``pointcloud_timestamp`` in microseconds)."""
+    if side == "vehicle":
+        return {"image_path": f"image/{frame}.jpg", "image_timestamp": str(stamp - 58000),
+                "pointcloud_path": f"velodyne/{frame}.pcd", "pointcloud_timestamp": str(stamp),
+                **{f"calib_{name}_path": f"calib/{name}/{frame}.json"
+                   for name in ("camera_intrinsic", "lidar_to_camera", "lidar_to_novatel", "novatel_to_world")},
+                "label_camera_std_path": f"label/camera/{frame}.json",
+                "label_lidar_std_path": f"label/lidar/{frame}.json",
+                "batch_start_id": frame, "batch_end_id": frame, "batch_id": "34", "intersection_loc": "yizhuang10"}
+    return {"pointcloud_path": f"velodyne/{frame}.pcd", "pointcloud_timestamp": str(stamp), "lidar_id": "151",
+            "intersection_loc": "yizhuang10",
+            **{f"calib_{name}_path": f"calib/{name}/{frame}.json"
+               for name in ("camera_intrinsic", "virtuallidar_to_world", "virtuallidar_to_camera")},
+            "image_path": f"image/{frame}.jpg", "image_timestamp": str(stamp + 102348), "camera_ip": "172_18_9_101",
+            "camera_id": "1", "batch_id": "122",
+            "valid_batch_splits": [{"batch_start_id": frame, "batch_end_id": frame}]}
 
 
 def write_json(path: Path, value) -> None:
