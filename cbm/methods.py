@@ -34,8 +34,7 @@ from .pipeline import match
 from .posegraph import match_graph
 from .prior_free import PRIOR_FREE, match_without_prior
 from .result import MatchResult
-from .sequence import SequenceCalibrator, TrackingParams, match_first_step
-from .smooth import Smoother
+from .sequence import SequenceCalibrator, Smoother, TrackingParams, match_first_step
 
 
 @dataclass(frozen=True)
@@ -68,7 +67,7 @@ class Method:
     """Calibrates a sequence frame after frame (``calibrator``): its frames run in time order, per
     CAV; called on one frame alone it is that frame's first step."""
     offline: bool = False
-    """Over time, and answers only once every frame is in (``cbm.smooth``: the frames after a frame
+    """Over time, and answers only once every frame is in (``cbm.sequence.Smoother``: the frames after a frame
     count too): a whole recording's method, for runs over every frame."""
 
     @property
@@ -100,7 +99,7 @@ class Method:
 
     def calibrator(self, params: Any = None, tracking: TrackingParams | None = None) -> SequenceCalibrator | Smoother:
         """A fresh calibrator over time with ``params`` and ``tracking`` (``over_time`` methods only);
-        an offline method's is a ``cbm.smooth.Smoother``, whose ``smoothed()`` answers at the end."""
+        an offline method's is a ``cbm.sequence.Smoother``, whose ``smoothed()`` answers at the end."""
         if not self.over_time:
             raise ValueError(f"{self.name} calibrates every frame alone; it has no calibrator over time")
         return (Smoother if self.offline else SequenceCalibrator)(self.resolved(params), tracking)

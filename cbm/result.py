@@ -50,7 +50,7 @@ class TrackNote:
     """(3, 3) the transform answered."""
     covariance: np.ndarray | None = None
     """(3, 3) covariance of the answer's pose error (x, y in m^2, yaw in rad^2): the track's, or the
-    frame's own measurement's; None without either (``cbm.smooth`` weighs answers by it)."""
+    frame's own measurement's; None without either (``cbm.sequence.Smoother`` weighs answers by it)."""
 
 
 @dataclass(frozen=True)

@@ -169,7 +169,7 @@ def grid_defaults(methods: Iterable[str]) -> dict[str, Any]:
 
 def calibrator_for(method: str, params: Any, tracking: TrackingParams) -> SequenceCalibrator:
     """A fresh calibrator over time for ``method`` (``over_time`` methods), with ``params`` as it runs
-    them and ``tracking`` (an offline method's answers at the end: ``cbm.smooth.Smoother``)."""
+    them and ``tracking`` (an offline method's answers at the end: ``cbm.sequence.Smoother``)."""
     return METHODS[method].calibrator(params, tracking)
 
 

@@ -190,3 +190,26 @@ def test_a_stopped_step_run_again_answers_as_one_never_stopped():
     assert [r.track.event for r in again] == [r.track.event for r in never[8:]]
     for a, b in zip(again, never[8:]):
         np.testing.assert_array_equal(a.transform, b.transform)
+
+
+def test_the_smoother_starts_on_the_first_frame_where_the_causal_track_still_watches():
+    """The first frames of a drifting error: CBM over time answers them per frame (the error has not
+    been seen to persist yet); over the whole recording the frames after them vouch for them, so
+    their answers are the track's, with its covariance, and no farther from the truth on average."""
+    from cbm.sequence import Smoother
+
+    trials = frames(30, drifting(16), noise=0.6)
+    smoother = Smoother(CBMParams())
+    causal = [smoother.step(t.ego_boxes, t.cav_boxes, t.init, 0.1 * k, agent="cav") for k, t in enumerate(trials)]
+    smoothed = smoother.smoothed()
+    assert len(smoothed) == len(trials)
+    assert causal[0].track.event == "per frame" and not causal[0].track.persists
+
+    def error(result, trial):
+        return float(np.hypot(*se2.translation_of(se2.inverse(trial.T_true) @ result.transform)))
+
+    early = range(4)
+    assert np.mean([error(s, t) for s, t in zip(smoothed[:4], trials)]) <= \
+        np.mean([error(c, t) for c, t in zip(causal[:4], trials)]) + 1e-9
+    assert any(not np.array_equal(smoothed[k].transform, causal[k].transform) for k in early)
+    assert [r.pairs.tolist() for r in smoothed] == [r.pairs.tolist() for r in causal]
