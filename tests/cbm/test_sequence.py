@@ -102,7 +102,7 @@ def test_a_track_holds_through_frames_without_measurements_until_its_prediction_
     per-frame guess, is the answer; once the prediction grows too uncertain the track is lost and
     the frame abstains with per-frame CBM's answer."""
     trials = frames(30, drifting(8))
-    calibrator = SequenceCalibrator(CBMParams(), TrackingParams(lost_after=2))
+    calibrator = SequenceCalibrator(CBMParams(), TrackingParams(lost_after=2, lost_m=1.5, lost_deg=1.5))
     run(trials, calibrator)
     empty = np.zeros((0, 7))
     results = [calibrator.step(empty, empty, trials[0].init, 0.7 + 1.0 * k, agent="cav") for k in range(1, 8)]
