@@ -219,6 +219,23 @@ class LateMessages:
     def copy(self) -> LateMessages:
         return copy.deepcopy(self)
 
+    def _pairs(self, ego: np.ndarray, cav: np.ndarray, result: MatchResult,
+               velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The pairs the age is read from: CBM's own, or -- once an age is known -- the one-to-one
+        pairs of the ego's boxes moved back by their motion over it and the CAV's under CBM's pose,
+        so that a fast object whose offset the age explains is not left out by the gate of CBM's
+        pairs (which would leave only the moving pairs that moved least, and the age too short)."""
+        pooled = self.age.seconds
+        if pooled is None:
+            return result.pairs[:, 0], result.pairs[:, 1]
+        back = ego.copy()
+        back[:, :2] -= np.where(np.isfinite(velocity), velocity, 0.0) * pooled
+        sigma = max(float(np.sqrt(np.mean(result.residuals ** 2) / 2.0)), LINK_SIGMA / 2.0)
+        pairs = gated_assignment(back, se2.apply_boxes(result.transform, cav), 3.0 * sigma, sigma)
+        if len(pairs) < LEAST_PAIRS:
+            return result.pairs[:, 0], result.pairs[:, 1]
+        return pairs[:, 0], pairs[:, 1]
+
     def corrected(self, ego: np.ndarray, cav: np.ndarray, result: MatchResult, time_s: float) -> MatchResult:
         """``result`` (CBM's on the frame at ``time_s``) with the message's age (``latency_s``, None
         while it cannot tell) and, once known, its pose refitted with the ego's boxes moved back by
@@ -226,7 +243,7 @@ class LateMessages:
         velocity = self.tracks.step(ego, time_s)
         if not result.estimated or len(result.pairs) < LEAST_PAIRS:
             return dataclasses.replace(result, latency_s=self.age.seconds)
-        e, c = result.pairs[:, 0], result.pairs[:, 1]
+        e, c = self._pairs(ego, cav, result, velocity)
         frame = frame_age(result.transform, ego[e, :2], cav[c, :2], velocity[e])
         self.age.add(*frame)
         age = self.age.of_frame(*frame)
