@@ -53,7 +53,8 @@ class ClientSession:
         self.baseline = Baseline()
         self._frame_for: Settings | None = None
         """Settings whose result the camera is to frame when shown (a jump to a frame)."""
-        self.stage = Stage(client, lambda *clicked: self.controls.call("picked", *clicked))
+        self.stage = Stage(client, lambda *clicked: self.controls.call("picked", *clicked),
+                           lambda marks: self.controls.metrics.show_away(marks))
         self.offers = offers_of(explorer.sequence)
         self.controls = panels.build(client.gui, self)
         for warning in explorer.sequence.warnings:
@@ -118,6 +119,9 @@ class ClientSession:
 
     def hide_click_label(self) -> None:
         self.stage.hide_click_label()
+
+    def fly_to(self, key: str) -> None:
+        self.stage.fly_to(key)
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""
