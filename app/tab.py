@@ -19,7 +19,7 @@ from .panels.keynumbers import unusable_markdown
 from .panels.metrics import timeline_of
 from .scene.drawing import Drawing, draw
 from .scene.pinned import with_baseline
-from .scene.words import error_words
+from .scene.words import error_words, setting_words
 from .session.baseline import Baseline
 from .session.coalesce import Coalescer
 from .session.explorer import Explorer, Outcome
@@ -98,7 +98,7 @@ class ClientSession:
                 self._frame_for = new if frame_camera else self._frame_for
                 self.worker.submit(new)
         except (ValueError, TypeError) as error:
-            self.notify("Setting refused", str(error), "red")
+            self.notify("Setting refused", setting_words(error), "red")
             self.controls.show(self._settings)
             return
         if switched:
