@@ -28,6 +28,8 @@ taken for a denser screen (``pixel_ratio``)."""
 CHAR_EM, LINE_EM = 0.62, 1.45
 """A label's character width and line height, in ems of its text height (viser draws labels in the
 system sans-serif font, on a background padded by a fifth of an em)."""
+SHIFTS = (1.0, 0.75, 0.5, 0.25)
+"""The shares of the way to the canvas's middle ``balanced`` tries, the longest first."""
 NARROWINGS, NARROW_PX = 6, 8.0
 """How often, and by how many CSS pixels each time, ``frame`` narrows the area it frames in."""
 
@@ -159,20 +161,24 @@ def frame(spots: list[Spot], canvas: Canvas, areas: list[Area]) -> tuple[tuple[f
 
 def balanced(spots: list[Spot], pose: tuple[tuple[float, ...], tuple[float, ...]], canvas: Canvas,
              covered: Area | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
-    """``pose`` moved, at its scale, to centre the spots in the whole canvas when there they stay clear
-    of the ``covered`` corner: a framing beside a panel otherwise leaves the rest of the canvas empty."""
+    """``pose`` moved, at its scale, towards centring the spots in the whole canvas, as far as they stay
+    clear of the ``covered`` corner (the whole way, or ``SHIFTS`` of it): a framing beside a panel
+    otherwise leaves the rest of the canvas empty."""
     if covered is None or not spots:
         return pose
     whole = Area(0.0, 0.0, canvas.width, canvas.height).inset(MARGIN_PX)
-    moved = centred(spots, canvas, whole, 1.0 / metres_per_px(*pose, canvas))
+    target = centred(spots, canvas, whole, 1.0 / metres_per_px(*pose, canvas))
     clear = [Area(0.0, 0.0, canvas.width, covered.top - MARGIN_PX), Area(0.0, covered.bottom + MARGIN_PX,
              canvas.width, canvas.height), Area(0.0, 0.0, covered.left - MARGIN_PX, canvas.height)]
-    where = project(*moved, canvas, np.array([(s.x, s.y) for s in spots]))
-    ends = where + np.array([(s.width, s.height) for s in spots])
-    fits = all_inside(spots, *moved, canvas, whole) and all(
-        any(a.left <= u and a.top <= v and e <= a.right and f <= a.bottom for a in clear)
-        for (u, v), (e, f) in zip(where, ends))
-    return moved if fits else pose
+    for share in SHIFTS:
+        moved = tuple(tuple(a + share * (b - a) for a, b in zip(now, then)) for now, then in zip(pose, target))
+        where = project(*moved, canvas, np.array([(s.x, s.y) for s in spots]))
+        ends = where + np.array([(s.width, s.height) for s in spots])
+        if all_inside(spots, *moved, canvas, whole) and all(
+                any(a.left <= u and a.top <= v and e <= a.right and f <= a.bottom for a in clear)
+                for (u, v), (e, f) in zip(where, ends)):
+            return moved
+    return pose
 
 
 def frame_in(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:

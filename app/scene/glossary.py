@@ -17,7 +17,7 @@ GLOSSARY = {
               "neighbourhood against it (eq. 9) and keeps the anchor whose set of agreeing pairs is largest "
               "(eq. 13).",
     "L_ij": "the candidate set of anchor (i, j): the pairs whose vectors to their neighbours agree within σ1 "
-            "(angle) and σ2 (tip distance) seen from i and from j (eq. 9).",
+            "(angle) and σ2 (distance between their tips) seen from i and from j (eq. 9).",
     "margin": f"evidence margin: how much better CBM's pose explains the scene than the best different pose, "
               f"as a natural-log likelihood ratio; CBM is sure from {SURE_FROM:g} (e^{SURE_FROM:g}, about 3000 "
               f"times likelier). The consensus vote counts pairs instead: the winning anchor's against the "

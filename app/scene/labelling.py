@@ -1,6 +1,6 @@
-"""Labels beside what they name, never over each other: each label in turn takes the first free
-place around the thing it names (right of it, left, below, above), then farther out a line at a
-time, with a short leader line back to it. A label that finds no free place within ``REACH_LINES``
+"""Labels beside what they name, never over each other nor over a thing labelled: each label in turn
+takes the first free place around the thing it names (right of it, left, below, above), then farther
+out a line at a time, with a short leader line back to it. A label that finds no free place within ``REACH_LINES``
 waits for a click (its box's click label says the same), unless the picture must show it (an
 agent's, a title, a pair that decides the result: ``kept``), which searches on.
 
@@ -117,6 +117,8 @@ def lay_out(labels: Labels, metres_per_px: float, label_px: float, room: Room | 
     line = LINE_EM * label_px
     pad = (SLACK - 1.0) * line / 2
     placed: list[tuple[float, float, float, float]] = []
+    things = [_thing(-point[1] / m, -point[0] / m, room.get(name, (0.0, 0.0)), m)
+              for name, (_, point) in labels.items() if name in room]
     shown, leaders, hidden, flush = {}, [], set(), set()
     order = sorted(labels.items(), key=lambda item: (rank(item[0], kept), -item[1][1][0], item[0]))
     for name, (text, (x, y, z)) in order:
@@ -128,7 +130,8 @@ def lay_out(labels: Labels, metres_per_px: float, label_px: float, room: Room | 
             continue
         half = tuple(extent / m for extent in room.get(name, (0.0, 0.0)))
         must = rank(name, kept) < 3 or name in LAST
-        found = _place((u, v), half, size, line, FAR_LINES if must else REACH_LINES, placed, pad, bounds, must)
+        found = _place((u, v), half, size, line, FAR_LINES if must else REACH_LINES, placed, things, pad, bounds,
+                       must)
         if found is None:
             hidden.add(name)
             continue
@@ -143,15 +146,21 @@ def lay_out(labels: Labels, metres_per_px: float, label_px: float, room: Room | 
     return Laid(shown, segments, frozenset(hidden), frozenset(flush))
 
 
+def _thing(u: float, v: float, half: tuple[float, float], m: float) -> tuple[float, float, float, float]:
+    """The box, in the layout's pixels, of a thing at (``u``, ``v``) ``half`` metres across and down."""
+    return u - half[0] / m, v - half[1] / m, u + half[0] / m, v + half[1] / m
+
+
 def _place(at: tuple[float, float], half: tuple[float, float], size: tuple[float, float], line: float, lines: int,
-           placed: list[tuple[float, float, float, float]], pad: float, bounds: Bounds | None,
-           must: bool) -> tuple[int, float, float] | None:
-    """The first free place (``places``) inside ``bounds`` for a label of ``size`` naming the thing at
-    ``at``; else, for a label that ``must`` show, the first free place outside them; else None."""
+           placed: list[tuple[float, float, float, float]], things: list[tuple[float, float, float, float]],
+           pad: float, bounds: Bounds | None, must: bool) -> tuple[int, float, float] | None:
+    """The first free place (``places``: off the labels ``placed`` and the ``things`` labelled) inside
+    ``bounds`` for a label of ``size`` naming the thing at ``at``; else, for a label that ``must``
+    show, the first free place outside them; else None."""
     outside = None
     for ring, dx, dy in places(half, size, line, lines):
         box = (at[0] + dx, at[1] + dy, at[0] + dx + size[0], at[1] + dy + size[1])
-        if not _clear(box, placed, pad):
+        if not (_clear(box, placed, pad) and _clear(box, things, 0.0)):
             continue
         if _inside(box, bounds):
             return ring, dx, dy

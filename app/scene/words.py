@@ -15,7 +15,7 @@ WORDS = {
     # (parameter set, field): (label, hint in plain words)
     ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 6-7) "
                         "count as the same neighbour only if they point within this angle of each other (eq. 8)."),
-    ("cbm", "sigma2"): ("σ2 tip distance (m)", "Two neighbour vectors count as the same neighbour only if their "
+    ("cbm", "sigma2"): ("σ2 distance (m)", "Two neighbour vectors count as the same neighbour only if their "
                         "tips are at most this far apart, |Δx| + |Δy| in metres (eq. 8). Larger: more candidate "
                         "matches, more of them wrong."),
     ("cbm", "sigma3"): ("σ3 voting (m)", "In the consensus vote, a candidate pair backs another when their "
@@ -159,7 +159,7 @@ def field_label(cls: str, name: str) -> str:
 
 def setting_words(error: BaseException) -> str:
     """A refused setting in the app's words: the control's label for the field a parameter class
-    names (``σ2 tip distance (m) must be at most 10, got 25``), any other message as it is."""
+    names (``σ2 distance (m) must be at most 10, got 25``), any other message as it is."""
     found = FIELD_ERROR.match(str(error))
     if found is None:
         return str(error)

@@ -103,7 +103,7 @@ def test_the_glossary_holds_every_word_the_issue_names() -> None:
 def test_a_refused_setting_is_said_with_the_controls_label() -> None:
     with pytest.raises(ValueError) as refused:
         CBMParams(sigma2=25.0)
-    assert setting_words(refused.value) == "σ2 tip distance (m) must be at most 10, got 25.0"
+    assert setting_words(refused.value) == "σ2 distance (m) must be at most 10, got 25.0"
     with pytest.raises(ValueError) as refused:
         ScenarioParams(sigma_p=-1.0)
     assert setting_words(refused.value).startswith("position noise σp (m) must be")

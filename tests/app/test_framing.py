@@ -20,8 +20,8 @@ from app.session.presets import discover
 from app.session.settings import Settings
 from evaluation.trials import NoTrial
 
-CANVAS = Canvas(np.radians(50.0), 892.0, 720.0)
-"""A 1280x720 window's canvas left of the docked control panel."""
+CANVAS = Canvas(np.radians(75.0), 892.0, 720.0)
+"""A 1280x720 window's canvas left of the docked control panel, with the field of view chromium reports."""
 COVERED = Area(516.0, 16.0, 876.0, 190.0)
 """The key numbers of a failed frame, at the canvas's top right."""
 HEAVY = (45, 34, 7, 22)
@@ -96,13 +96,14 @@ def test_labels_sit_beside_their_boxes_never_overprint_and_a_crowd_keeps_the_one
     mpp, px = 0.08, 14.0
     labels = {"ego_after": ("ego", (0.0, 0.0, 0.3)), "a": ("✗ ego 1 ↔ CAV 2", (10.0, 0.0, 0.3)),
               "b": ("✗ ego 2 ↔ CAV 1", (9.8, -1.0, 0.3)), "c": ("missed 7", (10.0, 40.0, 0.3)),
-              "pairs_after_missed_1_1": ("missed 0ee9d30a", (0.3, 0.2, 0.3)), "picked": ("ego 5: matched", (10.0, 0.5, 0.3))}
+              "pairs_after_missed_1_1": ("missed 0ee9d30a", (0.3, 0.2, 0.3)),
+              "picked": ("ego 5: matched", (10.0, 0.5, 0.3))}
     room = {name: (1.0, 2.3) for name in labels}
     laid = labelling.lay_out(labels, mpp, px, room)
     assert set(laid.labels) == set(labels) and not laid.hidden
     (_, (x, y, _)), half = laid.labels["ego_after"], room["ego_after"]
-    assert x == pytest.approx(px * labelling.LINE_EM / 2 * mpp) and y == pytest.approx(-half[0] - labelling.GAP_PX * mpp), \
-        "the ego's label starts just right of its vehicle, level with it"
+    assert x == pytest.approx(px * labelling.LINE_EM / 2 * mpp), "level with its vehicle"
+    assert y == pytest.approx(-half[0] - labelling.GAP_PX * mpp), "the ego's label starts just right of its vehicle"
     height = mpp * CANVAS.focal
     pose = ((5.0, 0.0, height), (5.0 + 1e-3, 0.0, 0.0))
     assert overlapping(label_boxes(labels, pose, px)), "the labels given overprint (else this proves nothing)"
@@ -118,7 +119,8 @@ def test_labels_sit_beside_their_boxes_never_overprint_and_a_crowd_keeps_the_one
 
 
 @pytest.mark.parametrize("frame", HEAVY)
-def test_a_failed_heavy_noise_frame_frames_its_deciding_pairs_with_cars_readable(explorer: Explorer, frame: int) -> None:
+def test_a_failed_heavy_noise_frame_frames_its_deciding_pairs_with_cars_readable(explorer: Explorer,
+                                                                                 frame: int) -> None:
     """Issue 47: frame 45 was framed from 227 m, its boxes specks and its labels in a column."""
     drawing = draw(explorer.compute(heavy(frame)), explorer.map_segments)
     pose, aim = camera()._framed(drawing, COVERED)
@@ -136,7 +138,7 @@ def test_the_camera_zooms_back_in_on_a_frame_that_needs_less(explorer: Explorer)
     tab = camera()
     failed, _ = tab._framed(draw(explorer.compute(heavy(45)), explorer.map_segments), COVERED)
     success, _ = tab._framed(draw(explorer.compute(heavy(0)), explorer.map_segments), COVERED)
-    assert success[0][2] < 0.8 * failed[0][2]
+    assert success[0][2] == pytest.approx(framing.LOWEST, rel=0.01) and failed[0][2] > framing.LOWEST * 1.1
 
 
 def test_side_by_side_frames_both_halves(explorer: Explorer) -> None:
