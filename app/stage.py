@@ -3,6 +3,7 @@ camera that frames it, presentation mode's caption, the key numbers floating ove
 label of a box clicked, and the markers at the canvas's edge pointing to pairs out of view."""
 from __future__ import annotations
 
+import threading
 from collections.abc import Callable
 
 import numpy as np
@@ -36,66 +37,71 @@ class Stage:
 
     def __init__(self, client: viser.ClientHandle, picked: Picked, away: Away = lambda marks: None) -> None:
         self.client, self.picked, self.away = client, picked, away
+        self.shown: tuple[Outcome, Drawing] | None = None
+        self.aim = Aim(None)
+        """The last framing: its scale, area and the pairs it left out."""
+        self._lock = threading.RLock()
+        """Held while the scene or the camera changes: a result shown, a reset, a flight, a person's move."""
+        self._later = Later(RELAY_S)
         self.view = SceneView(client)
         self.camera = TabCamera(client)
         self.camera.on_measured = self.reset_camera
         self.camera.on_moved = lambda: self._later.call(self._follow_person)
         self.caption = presentation.Caption(client)
         self.key_numbers = KeyNumbers(client.gui)
-        self.shown: tuple[Outcome, Drawing] | None = None
-        self.aim = Aim(None)
-        """The last framing: its scale, area and the pairs it left out."""
-        self._later = Later(RELAY_S)
 
     def show(self, outcome: Outcome, picture: Drawing, reframe: bool) -> None:
         """Draw a result (inside the client's batch), the camera framing it (``focus``) unless a person
         or the 3D view holds it or *camera follows* is off; framed anyway when ``reframe`` (a jump), when
         it is the first, lays the boxes out anew or enters or leaves presentation mode."""
-        first, last = not self.view.meshes, self.shown and self.shown[0].settings.view
-        self.key_numbers.show(outcome)
-        staged = presentation.restage(self.client, last, outcome.settings.view)
-        relaid = last is not None and outcome.settings.view.layout != last.layout
-        view = outcome.settings.view
-        if reframe or relaid or staged or first or self.camera.may_frame(view):
-            self.aim = self.camera.frame(picture, view, self._covered(view))
-        else:
-            self.aim = Aim(None, self.aim.area, tuple(self._out_of_view(picture, view)))
-        self.view.area = self.aim.area if self.aim.scale else self._canvas_area()
-        self.view.show(picture, self.aim.scale, *self._edges(picture, view))
-        self.caption.show(outcome)
-        if first:
-            for name in picking.NODES:
-                self.view.meshes[name].on_click(self._picked)
-        self.shown = outcome, picture
-        self.away(self.aim.away)
+        with self._lock:
+            first, last = not self.view.meshes, self.shown and self.shown[0].settings.view
+            self.key_numbers.show(outcome)
+            staged = presentation.restage(self.client, last, outcome.settings.view)
+            relaid = last is not None and outcome.settings.view.layout != last.layout
+            view = outcome.settings.view
+            if reframe or relaid or staged or first or self.camera.may_frame(view):
+                self.aim = self.camera.frame(picture, view, self._covered(view))
+            else:
+                self.aim = Aim(None, self.aim.area, tuple(self._out_of_view(picture, view)))
+            self.view.area = self.aim.area if self.aim.scale else self._canvas_area()
+            self.view.show(picture, self.aim.scale, *self._edges(picture, view))
+            self.caption.show(outcome)
+            if first:
+                for name in picking.NODES:
+                    self.view.meshes[name].on_click(self._picked)
+            self.shown = outcome, picture
+            self.away(self.aim.away)
 
     def reset_camera(self, oblique: bool = False) -> None:
         """Frame the frame on screen from straight above (presentation mode: over the two agents);
         ``oblique``: the 3D view, from behind and above the ego. The labels are laid out again."""
-        if self.shown is None:
-            return
-        outcome, picture = self.shown
-        view = outcome.settings.view
-        self.aim = self.camera.frame(picture, view, self._covered(view), oblique)
-        self.view.area = self.aim.area
-        self.view.set_extra(EDGE, *self._edges(picture, view))
-        self.view.lay_out(self.aim.scale)
-        self.away(self.aim.away)
+        with self._lock:
+            if self.shown is None:
+                return
+            outcome, picture = self.shown
+            view = outcome.settings.view
+            self.aim = self.camera.frame(picture, view, self._covered(view), oblique)
+            self.view.area = self.aim.area
+            self.view.set_extra(EDGE, *self._edges(picture, view))
+            self.view.lay_out(self.aim.scale)
+            self.away(self.aim.away)
 
     def fly_to(self, key: str) -> None:
         """Frame the pair ``key`` (``deciding.Mark.key``) of the frame on screen."""
-        if self.shown is None:
-            return
-        outcome, picture = self.shown
-        mark = next((m for m in picture.marks if m.key == key), None)
-        if mark is None:
-            return
-        covered = self._covered(outcome.settings.view)
-        flown = self.camera.fly_to(picture, mark, covered)
-        self.aim = Aim(flown.scale, flown.area, self.aim.away)
-        self.view.area = flown.area
-        self.view.set_extra(EDGE, *self._edges(picture, outcome.settings.view))
-        self.view.lay_out(flown.scale)
+        with self._lock:
+            if self.shown is None:
+                return
+            outcome, picture = self.shown
+            mark = next((m for m in picture.marks if m.key == key), None)
+            if mark is None:
+                return
+            covered = self._covered(outcome.settings.view)
+            flown = self.camera.fly_to(picture, mark, covered)
+            self.aim = Aim(flown.scale, flown.area, self.aim.away)
+            self.view.area = flown.area
+            self.view.set_extra(EDGE, *self._edges(picture, outcome.settings.view))
+            self.view.lay_out(flown.scale)
 
     def _out_of_view(self, picture: Drawing, view: ViewOptions) -> list[Mark]:
         """The pairs of ``picture`` not wholly in sight through the camera as it stands."""
@@ -115,12 +121,13 @@ class Stage:
     def _follow_person(self) -> None:
         """A person moved the camera: the labels are laid out for its scale and the edge markers point
         from where it stands."""
-        if self.shown is None:
-            return
-        outcome, picture = self.shown
-        self.view.area = self._canvas_area()
-        self.view.set_extra(EDGE, *self._edges(picture, outcome.settings.view))
-        self.view.lay_out()
+        with self._lock:
+            if self.shown is None:
+                return
+            outcome, picture = self.shown
+            self.view.area = self._canvas_area()
+            self.view.set_extra(EDGE, *self._edges(picture, outcome.settings.view))
+            self.view.lay_out()
 
     def _canvas_area(self) -> Area:
         """The whole canvas, less the framing's margin: where labels stay under a camera a person moved."""

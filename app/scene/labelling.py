@@ -74,8 +74,11 @@ def places(half: tuple[float, float], size: tuple[float, float], line: float,
            lines: int) -> Iterator[tuple[int, float, float]]:
     """(ring, dx, dy): top-left corners, in pixels from the thing's centre, of the places tried for
     a label ``size`` beside a thing ``half`` pixels across and down: right, left, below and above it
-    (ring 0), then each ring a ``line`` farther: beside it a line lower or higher, and out on each side."""
+    (ring 0; a point first gets its label's corner on it), then each ring a ``line`` farther: beside
+    it a line lower or higher, and out on each side."""
     (rx, ry), (w, h) = half, size
+    if not rx and not ry:
+        yield 0, 0.0, 0.0
     right, left, middle = rx + GAP_PX, -rx - GAP_PX - w, -h / 2
     below, above = ry + GAP_PX, -ry - GAP_PX - h
     yield from ((0, right, middle), (0, left, middle), (0, -w / 2, below), (0, -w / 2, above))
