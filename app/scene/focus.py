@@ -23,6 +23,10 @@ if TYPE_CHECKING:
 READABLE = 0.125
 """The coarsest scale, in metres of ground per CSS pixel, at which the camera takes in a pair: a car
 (4.6 m by 1.9 m) still shows as a box 37 by 15 pixels. Only the agents themselves may need more."""
+SLANT = 1.1
+"""How much higher the camera's final framing may stand than ``needed`` estimates (straight down): its
+slight slant (``framing.TILT``) stretches the near edge of a 75° view by up to a tenth, which
+``framing.frame_in`` narrows for; ``choose`` aims that much lower."""
 CONTEXT_SLACK = 1.02
 """How much higher (a share) the camera may stand to take in the boxes around what it frames."""
 EDGE_PX = 6.0
@@ -59,16 +63,16 @@ def mark_spots(drawing: Drawing, mark: Mark, m: float) -> list[Spot]:
 
 
 def needed(spots: list[Spot], canvas: Canvas, areas: list[Area]) -> float:
-    """Metres per pixel of the closest camera that frames ``spots`` in one of ``areas``."""
-    return framing.metres_per_px(*framing.frame(spots, canvas, areas), canvas)
+    """Metres per pixel of the closest camera that frames ``spots`` in one of ``areas`` (seen straight
+    down: the final ``framing.frame`` takes the perspective in)."""
+    return 1.0 / max(framing.fitting_scale(spots, canvas, area) for area in areas)
 
 
 def choose(drawing: Drawing, canvas: Canvas, areas: list[Area]) -> tuple[list[Mark], list[Mark]]:
     """(shown, away): the pairs the camera takes in, in ``ordered`` order, each while the scale
     stays at ``READABLE`` (or at what the agents alone need), and the others."""
-    m = READABLE
-    spots = base_spots(drawing, m)
-    limit = max(READABLE, needed(spots, canvas, areas))
+    spots = base_spots(drawing, READABLE)
+    limit = max(READABLE / SLANT, needed(spots, canvas, areas))
     shown, away = [], []
     for mark in ordered(drawing.marks):
         trial = spots + mark_spots(drawing, mark, limit)

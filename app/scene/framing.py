@@ -28,6 +28,8 @@ taken for a denser screen (``pixel_ratio``)."""
 CHAR_EM, LINE_EM = 0.62, 1.45
 """A label's character width and line height, in ems of its text height (viser draws labels in the
 system sans-serif font, on a background padded by a fifth of an em)."""
+BISECTIONS = 24
+"""Halvings of the scale's bracket (``_fitting_scale``): to a sixteen-millionth of the closest scale."""
 SHIFTS = (1.0, 0.75, 0.5, 0.25)
 """The shares of the way to the canvas's middle ``balanced`` tries, the longest first."""
 NARROWINGS, NARROW_PX = 6, 8.0
@@ -125,7 +127,7 @@ def _fitting_scale(ground: np.ndarray, extent: np.ndarray, room: float, most: fl
     if _length(ground, extent, most) <= room:
         return most
     low, high = 0.0, most
-    for _ in range(40):
+    for _ in range(BISECTIONS):
         middle = (low + high) / 2
         low, high = (middle, high) if _length(ground, extent, middle) <= room else (low, middle)
     return max(low, most * 1e-3)
@@ -134,12 +136,17 @@ def _fitting_scale(ground: np.ndarray, extent: np.ndarray, room: float, most: fl
 def framed(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Camera position and look-at point, looking down, at which every spot shows whole inside
     ``area`` of ``canvas`` (no lower than ``LOWEST``): x points up the screen, y to its left."""
+    return centred(spots, canvas, area, fitting_scale(spots, canvas, area))
+
+
+def fitting_scale(spots: list[Spot], canvas: Canvas, area: Area) -> float:
+    """The most pixels per metre (no closer than ``LOWEST``) at which the spots fit ``area``, seen
+    straight down (the perspective left out: ``frame_in`` narrows the area for it)."""
     xs, ys = np.array([s.x for s in spots]), np.array([s.y for s in spots])
     widths, heights = np.array([s.width for s in spots]), np.array([s.height for s in spots])
     most = canvas.focal / LOWEST
-    k = min(_fitting_scale(ys, widths, area.right - area.left, most),
-            _fitting_scale(xs, heights, area.bottom - area.top, most))
-    return centred(spots, canvas, area, k)
+    return min(_fitting_scale(ys, widths, area.right - area.left, most),
+               _fitting_scale(xs, heights, area.bottom - area.top, most))
 
 
 def centred(spots: list[Spot], canvas: Canvas, area: Area, k: float) -> tuple[tuple[float, ...], tuple[float, ...]]:

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from app.scene import focus
+from app.scene.view import LEADERS
 from app.session.explorer import Explorer
 from support import browser as ui
 from support import pixels
@@ -45,15 +46,22 @@ def type_into(page, label: str, value: str) -> None:
 
 def beside(tab, name: str) -> bool:
     """Whether label ``name`` shows next to the box it names: its nearest point within a few lines of
-    the box's edge, or joined to it by a leader line."""
+    the box's edge, or a leader line from the box's edge to the label."""
     view = tab.stage.view
     label = label_boxes(tab, lambda n: n == name)[name]
-    x, y, _ = tab.stage.view.wanted[name][1]
+    x, y, _ = view.wanted[name][1]
     u, v = pixels.project(tab.client.camera, np.array([[x, y, 0.0]]))[0]
     nearest = np.array([min(max(u, label[0]), label[2]), min(max(v, label[1]), label[3])])
     across, down = view.room.get(name, (0.0, 0.0))
-    reach = np.hypot(across, down) / metres_per_px(tab) + 4 * 1.45 * view.label_px
-    return bool(np.hypot(*(nearest - (u, v))) <= reach)
+    edge = np.hypot(across, down) / metres_per_px(tab)
+    if np.hypot(*(nearest - (u, v))) <= edge + 4 * 1.45 * view.label_px:
+        return True
+    leaders = view.lines.get(LEADERS)
+    if leaders is None or not leaders.visible:
+        return False
+    ends = pixels.project(tab.client.camera, np.asarray(leaders.points, float).reshape(-1, 3)).reshape(-1, 2, 2)
+    return any(np.hypot(*(start - (u, v))) <= edge + 2 and label[0] - 2 <= end[0] <= label[2] + 2
+               and label[1] - 2 <= end[1] <= label[3] + 2 for start, end in ends)
 
 
 def assert_explains(page, tab, readable: bool = True) -> None:
