@@ -8,11 +8,17 @@ labels; the key numbers say CBM was sure and wrong with the reason, the glossary
 and a number box given text says so.
 
 The scene's state is what the server sent the browser (``support.scene_state``); the camera is the
-one the browser reports."""
+one the browser reports. With ``CBM_UPDATE_DOCS_IMG=1`` the test also saves what it checked as
+docs/img/failure/after_*.png."""
 from __future__ import annotations
+
+import io
+import os
+from pathlib import Path
 
 import numpy as np
 import pytest
+from PIL import Image
 
 from app.scene import focus
 from app.scene.view import LEADERS
@@ -23,6 +29,16 @@ from support.scene_state import box_pixels, floating_panels, label_boxes, meets,
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
 HEAVY = (45, 34, 7, 22)
+DOCS = Path(__file__).resolve().parents[2] / "docs" / "img" / "failure"
+
+
+def keep(page, name: str) -> None:
+    """Save the page as docs/img/failure/after_``name``.png (with ``CBM_UPDATE_DOCS_IMG=1``), in 256 colours."""
+    if os.environ.get("CBM_UPDATE_DOCS_IMG") == "1":
+        ui.close_notifications(page)
+        shot = Image.open(io.BytesIO(ui.settled_screenshot(page))).convert("RGB")
+        shot.quantize(256, method=Image.Quantize.FASTOCTREE, dither=Image.Dither.NONE).save(
+            DOCS / f"after_{name}.png", optimize=True)
 
 
 @pytest.fixture(scope="module")
@@ -110,20 +126,23 @@ def test_failed_heavy_noise_frames_frame_what_decides_them(browser, server) -> N
         ui.go_to_frame(page, tab, frame)
         assert_explains(page, tab)
         assert box_pixels(tab, page) >= 0.2 * first, f"frame {frame}: boxes of a readable size"
+        keep(page, f"heavy_{frame}")
     ui.go_to_frame(page, tab, 45)
     settled(page, tab)
     failed_height = tab.client.camera.position[2]
     keys = page.locator("#cbm-key-numbers").inner_text()
     assert "CBM was not sure, rightly" in keys and "sure from 8" in keys
+    ui.go_to_frame(page, tab, 0)
+    settled(page, tab)
+    assert tab.client.camera.position[2] < 0.9 * failed_height, "back on a frame that succeeds, it zooms in again"
+    keep(page, "heavy_0_after_45")
 
+    ui.go_to_frame(page, tab, 45)
+    settled(page, tab)
     key, _ = next(iter(tab.controls.metrics.away_keys.items()))
     mark = next(m for m in tab.last_drawing.marks if m.key == tab.controls.metrics.away_keys[key])
     page.get_by_role("button", name=key).click()
     ui.wait_until(lambda: tab.stage.camera.arrived and on_screen(mark.points, tab, page).all(), 60)
-
-    ui.go_to_frame(page, tab, 0)
-    settled(page, tab)
-    assert tab.client.camera.position[2] < 0.9 * failed_height, "back on a frame that succeeds, it zooms in again"
     page.close()
 
 
@@ -162,6 +181,7 @@ def test_method_none_side_by_side_and_three_cavs_are_framed_whole(browser, serve
         assert len(tab.last_drawing.agents) == 4
         assert {"before", "after"} <= set(label_boxes(tab)), "both halves' titles show"
     assert box_pixels(tab, page) >= 0.2 * first * (0.5 if change == "side by side" else 1.0)
+    keep(page, {"none": "heavy_45_none", "side by side": "heavy_45_side", "three CAVs": "heavy_45_three_cavs"}[change])
     page.close()
 
 
