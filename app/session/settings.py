@@ -57,8 +57,8 @@ class ViewOptions:
     points_every: int = 10
     """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
     follow: bool = True
-    """While stepping or playing, the camera moves only when something that matters (an agent, a
-    wrong or missed pair) would leave the view; off: it stays still."""
+    """The camera frames every frame shown (the agents and the pairs that explain it), unless a person
+    moved it; off: it stays still."""
     fused: bool = False
     """Late fusion (``evaluation.fusion``): outlines of the fused boxes, green a true positive, red a false
     one (BEV IoU 0.7 against what either agent sees), at each panel's CAV pose."""
