@@ -17,6 +17,7 @@ import loaders
 from evaluation.stop import FORCE_AFTER_S, Watchdog, force_exit, kill_descendants
 
 from .panels.registry import tabs_help
+from .scene.words import plural
 from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
 from .session.explorer import Explorer
@@ -166,7 +167,7 @@ def main(argv: list[str] | None = None) -> int:
     if not local:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")
-    print(f"CBM Explorer on {sequence.name} ({len(sequence)} frames): open {server.url}", flush=True)
+    print(f"CBM Explorer on {sequence.name} ({plural(len(sequence), 'frame')}): open {server.url}", flush=True)
     server.kernels.when_ready(lambda: print(kernels_ready_line(server.kernels), flush=True))
     while not stopping.wait(0.1):
         pass

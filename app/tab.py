@@ -19,7 +19,7 @@ from .panels.keynumbers import unusable_markdown
 from .panels.metrics import timeline_of
 from .scene.drawing import Drawing, draw
 from .scene.pinned import with_baseline
-from .scene.words import error_words
+from .scene.words import error_words, setting_words
 from .session.baseline import Baseline
 from .session.coalesce import Coalescer
 from .session.explorer import Explorer, Outcome
@@ -53,7 +53,8 @@ class ClientSession:
         self.baseline = Baseline()
         self._frame_for: Settings | None = None
         """Settings whose result the camera is to frame when shown (a jump to a frame)."""
-        self.stage = Stage(client, lambda *clicked: self.controls.call("picked", *clicked))
+        self.stage = Stage(client, lambda *clicked: self.controls.call("picked", *clicked),
+                           lambda marks: self.controls.metrics.show_away(marks))
         self.offers = offers_of(explorer.sequence)
         self.controls = panels.build(client.gui, self)
         for warning in explorer.sequence.warnings:
@@ -97,7 +98,7 @@ class ClientSession:
                 self._frame_for = new if frame_camera else self._frame_for
                 self.worker.submit(new)
         except (ValueError, TypeError) as error:
-            self.notify("Setting refused", str(error), "red")
+            self.notify("Setting refused", setting_words(error), "red")
             self.controls.show(self._settings)
             return
         if switched:
@@ -118,6 +119,9 @@ class ClientSession:
 
     def hide_click_label(self) -> None:
         self.stage.hide_click_label()
+
+    def fly_to(self, key: str) -> None:
+        self.stage.fly_to(key)
 
     def refresh(self) -> None:
         """Recompute the settings on screen (the pinned baseline changed)."""

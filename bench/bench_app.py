@@ -206,7 +206,7 @@ def measure(dataset: str, edits: int, browser) -> list[Run]:
         page.get_by_text("precision / recall").first.wait_for(timeout=300_000)
         session = next(iter(server.sessions.values()))
         page.get_by_role("tab", name="Method").click()
-        sigma2 = number_box(page, "σ2 L1 (m)")
+        sigma2 = number_box(page, "σ2 distance (m)")
         timed_edits(page, sigma2, *sigma2_edits(2))
         runs = []
         for edit, box, (values, markers) in (("σ2", sigma2, sigma2_edits(edits)),

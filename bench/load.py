@@ -128,7 +128,7 @@ class Tab:
             self.page.get_by_role("tab", name="Explore").click()
             self.page.get_by_role("button", name="run all frames").click()
         self.page.get_by_role("tab", name="Method").click()
-        self.box = number_box(self.page, "σ2 L1 (m)")
+        self.box = number_box(self.page, "σ2 distance (m)")
         self.page.evaluate(WATCH)
 
     def edit(self) -> None:

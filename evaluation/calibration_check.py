@@ -150,9 +150,14 @@ def flagged_markdown(rows: list[FrameCheck], thresholds: Thresholds) -> str:
     """The flagged frames as a markdown table (what the CLI prints and writes)."""
     flagged = [row for row in rows if row.flagged]
     judged = sum(row.judged_by != "none" for row in rows)
-    head = (f"{len(flagged)} of {judged} judged frame checks disagree with the dataset's transform by more "
-            f"than {thresholds.metres:g} m / {thresholds.degrees:g} deg ({len(rows) - judged} had fewer than "
-            f"{MIN_PAIRS} shared objects)\n")
+    checked = f"{judged} frame{'s' * (judged != 1)} checked"
+    unchecked = f"{len(rows) - judged} had fewer than {MIN_PAIRS} shared objects to check"
+    limits = f"more than {thresholds.metres:g} m / {thresholds.degrees:g} deg"
+    if flagged:
+        verb = "disagrees" if len(flagged) == 1 else "disagree"
+        head = f"{len(flagged)} of {checked} {verb} with the dataset's transform by {limits} ({unchecked})\n"
+    else:
+        head = f"No frame disagrees with the dataset's transform by {limits} ({checked}; {unchecked})\n"
     if not flagged:
         return head
     lines = ["", "| frame | frame id | ego | CAV | judged by | shared | oracle m | oracle deg | CBM m | CBM deg |",

@@ -15,7 +15,7 @@ import viser
 from ..scene.drawing import Drawing
 from ..session.explorer import Outcome
 from ..session.settings import Settings
-from . import frame, metrics
+from . import frame, metrics, numbers
 from .actions import TabActions
 from .registry import found
 
@@ -83,6 +83,7 @@ def build(gui: viser.GuiApi, tab: TabActions) -> Controls:
     metrics.bind(shown, tab)
     controls = Controls(shown, frames, tabs, parts)
     controls.reflect(tab.settings)
+    numbers.teach(tab.client)
     return controls
 
 

@@ -3,11 +3,11 @@ one scroll area, so the metrics at its top scroll away while a slider deep in a 
 box never does, and sits where the eye is while editing (notifications open top-left). It is a
 small panel of its own floating at the canvas's top right (viser's ``add_panel``), so it follows the
 docked control panel's edge when that is dragged wider. It also carries the lasting message of a
-frame CBM cannot run on (``unusable_markdown``)."""
+frame CBM cannot run on (``unusable_markdown``), and, in a tab of its own, the glossary of the words
+the panels use (``app.scene.glossary``)."""
 from __future__ import annotations
 
 import html
-import math
 
 import numpy as np
 import viser
@@ -18,8 +18,10 @@ from loaders import is_vehicle
 
 from ..scene import cavs
 from ..scene.colours import Palette, palette
+from ..scene.confidence import SURE_WORDS, sure_words, verdict
+from ..scene.glossary import glossary_html
 from ..scene.text import number
-from ..scene.words import error_words, times_better
+from ..scene.words import error_words
 from ..session.explorer import Explorer, Outcome
 from ..session.markup import plain
 from ..session.settings import Settings
@@ -28,7 +30,11 @@ ELEMENT_ID = "cbm-key-numbers"
 WARNING_ID = "cbm-not-enough-evidence"
 WARNING_COLOUR = "#c77700"
 """The warning light of a pose CBM has not enough evidence for (amber: shown, but not to be trusted)."""
-TAB = "Key numbers"
+WRONG_ID = "cbm-sure-and-wrong"
+WRONG_COLOUR = "#d01c1c"
+"""The light of a pose CBM was sure of on a failed frame (red: its confidence was wrong)."""
+TAB, WORDS_TAB = "Key numbers", "Words"
+"""The floating panel's tabs: the frame's key numbers, and the glossary of the words they use."""
 GAP, WIDTH = 16.0, 360.0
 """CSS pixels from the canvas's top right corner to the panel, and its width."""
 STYLE = "font:13px/1.4 system-ui,sans-serif;padding:2px 12px 8px;color:inherit"
@@ -36,42 +42,43 @@ STYLE = "font:13px/1.4 system-ui,sans-serif;padding:2px 12px 8px;color:inherit"
 
 def key_numbers_html(outcome: Outcome) -> str:
     """One line per fact: the frame and its verdict, precision / recall, the pose errors, and CBM's
-    confidence (``evidence_lines``); with several CAVs, how many succeed and a line per CAV
-    (``per_cav_line``)."""
+    confidence against the truth (``confidence_lines``); with several CAVs, how many succeed and a
+    line per CAV (``per_cav_line``)."""
     m = outcome.metrics
     if not outcome.others:
         return _box([f"<b>Frame {outcome.frame_index}</b> · {_verdict(m)}",
                      f"precision / recall {number(m.precision)} / {number(m.recall)}",
                      f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}",
-                     *evidence_lines(outcome.result)])
+                     *confidence_lines(outcome)])
     shown = cavs.every_cav(outcome)
     wins = sum(is_success(cav.metrics) for cav in shown)
-    return _box([f"<b>Frame {outcome.frame_index}</b> · {wins} of {len(shown)} CAVs succeed",
+    sure = f" · {SURE_WORDS}" if any(sure_words(cav.result) for cav in shown) else ""
+    return _box([f"<b>Frame {outcome.frame_index}</b> · {wins} of {len(shown)} CAVs succeed{sure}",
                  *(per_cav_line(cav, palette(outcome.settings.view)) for cav in shown)])
 
 
-def evidence_lines(result: object) -> list[str]:
-    """A warning light and the reason when CBM says it has not enough evidence
-    (``MatchResult.abstained``), else how much better its pose explains the scene than the
-    runner-up pose (nothing for methods that do not verify)."""
-    if getattr(result, "abstained", False):
-        reason = html.escape(getattr(result, "reason", ""))
-        return [f'<span id="{WARNING_ID}" style="color:{WARNING_COLOUR}">&#9679;</span> '
-                f"<b>not enough evidence</b>: {reason}"]
-    margin = getattr(result, "evidence_margin", math.nan)
-    if math.isnan(margin):
+def confidence_lines(outcome: Outcome) -> list[str]:
+    """CBM's confidence against the truth (``confidence.verdict``), after a light: amber when CBM was
+    not sure, red when it was sure and wrong (nothing for methods that do not verify)."""
+    success = is_success(outcome.metrics)
+    words = verdict(outcome.result, success, getattr(outcome, "findings", ()))
+    if words is None:
         return []
-    if math.isinf(margin):
-        return ["confidence: no other pose explains the scene"]
-    return [f"confidence: {margin:.1f} (the pose explains the scene {times_better(margin)} than the runner-up)"]
+    head, _, rest = words.partition(":")
+    if getattr(outcome.result, "abstained", False):
+        light = f'<span id="{WARNING_ID}" style="color:{WARNING_COLOUR}">&#9679;</span> '
+    else:
+        light = "" if success else f'<span id="{WRONG_ID}" style="color:{WRONG_COLOUR}">&#9679;</span> '
+    return [f"{light}<b>{html.escape(head)}</b>:{html.escape(rest)}"]
 
 
 def per_cav_line(cav: cavs.ShownCav, colours: Palette) -> str:
-    """One CAV's verdict, precision / recall and pose errors, after a square of its colour."""
+    """One CAV's verdict, precision / recall, pose errors and CBM's confidence, after a square of its colour."""
     m, (r, g, b) = cav.metrics, cavs.box_colour(cav.rank, colours)
+    sure = sure_words(cav.result)
     return (f'<span style="color:rgb({r},{g},{b})">■</span> CAV {cav.rank} · {_verdict(m)} · '
             f"P / R {number(m.precision)} / {number(m.recall)} · "
-            f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}")
+            f"RRE / RTE {number(m.rre, '°')} / {number(m.rte, ' m')}" + (f" · {html.escape(sure)}" if sure else ""))
 
 
 def _verdict(m: TrialMetrics) -> str:
@@ -122,6 +129,8 @@ class KeyNumbers:
         self.panel = gui.add_panel()
         with self.panel.add_tab(TAB):
             self.handle = gui.add_html(problem_html("Computing the first frame…"))
+        with self.panel.add_tab(WORDS_TAB):
+            gui.add_html(glossary_html(STYLE))
         self.panel.float(x=-GAP, y=GAP, width=WIDTH)
 
     def show(self, outcome: Outcome) -> None:

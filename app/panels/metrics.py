@@ -17,6 +17,7 @@ from viser._messages import GuiSliderMark
 
 from cbm.methods import METHODS
 
+from ..scene.deciding import Mark
 from ..session.baseline import Baseline
 from ..session.coalesce import Later
 from ..session.history import FAILED_MEANING, FrameHistory, step_to_failure
@@ -29,6 +30,9 @@ than the rest of a result, and while a slider moves only the last result's timel
 FAILED_HEADER = "failed frames"
 PIN, UNPIN = "pin baseline", "unpin"
 HELP, HELP_SHOWN = "? what the timeline shows", "? hide the timeline's help"
+AWAY_HINT = ("pairs (ego id ↔ CAV id, and how far from the ego) that tell why this frame failed but lie outside "
+             "the view at a scale where a car still reads as a box; a click flies the camera there (an arrow at the "
+             "scene's edge points to them)")
 HINT = (f"Red dots: failed frames ({FAILED_MEANING}); black bar: this frame; dashed: pinned; a gap: frames not "
         "computed. Fills with every frame computed (stepping, play, *run all frames*) until a setting other than "
         "frame, CAV or view changes.")
@@ -46,6 +50,9 @@ class TimelineTab(TabActions, Protocol):
     def stop_catching_up(self) -> None:
         """Stop a method over time computing the frames before the one asked for."""
 
+    def fly_to(self, key: str) -> None:
+        """Frame one pair of the frame on screen (``deciding.Mark.key``)."""
+
 
 @dataclass
 class MetricsControls:
@@ -53,6 +60,8 @@ class MetricsControls:
     stop: viser.GuiButtonHandle
     """Stops a method over time computing the frames before the one asked for (shown meanwhile)."""
     text: viser.GuiMarkdownHandle
+    away: viser.GuiButtonGroupHandle
+    """The pairs left out of view, one button each (``show_away``): a click flies the camera there."""
     plot: viser.GuiUplotHandle
     scrubber: viser.GuiSliderHandle
     """The frame slider (``frame.Navigation``): a mark on each failed frame known."""
@@ -62,6 +71,8 @@ class MetricsControls:
     help: viser.GuiButtonHandle
     """The "?" that shows or hides ``legend``, the timeline's help."""
     legend: viser.GuiMarkdownHandle
+    away_keys: dict[str, str] = field(default_factory=dict)
+    """Each button of ``away`` -> the pair's key (``deciding.Mark.key``)."""
     later: Later = field(default_factory=lambda: Later(TIMELINE_DELAY))
     """Draws the timeline of the latest result (``show_timeline_soon``)."""
     closed: bool = False
@@ -80,6 +91,14 @@ class MetricsControls:
         """One result's metrics, and what to say above them (the timeline follows, ``show_timeline``)."""
         self.say(status)
         assign(self.text, content=metrics_markdown)
+
+    def show_away(self, marks: tuple[Mark, ...]) -> None:
+        """A button for each pair out of view (hidden when there is none)."""
+        keys = {f"{mark.words} · {mark.distance:.0f} m": mark.key for mark in marks}
+        if keys != self.away_keys:
+            self.away_keys = keys
+            self.away.options = tuple(keys) or ("-",)
+        self.away.visible = bool(keys)
 
     def show_timeline(self, timeline: tuple[np.ndarray, ...], failures: list[int], pinned: bool, frame: int,
                       over_time: bool = False) -> None:
@@ -131,6 +150,7 @@ def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle,
     """The metrics and the timeline's controls; ``frame_slider`` (built above them) carries the
     marks, ``status`` is ``build_status``'s line and button."""
     text = gui.add_markdown("Computing the first frame…")
+    away = gui.add_button_group("not in view", ("-",), visible=False, hint=AWAY_HINT)
     plot = add_timeline(gui)
     failures = gui.add_button_group("failure", ("◀ previous failure", "next failure ▶"))
     failed = gui.add_dropdown("jump to", (f"{FAILED_HEADER} (0 known)",),
@@ -138,11 +158,12 @@ def build(gui: viser.GuiApi, frame_slider: viser.GuiSliderHandle,
     pin = gui.add_button(PIN, hint="keep these settings and their per-frame results to compare against")
     help_button = gui.add_button(HELP, hint="what the timeline's dots, bar, dashes and gaps mean")
     legend = gui.add_markdown(HINT, visible=False)
-    return MetricsControls(*status, text, plot, frame_slider, failures, failed, pin, help_button, legend)
+    return MetricsControls(*status, text, away, plot, frame_slider, failures, failed, pin, help_button, legend)
 
 
 def bind(c: MetricsControls, tab: TimelineTab) -> None:
     c.stop.on_click(lambda e: tab.stop_catching_up())
+    c.away.on_click(lambda e: tab.fly_to(c.away_keys.get(e.target.value, "")))
     c.failures.on_click(lambda e: step_failure(tab, -1 if e.target.value.startswith("◀") else 1))
     on_user(c.failed, lambda: jump(tab, c.failed.value))
     c.pin.on_click(lambda e: toggle_pin(tab))

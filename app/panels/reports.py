@@ -11,6 +11,7 @@ from evaluation.search import all_tie
 
 from ..scene.differences import Difference, change_lines, now_words
 from ..scene.text import number
+from ..scene.words import plural
 from ..session.search import OBJECTIVE_LABELS, SearchResult
 from ..session.sequence import SequenceRun
 
@@ -20,7 +21,7 @@ def sequence_markdown(run: SequenceRun) -> str:
     frames with an estimate and the late-fusion AP."""
     s = run.summary()
     state = "cancelled after" if run.cancelled else "over"
-    head = (f"**{METHODS[run.settings.method].label}**, {state} {len(run.rows)} of {run.n_frames} frames "
+    head = (f"**{METHODS[run.settings.method].label}**, {state} {len(run.rows)} of {plural(run.n_frames, 'frame')} "
             f"(seed {run.settings.scenario.seed}, {run.settings.scenario.protocol} protocol)")
     if not s:
         return head + "\n\nNo frame was run."
@@ -38,8 +39,8 @@ def sequence_markdown(run: SequenceRun) -> str:
 def search_markdown(result: SearchResult, top: int = 5) -> str:
     """The table of the best settings against the current ones, with how ties were broken."""
     objective = OBJECTIVE_LABELS[result.objective]
-    lines = [(f"**Best of {len(result.candidates)} settings** by {objective} over "
-              f"{len(result.frames)} frames (seed {result.settings.scenario.seed})"), "", ties_words(result), "",
+    over = f"{plural(len(result.frames), 'frame')} (seed {result.settings.scenario.seed})"
+    lines = [f"**Best of {len(result.candidates)} settings** by {objective} over {over}", "", ties_words(result), "",
              "| | σ1 | σ2 | σ3 | limit | score | RTE | margin | success | P / R |",
              "|---|---|---|---|---|---|---|---|---|---|"]
     rows = [(f"#{k + 1}", c) for k, c in enumerate(result.candidates[:top])] + [("current", result.current)]

@@ -98,12 +98,12 @@ def build(gui: viser.GuiApi, settings: Settings, offers: Offers) -> ViewControls
         sight=gui.add_checkbox("agents' sight", view.sight, hint=SIGHT_HINT),
         pinned_lines=gui.add_checkbox("show pinned matches", view.pinned_lines,
                                       hint="The pinned baseline's match lines, thin violet (pin under the timeline)"),
-        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene, framing the agents and every "
-                                                          "wrong and missed pair: footprints show as compared"),
+        reset_camera=gui.add_button("reset camera", hint="Straight down on the scene, framing the agents and the "
+                                                          "pairs that explain the frame: footprints show as compared"),
         view_3d=gui.add_button("3D view", hint="From behind and above the ego (reset camera: back to top-down)"),
         follow=gui.add_checkbox("camera follows", view.follow,
-                                hint="While stepping or playing, move the camera only when an agent or a wrong or "
-                                     "missed pair would leave the view (a camera you moved stays until reset camera)"),
+                                hint="Frame every frame shown, the agents and the pairs that explain it (off: the "
+                                     "camera stays still; a camera you moved stays until reset camera)"),
         presentation=gui.add_checkbox("presentation mode", view.presentation,
                                       hint="Colour-blind-safe palette, large labels, the key numbers in the 3D "
                                            "view, the camera over the two agents, this panel minimised"),

@@ -9,6 +9,7 @@ from typing import TYPE_CHECKING
 from evaluation.metrics import is_success
 
 from ..session.settings import ViewOptions
+from .confidence import margin_words, verdict
 from .seen import caption_line
 from .text import number
 
@@ -30,13 +31,16 @@ def label_px(view: ViewOptions) -> float:
 
 def caption_lines(outcome: Outcome) -> list[str]:
     """The frame and its verdict, precision and recall, the pose errors (to the key numbers'
-    precision: an RRE of 0.04° is not "0.0°"): one line each (with several CAVs, the first CAV's,
-    and the caption says so)."""
+    precision: an RRE of 0.04° is not "0.0°") and CBM's confidence against the truth (its words and
+    evidence margin, without the reason): one line each (with several CAVs, the first CAV's, and the
+    caption says so)."""
     m = outcome.metrics
     which = f"CAV 1 of {len(outcome.others) + 1} · " if outcome.others else ""
+    words = verdict(outcome.result, is_success(m))
+    sure = [f"{words.partition(':')[0]} · {margin_words(outcome.result) or 'no evidence margin'}"] if words else []
     return [f"Frame {outcome.frame_index} · {which}{'success' if is_success(m) else 'failed'}",
             f"precision {number(m.precision)} · recall {number(m.recall)}",
-            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}", *caption_line(outcome)]
+            f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}", *sure, *caption_line(outcome)]
 
 
 def caption_html(outcome: Outcome) -> str:

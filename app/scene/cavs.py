@@ -17,7 +17,7 @@ from . import colours
 from .colours import CAV_COLOURS
 from .pairs import Drawn
 
-COLOUR_NAMES = ("orange", "reddish purple", "sky blue", "yellow")
+COLOUR_NAMES = ("orange", "teal", "sky blue", "yellow")
 """How the metrics table names each CAV's colour: the first CAV's orange, then ``CAV_COLOURS``."""
 SLIM = (0.7, 0.5, 0.35, 0.25)
 """Width and length of each CAV's drawn footprints, per rank, as a fraction of the box's: nested on

@@ -16,7 +16,7 @@ from loaders import Frame, is_roadside
 
 from ..session.explorer import Outcome
 from ..session.settings import MAX_CAVS
-from . import captions, cavs, colours, geometry, pairs, planes, seen
+from . import captions, cavs, colours, deciding, geometry, pairs, planes, seen
 from .layouts import LAYOUTS, TITLE_AT, Panel
 from .memo import ByContent
 from .points import PointCloud, clouds, problems_markdown
@@ -65,6 +65,12 @@ class Drawing:
     """Height of the labels' text in CSS pixels."""
     points: dict[str, PointCloud] = field(default_factory=dict)
     """The agents' LiDAR points (``ego_points``, ``cav_points``; empty unless the view asks for them)."""
+    room: pairs.Room = field(default_factory=dict)
+    """Half extents of what each label names (``labelling.lay_out`` sets the label beside it)."""
+    kept: frozenset[str] = frozenset()
+    """The labels the picture must show however crowded (the agents', the titles, the deciding pairs')."""
+    marks: tuple[deciding.Mark, ...] = ()
+    """The pairs the camera is to show, most telling first (``deciding``)."""
 
 
 @dataclass
@@ -84,6 +90,10 @@ class _Parts:
     before_poses: list[np.ndarray] = field(default_factory=list)
     shapes: list[pairs.PairShapes] = field(default_factory=list)
     labels: dict[str, tuple[str, tuple[float, float, float]]] = field(default_factory=dict)
+    room: pairs.Room = field(default_factory=dict)
+    marks: list[deciding.Mark] = field(default_factory=list)
+    ranked: dict[int, list[deciding.Ranked]] = field(default_factory=dict)
+    """Each CAV's pairs in the camera's order (``deciding.ranked_pairs``), found once for every copy."""
     map_poses: list[np.ndarray] = field(default_factory=list)
     roadside: set[int] = field(default_factory=set)
     """The ranks of the CAVs that are roadside units (drawn as a mast, not a car)."""
@@ -111,10 +121,15 @@ def draw(outcome: Outcome, map_segments: dict[str, np.ndarray], frame: Frame | N
     sights = _sights(seen.sight_fans(outcome, panels), palette)
     lines.update({**sights[1], "moved": Lines(moved, palette.cav_vehicle, 2.0)})
     labels = {**parts.labels, **{k: v for shapes in parts.shapes for k, v in shapes.labels.items()}, **moved_labels}
+    room = {**parts.room, **{k: v for shapes in parts.shapes for k, v in shapes.room.items()}}
+    marks = deciding.merged(parts.marks)
+    kept = ({name for name in parts.labels} | set(moved_labels)
+            | {name for mark in marks if mark.deciding for name in mark.labels})
     return Drawing(meshes={**_meshes(parts, ego, palette), **sights[0]}, lines=lines, labels=labels,
                    metrics_markdown=metrics_markdown(outcome) + problems_markdown(points), objects=objects,
                    centre_y=float(np.mean([panel.offset[1] for panel in panels])),
-                   agents=agents, label_px=captions.label_px(view), points=points)
+                   agents=agents, label_px=captions.label_px(view), points=points, room=room,
+                   kept=frozenset(kept), marks=marks)
 
 
 def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: bool, palette: colours.Palette) -> None:
@@ -127,8 +142,9 @@ def _add_panel(parts: _Parts, outcome: Outcome, panel: Panel, before_ghosts: boo
     parts.ego.append(ego.boxes)
     parts.ego_poses.append(shift)
     parts.labels[f"ego_{panel.placement}"] = ("ego", (*se2.translation_of(shift), planes.LABELS))
+    parts.room[f"ego_{panel.placement}"] = _vehicle_room(shift, geometry.CAR_SIZE)
     if panel.title:
-        parts.labels[panel.placement] = (panel.title, (TITLE_AT[0], float(panel.offset[1]), TITLE_AT[1]))
+        parts.labels[panel.placement] = (panel.title, (TITLE_AT, float(panel.offset[1]), planes.LABELS))
     shown = cavs.every_cav(outcome)
     for cav in shown:
         _add_cav(parts, cav, len(shown), panel, ego, view.lines, palette)
@@ -158,12 +174,17 @@ def _add_cav(parts: _Parts, cav: cavs.ShownCav, count: int, panel: Panel, ego: p
         parts.roadside.add(cav.rank)
     parts.tiles[cav.rank].append(drawn.boxes)
     parts.cav_poses[cav.rank].append(pose)
-    parts.labels[f"{cavs.node('cav', cav.rank)}_{panel.placement}"] = (name, (*se2.translation_of(pose), planes.LABELS))
+    label = f"{cavs.node('cav', cav.rank)}_{panel.placement}"
+    parts.labels[label] = (name, (*se2.translation_of(pose), planes.LABELS))
+    parts.room[label] = _vehicle_room(pose, _body(parts, cav.rank))
     if lines:
         partners = cavs.drawn_partners(cav, ego, panel.offset) if cav.rank > 1 else ego
-        shapes = pairs.pair_shapes(cav.pairs, cav.trial.gt_pairs, partners, drawn, palette, name,
-                                   f"{cavs.node('pairs', cav.rank)}_{panel.placement}")
+        key = f"{cavs.node('pairs', cav.rank)}_{panel.placement}"
+        shapes = pairs.pair_shapes(cav.pairs, cav.trial.gt_pairs, partners, drawn, palette, name, key)
         parts.shapes.append(shapes)
+        if cav.rank not in parts.ranked:
+            parts.ranked[cav.rank] = deciding.ranked_pairs(cav)
+        parts.marks.extend(deciding.marks_of(parts.ranked[cav.rank], cav, name, partners, drawn, shapes.labels, key))
 
 
 def _objects(outcome: Outcome, parts: _Parts, ego: np.ndarray, copies: int) -> dict[str, tuple[np.ndarray, np.ndarray]]:
@@ -199,6 +220,12 @@ def _sights(fans: dict[str, seen.Fan], palette: colours.Palette) -> tuple[dict[s
              for role, (v, f, _) in fans.items()},
             {seen.sight_node(role, "sight_edge"): Lines(edge, colour[role], 1.5)
              for role, (_, _, edge) in fans.items()})
+
+
+def _vehicle_room(pose: np.ndarray, size: tuple[float, ...]) -> tuple[float, float]:
+    """The half extents of a vehicle of ``size`` standing at ``pose``, for its label."""
+    x, y = se2.translation_of(pose)
+    return pairs.half_extents(np.array([x, y, 0.0, size[0], size[1], size[2], se2.yaw_of(pose)]))
 
 
 def _body(parts: _Parts, rank: int) -> tuple[float, ...]:

@@ -1,5 +1,5 @@
-"""Where the camera stands to show what matters: the ego, every CAV and every wrong and missed
-pair, with their labels, whole, inside the part of the canvas no floating panel covers.
+"""Where the camera stands to show given spots (what ``focus`` chooses: the agents, the pairs that
+explain the result, their labels), whole, inside the part of the canvas no floating panel covers.
 
 Lengths on the page are CSS pixels. The browser reports its canvas in drawing-buffer pixels (CSS
 pixels times a pixel ratio the server is not told), so the canvas's CSS size is estimated
@@ -9,15 +9,11 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING, Any
+from typing import Any
 
 import numpy as np
 
 from .layouts import SCREEN, screen_of
-
-if TYPE_CHECKING:
-    from .drawing import Drawing
-    from .pairs import Labels
 
 MARGIN_PX = 24.0
 """CSS pixels kept free between what is framed and the edges of the free part of the canvas."""
@@ -32,10 +28,12 @@ taken for a denser screen (``pixel_ratio``)."""
 CHAR_EM, LINE_EM = 0.62, 1.45
 """A label's character width and line height, in ems of its text height (viser draws labels in the
 system sans-serif font, on a background padded by a fifth of an em)."""
+BISECTIONS = 24
+"""Halvings of the scale's bracket (``_fitting_scale``): to a sixteen-millionth of the closest scale."""
+SHIFTS = (1.0, 0.75, 0.5, 0.25)
+"""The shares of the way to the canvas's middle ``balanced`` tries, the longest first."""
 NARROWINGS, NARROW_PX = 6, 8.0
 """How often, and by how many CSS pixels each time, ``frame`` narrows the area it frames in."""
-MARKS = ("wrong_marks", "missed_marks")
-"""The drawing's line sets that outline the boxes of wrong and missed pairs."""
 
 
 @dataclass(frozen=True)
@@ -110,19 +108,6 @@ def label_spot(text: str, x: float, y: float, label_px: float) -> Spot:
     return Spot(x, y, CHAR_EM * label_px * len(text) + label_px / 5, LINE_EM * label_px)
 
 
-def spots_of(drawing: Drawing, labels: Labels | None = None) -> list[Spot]:
-    """What the camera frames in ``drawing``: every vehicle, every label (the agents', the wrong and
-    missed pairs', the layout's titles; ``labels``: these in their place) and the corners of every
-    wrong and missed pair's boxes."""
-    spots = [Spot(x, y) for x, y in drawing.agents]
-    spots += [label_spot(text, p[0], p[1], drawing.label_px) for text, p in (labels or drawing.labels).values()]
-    for name in MARKS:
-        if name in drawing.lines:
-            ends = drawing.lines[name].segments.reshape(-1, 3)
-            spots += [Spot(float(x), float(y)) for x, y, _ in ends]
-    return spots
-
-
 def _span(ground: np.ndarray, extent: np.ndarray, k: float) -> tuple[float, float]:
     """(low, high) screen offsets covered along one axis at ``k`` pixels per metre, the screen
     running against ``ground`` (metres) and each spot reaching ``extent`` pixels further."""
@@ -142,7 +127,7 @@ def _fitting_scale(ground: np.ndarray, extent: np.ndarray, room: float, most: fl
     if _length(ground, extent, most) <= room:
         return most
     low, high = 0.0, most
-    for _ in range(40):
+    for _ in range(BISECTIONS):
         middle = (low + high) / 2
         low, high = (middle, high) if _length(ground, extent, middle) <= room else (low, middle)
     return max(low, most * 1e-3)
@@ -151,11 +136,24 @@ def _fitting_scale(ground: np.ndarray, extent: np.ndarray, room: float, most: fl
 def framed(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Camera position and look-at point, looking down, at which every spot shows whole inside
     ``area`` of ``canvas`` (no lower than ``LOWEST``): x points up the screen, y to its left."""
+    return centred(spots, canvas, area, fitting_scale(spots, canvas, area))
+
+
+def fitting_scale(spots: list[Spot], canvas: Canvas, area: Area) -> float:
+    """The most pixels per metre (no closer than ``LOWEST``) at which the spots fit ``area``, seen
+    straight down (the perspective left out: ``frame_in`` narrows the area for it)."""
     xs, ys = np.array([s.x for s in spots]), np.array([s.y for s in spots])
     widths, heights = np.array([s.width for s in spots]), np.array([s.height for s in spots])
     most = canvas.focal / LOWEST
-    k = min(_fitting_scale(ys, widths, area.right - area.left, most),
-            _fitting_scale(xs, heights, area.bottom - area.top, most))
+    return min(_fitting_scale(ys, widths, area.right - area.left, most),
+               _fitting_scale(xs, heights, area.bottom - area.top, most))
+
+
+def centred(spots: list[Spot], canvas: Canvas, area: Area, k: float) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """Camera position and look-at point, looking down at ``k`` pixels per metre, with the spots'
+    extent centred in ``area``."""
+    xs, ys = np.array([s.x for s in spots]), np.array([s.y for s in spots])
+    widths, heights = np.array([s.width for s in spots]), np.array([s.height for s in spots])
     across, down = _span(ys, widths, k), _span(xs, heights, k)
     look_y = ((area.left + area.right) / 2 - canvas.width / 2 - sum(across) / 2) / k
     look_x = ((area.top + area.bottom) / 2 - canvas.height / 2 - sum(down) / 2) / k
@@ -166,6 +164,28 @@ def framed(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, 
 def frame(spots: list[Spot], canvas: Canvas, areas: list[Area]) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """The camera closest to the ground that frames every spot in one of ``areas`` (``frame_in``)."""
     return min((frame_in(spots, canvas, area) for area in areas), key=lambda pose: pose[0][2])
+
+
+def balanced(spots: list[Spot], pose: tuple[tuple[float, ...], tuple[float, ...]], canvas: Canvas,
+             covered: Area | None) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """``pose`` moved, at its scale, towards centring the spots in the whole canvas, as far as they stay
+    clear of the ``covered`` corner (the whole way, or ``SHIFTS`` of it): a framing beside a panel
+    otherwise leaves the rest of the canvas empty."""
+    if covered is None or not spots:
+        return pose
+    whole = Area(0.0, 0.0, canvas.width, canvas.height).inset(MARGIN_PX)
+    target = centred(spots, canvas, whole, 1.0 / metres_per_px(*pose, canvas))
+    clear = [Area(0.0, 0.0, canvas.width, covered.top - MARGIN_PX), Area(0.0, covered.bottom + MARGIN_PX,
+             canvas.width, canvas.height), Area(0.0, 0.0, covered.left - MARGIN_PX, canvas.height)]
+    for share in SHIFTS:
+        moved = tuple(tuple(a + share * (b - a) for a, b in zip(now, then)) for now, then in zip(pose, target))
+        where = project(*moved, canvas, np.array([(s.x, s.y) for s in spots]))
+        ends = where + np.array([(s.width, s.height) for s in spots])
+        if all_inside(spots, *moved, canvas, whole) and all(
+                any(a.left <= u and a.top <= v and e <= a.right and f <= a.bottom for a in clear)
+                for (u, v), (e, f) in zip(where, ends)):
+            return moved
+    return pose
 
 
 def frame_in(spots: list[Spot], canvas: Canvas, area: Area) -> tuple[tuple[float, ...], tuple[float, ...]]:
@@ -191,6 +211,21 @@ def project(position: tuple[float, ...], look_at: tuple[float, ...], canvas: Can
     depth = rel @ forward
     return np.stack([canvas.width / 2 + canvas.focal * (rel @ right) / depth,
                      canvas.height / 2 - canvas.focal * (rel @ up) / depth], axis=1)
+
+
+def unproject(position: tuple[float, ...], look_at: tuple[float, ...], canvas: Canvas, uv: np.ndarray,
+              z: float = 0.0) -> np.ndarray:
+    """(N, 2) ground points at height ``z`` that show at CSS pixels ``uv`` (N, 2) through the camera at
+    ``position`` looking at ``look_at`` (``project``'s inverse)."""
+    position, look_at = np.asarray(position, float), np.asarray(look_at, float)
+    forward = (look_at - position) / np.linalg.norm(look_at - position)
+    right = np.cross(forward, (0.0, 0.0, 1.0))
+    right /= np.linalg.norm(right)
+    up = np.cross(right, forward)
+    uv = np.asarray(uv, float).reshape(-1, 2)
+    rays = forward + ((uv[:, :1] - canvas.width / 2) * right - (uv[:, 1:] - canvas.height / 2) * up) / canvas.focal
+    reach = (z - position[2]) / rays[:, 2]
+    return position[:2] + reach[:, None] * rays[:, :2]
 
 
 def inside_one(spots: list[Spot], position: tuple[float, ...], look_at: tuple[float, ...], canvas: Canvas,

@@ -17,8 +17,8 @@ from ..session.explorer import Outcome
 
 SIDE_GAP = 20.0
 """Metres between the two copies of the side-by-side layout."""
-TITLE_AT = (-12.0, 3.0)
-"""(x, height) of a copy's title."""
+TITLE_AT = -12.0
+"""x (metres behind the ego) of a copy's title."""
 PANEL_PX = 388
 """CSS pixels the control panel, docked at the page's right (``app.server``), takes from a page's
 width: viser's ``large`` width (24 em of its 16 px font) and the dock's 4 px seam. The scene's canvas

@@ -15,6 +15,9 @@ from . import colours, geometry, planes
 
 Labels = dict[str, tuple[str, tuple[float, float, float]]]
 """Text and (x, y, z) of each label, by name."""
+Room = dict[str, tuple[float, float]]
+"""Half the width and half the height, in metres along a top-down screen (ground y and x), of the
+thing each label names (``labelling.lay_out`` puts the label beside it)."""
 
 
 @dataclass(frozen=True)
@@ -39,6 +42,15 @@ class PairShapes:
     missed_marks: np.ndarray
     """Outlines of the two boxes of every true pair the method missed."""
     labels: Labels
+    room: Room
+
+
+def half_extents(box: np.ndarray) -> tuple[float, float]:
+    """Half the width (along ground y) and half the height (along ground x) of a box's footprint:
+    what its label steps aside of on a top-down screen."""
+    c, s = abs(float(np.cos(box[6]))), abs(float(np.sin(box[6])))
+    half_l, half_w = float(box[3]) / 2, float(box[4]) / 2
+    return half_l * s + half_w * c, half_l * c + half_w * s
 
 
 def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, palette: colours.Palette,
@@ -48,9 +60,11 @@ def pair_shapes(pairs: np.ndarray, truth: np.ndarray, ego: Drawn, cav: Drawn, pa
     right, wrong, missed = classified_pairs(pairs, truth)
     lines = [_segments(ego, cav, p, stroke.dash) for p, stroke in
              ((right, palette.right), (wrong, palette.wrong), (missed, palette.missed))]
-    labels = {**_labels(wrong, ego, cav, f"{key}_wrong", "✗", cav_name, on_cav=True),
-              **_labels(unexplained(missed, wrong), ego, cav, f"{key}_missed", "missed", cav_name, on_cav=False)}
-    return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), labels)
+    labels, room = _labels(wrong, ego, cav, f"{key}_wrong", "✗", cav_name, on_cav=True)
+    missed_labels, missed_room = _labels(unexplained(missed, wrong), ego, cav, f"{key}_missed", "missed", cav_name,
+                                         on_cav=False)
+    return PairShapes(*lines, _marks(wrong, ego, cav), _marks(missed, ego, cav), {**labels, **missed_labels},
+                      {**room, **missed_room})
 
 
 def unexplained(missed: np.ndarray, wrong: np.ndarray) -> np.ndarray:
@@ -72,13 +86,14 @@ def _marks(pairs: np.ndarray, ego: Drawn, cav: Drawn) -> np.ndarray:
 
 
 def _labels(pairs: np.ndarray, ego: Drawn, cav: Drawn, key: str, kind: str, cav_name: str,
-            on_cav: bool) -> Labels:
-    """A label per pair, on its CAV box (``on_cav``) or its ego box: what went wrong and both ids
-    (one id when both detections are of the same object, as a missed pair's are)."""
-    labels = {}
+            on_cav: bool) -> tuple[Labels, Room]:
+    """A label per pair, beside its CAV box (``on_cav``) or its ego box: what went wrong and both ids
+    (one id when both detections are of the same object, as a missed pair's are), and the box's room."""
+    labels, room = {}, {}
     for i, j in pairs.tolist():
         ego_id, cav_id = short_id(ego.ids[i]), short_id(cav.ids[j])
         ids = ego_id if ego_id == cav_id else f"ego {ego_id} ↔ {cav_name} {cav_id}"
-        x, y = (cav.boxes[j] if on_cav else ego.boxes[i])[:2]
-        labels[f"{key}_{i}_{j}"] = (f"{kind} {ids}", (float(x), float(y), planes.LINES))
-    return labels
+        box = cav.boxes[j] if on_cav else ego.boxes[i]
+        labels[f"{key}_{i}_{j}"] = (f"{kind} {ids}", (float(box[0]), float(box[1]), planes.LABELS))
+        room[f"{key}_{i}_{j}"] = half_extents(box)
+    return labels, room

@@ -24,8 +24,9 @@ FUSED = 13 * STEP
 """Outlines of the fused boxes (late fusion)."""
 HIGHLIGHT = 14 * STEP
 """Lines drawn over the match lines: the walkthrough's followed pair and the context vectors that matched."""
-LABELS = 2.5
-"""Labels float above the vehicles (screen-space text: their height moves no footprint)."""
+LABELS = 15 * STEP
+"""Every label, just over what it names (screen-space text, drawn over everything): at one height near
+the footprints', so that a top-down camera shows each beside its thing as laid out, at any zoom."""
 
 
 def cav(rank: int) -> float:

@@ -30,7 +30,7 @@ from ..session.recording import FrameRecord, Recording
 from ..session.settings import Settings
 from . import colours, geometry
 from .cavs import SLIM
-from .text import number
+from .text import VOTE_ROW, number
 from .words import label_of, margin_words, plural
 
 APP_NAME = "CBM Explorer"
@@ -67,7 +67,7 @@ def metrics_rows(metrics: dict[str, Any]) -> list[list[str]]:
             ["RTE before → after", f"{_with_unit(m['rte_before'], ' m')} → {_with_unit(m['rte'], ' m')}"],
             ["RRE before → after", f"{_with_unit(m['rre_before'], '°')} → {_with_unit(m['rre'], '°')}"]]
     if m.get("consensus_count") is not None:
-        rows.append(["consensus margin", margin_words(int(m["margin"]), m["consensus_count"], m["runner_up_count"])])
+        rows.append([VOTE_ROW, margin_words(m["consensus_count"], m["runner_up_count"])])
     rows.append(["result", "success (RTE < 1 m, RRE < 1°)" if m["success"] else "failed"])
     return rows
 
@@ -130,7 +130,7 @@ def recording_html(recording: Recording, dataset: str, presentation: bool = Fals
         raise ValueError("the recording has no frame")
     content = recording_data(recording, dataset, presentation)
     data = json.dumps(content, ensure_ascii=False, separators=(",", ":"))
-    title = html.escape(f"{APP_NAME} — {dataset} — {len(content['frames'])} frames")
+    title = html.escape(f"{APP_NAME} — {dataset} — {content['count']}")
     page = PAGE.replace("%TITLE%", title).replace("%DATA%", data.replace("</", "<\\/"))
     return page.replace("%STYLE%", STYLE).replace("%SCRIPT%", SCRIPT).encode("utf-8")
 

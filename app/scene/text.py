@@ -14,9 +14,13 @@ from evaluation.metrics import TrialMetrics, evaluate, is_success
 from ..session.explorer import Outcome
 from ..session.names import agent_name
 from .cavs import per_cav_rows
+from .confidence import verdict
 from .seen import late_rows
 from .words import margin_words, plural
 
+VOTE_ROW = "consensus vote"
+"""The row of the consensus margin (eq. 13): pairs of the winning anchor's set against the runner-up's,
+a count, not a confidence (the evidence margin's row is)."""
 ORACLE_ROW = f"{ORACLE_WORDS} (oracle)"
 """The row of what least squares on the true pairs reaches: a reference, not a bound (a robust fit can beat it)."""
 LAID_OUT = ("precision", "recall", "ad", "rre", "rte", "margin")
@@ -65,11 +69,12 @@ def findings_heading(outcome: Outcome) -> str:
 
 
 def time_row(method: Method) -> str:
-    """The time row's name: the method's short name (its label before any explanation in brackets)."""
+    """The time row's name: the method's short name (its label before any explanation in brackets)
+    and "time" ("time of this frame" for a method over time, which also computes earlier frames)."""
     if method.name == "none":
         return "time"
     short = method.label.split(" (")[0]
-    return f"{short} time of this frame" if short.endswith(" time") else f"{short} time"
+    return f"time of this frame ({short})" if method.over_time else f"{short} time"
 
 
 def metrics_markdown(outcome: Outcome) -> str:
@@ -101,9 +106,8 @@ def metrics_markdown(outcome: Outcome) -> str:
         *other_metric_rows(m),
     ]
     if outcome.voted:
-        margin = margin_words(result.margin, result.consensus_count, result.runner_up_count)
-        lines.append(f"| consensus margin | {margin} |")
-    lines.extend(evidence_rows(result))
+        lines.append(f"| {VOTE_ROW} | {margin_words(result.consensus_count, result.runner_up_count)} |")
+    lines.extend(confidence_rows(result, is_success(m), outcome.findings))
     lines.extend(over_time_rows(outcome))
     lines.append(f"| {time_row(method)} | {number(1000 * result.timings.get('total', float('nan')), ' ms', 1)} |")
     lines.extend(per_cav_rows(outcome))
@@ -155,17 +159,11 @@ def over_time_rows(outcome: Outcome) -> list[str]:
     return rows
 
 
-def evidence_rows(result: object) -> list[str]:
-    """CBM's verdict on its own pose (step 7c, ``cbm.hypotheses``): a warning light with the reason
-    when it has not enough evidence, else how much better its pose explains the scene than the
-    runner-up pose; nothing for methods that do not verify."""
-    if getattr(result, "abstained", False):
-        return [f"| evidence | ⚠ not enough evidence: {getattr(result, 'reason', '')} |"]
-    margin = getattr(result, "evidence_margin", float("nan"))
-    if margin != margin:
+def confidence_rows(result: object, success: bool, findings: list) -> list[str]:
+    """CBM's confidence in its pose against the truth (step 7c, ``cbm.hypotheses``;
+    ``confidence.verdict``), with a warning sign when it was not sure; nothing for methods that do
+    not verify."""
+    words = verdict(result, success, findings)
+    if words is None:
         return []
-    if margin == float("inf"):
-        agree = "every one lands on this pose" if result.hypotheses > 1 else "no rival anchor set to test"
-        return [f"| evidence | {plural(result.hypotheses, 'hypothesis', 'hypotheses')}, {agree} |"]
-    return [f"| evidence | margin {margin:.1f} over the runner-up pose (of "
-            f"{plural(result.hypotheses, 'hypothesis', 'hypotheses')}) |"]
+    return [f"| confidence | {'⚠ ' if getattr(result, 'abstained', False) else ''}{words} |"]

@@ -15,8 +15,9 @@ from cbm import se2
 from . import framing
 from .captions import LABEL_PX
 from .drawing import Drawing, Lines, Mesh
-from .labelling import spread
-from .pairs import Labels
+from .framing import Area
+from .labelling import lay_out, screen_bounds, size_px
+from .pairs import Labels, Room
 from .points import POINT_SIZE, PointCloud
 
 _DUMMY_VERTICES = np.zeros((3, 3), np.float32)
@@ -24,6 +25,9 @@ _DUMMY_FACES = np.array([[0, 1, 2]], np.uint32)
 _DUMMY_SEGMENTS = np.zeros((1, 2, 3), np.float32)
 VISER_LABEL_PX = 12.0
 """Height in CSS pixels of viser's screen-space label text at ``font_screen_scale`` 1."""
+LEADERS = "label_leaders"
+"""The node of the lines from labels moved off their thing's side back to it."""
+LEADER_COLOUR = (120, 120, 120)
 
 
 def fingerprint(arrays: tuple[np.ndarray, ...], *style: Hashable) -> Hashable:
@@ -62,9 +66,19 @@ class SceneView:
         self.label_px = LABEL_PX
         """Height of the labels' text in CSS pixels, as the last drawing shown asks."""
         self.wanted: Labels = {}
-        """Every label to show, where it belongs (``show`` spreads them apart on screen)."""
+        """Every label to show, where it belongs (``lay_out`` sets each beside its thing on screen)."""
+        self.room: Room = {}
+        """Half extents of what each wanted label names."""
+        self.kept: frozenset[str] = frozenset()
+        """The wanted labels that show however crowded; the others may wait for a click (``hidden``)."""
+        self.hidden: frozenset[str] = frozenset()
+        """The labels the last layout found no free place for near their thing."""
+        self.skipped: frozenset[str] = frozenset()
+        """Wanted labels not to show for now (those of pairs out of view: an edge marker stands for them)."""
         self.scale = 0.0
-        """Metres per pixel the labels were last spread at."""
+        """Metres per pixel the labels were last laid out at."""
+        self.area: Area | None = None
+        """The part of the canvas the labels are to stay in where they can (None: anywhere)."""
 
     @property
     def node_names(self) -> set[str]:
@@ -72,9 +86,11 @@ class SceneView:
         return {h.name for h in (*self.meshes.values(), *self.lines.values(), *self.labels.values(),
                                  *self.clouds.values())}
 
-    def show(self, drawing: Drawing, scale: float | None = None) -> None:
+    def show(self, drawing: Drawing, scale: float | None = None, extra: Labels | None = None,
+             skipped: frozenset[str] = frozenset()) -> None:
         """Replace the scene's arrays with ``drawing``'s, leaving the nodes that show the same alone;
-        the labels spread apart at ``scale`` metres per pixel (``lay_out``)."""
+        the labels (and the ``extra`` ones, kept in place; none of ``skipped``) laid out at ``scale``
+        metres per pixel (``lay_out``)."""
         with self.client.atomic():
             self._show_meshes(drawing.meshes)
             self._show_lines(drawing.lines)
@@ -82,7 +98,8 @@ class SceneView:
                 if self._changed(name, fingerprint((cloud.points,), cloud.color)):
                     self._cloud(name, cloud)
             self.label_px = drawing.label_px
-            self._show_labels(drawing.labels, scale)
+            self.room, self.kept, self.skipped = drawing.room, drawing.kept, skipped
+            self._show_labels({**drawing.labels, **(extra or {})}, scale)
 
     def show_only(self, meshes: dict[str, Mesh], lines: dict[str, Lines],
                   labels: dict[str, tuple[str, tuple[float, float, float]]]) -> None:
@@ -95,6 +112,7 @@ class SceneView:
                 self._hide(self.lines, name)
             self._show_meshes(meshes)
             self._show_lines(lines)
+            self.room, self.kept, self.skipped = {}, frozenset(labels), frozenset()
             self._show_labels(labels)
 
     def hide_all(self) -> None:
@@ -128,43 +146,67 @@ class SceneView:
                 _place(self.lines[name], line_set.pose)
 
     def _show_labels(self, labels: Labels, scale: float | None = None) -> None:
-        """Show ``labels`` (hiding the others), spread apart (``lay_out``)."""
+        """Show ``labels`` (hiding the others), laid out (``lay_out``)."""
         self.wanted = dict(labels)
-        for name in set(self.labels) - set(self.wanted):
-            self.labels[name].visible = False
         self.lay_out(scale)
 
+    def set_extra(self, prefix: str, labels: Labels, skipped: frozenset[str] = frozenset()) -> None:
+        """Replace the wanted labels named ``prefix``... by ``labels`` (kept where they are put), and
+        show none of ``skipped`` for now."""
+        self.wanted = {**{k: v for k, v in self.wanted.items() if not k.startswith(prefix)}, **labels}
+        self.skipped = skipped
+
     def lay_out(self, scale: float | None = None) -> None:
-        """Write every wanted label where ``labelling.spread`` puts it at ``scale`` metres per pixel
-        (the scale a framing spread them at), or the camera's as it stands when that is coarser:
-        labels spread at a coarser scale than the camera's show apart."""
+        """Write every wanted label where ``labelling.lay_out`` puts it at ``scale`` metres per pixel
+        (the scale a framing laid them out at), or the camera's as it stands when that is coarser:
+        labels laid out at a coarser scale than the camera's show apart; hide the others, and draw the
+        leader lines of the labels moved."""
         camera = self.client.camera
         here = framing.metres_per_px(tuple(camera.position), tuple(camera.look_at), framing.canvas_of(camera))
         self.scale = max(scale or 0.0, here)
-        for name, (text, position) in spread(self.wanted, self.scale, self.label_px).items():
-            self._write(name, text, position)
+        wanted = {name: label for name, label in self.wanted.items() if name not in self.skipped}
+        canvas, area = framing.canvas_of(camera), self.area
+        bounds = None if area is None else screen_bounds(tuple(camera.look_at), self.scale, canvas.width,
+                                                         canvas.height, (area.left, area.top, area.right, area.bottom))
+        laid = lay_out(wanted, self.scale, self.label_px, self.room, self.kept, bounds)
+        self.hidden = laid.hidden
+        for name in set(self.labels) - set(laid.labels):
+            self.labels[name].visible = False
+        for name, (text, (x, y, z)) in laid.labels.items():
+            if name in laid.flush_right:
+                self._write(name, text, (x, y - size_px(text, self.label_px)[0] * self.scale, z), "top-right")
+            else:
+                self._write(name, text, (x, y, z))
+        if len(laid.leaders) or LEADERS in self.lines:
+            leaders = Lines(laid.leaders, LEADER_COLOUR, 1.5)
+            if self._changed(LEADERS, fingerprint((leaders.segments,), leaders.color, leaders.thickness)):
+                self._lines(LEADERS, leaders)
 
     def _hide(self, handles: dict, name: str) -> None:
         """Hide node ``name``; forget what it showed, so that showing it again redraws it."""
         handles[name].visible = False
         self.shown.pop(name, None)
 
-    def label(self, name: str, text: str, position: tuple[float, float, float]) -> None:
-        """Show (or move) the label ``name`` at ``position``, or as near below it as keeps it off the others."""
+    def label(self, name: str, text: str, position: tuple[float, float, float],
+              room: tuple[float, float] = (0.0, 0.0)) -> None:
+        """Show (or move) the label ``name`` beside the thing at ``position`` (its half extents ``room``),
+        as near as keeps it off the others."""
         self.wanted[name] = (text, position)
+        self.room = {**self.room, name: room}
         self.lay_out(self.scale)
 
-    def _write(self, name: str, text: str, position: tuple[float, float, float]) -> None:
-        """Show (or move) the label ``name``, its text ``label_px`` high."""
+    def _write(self, name: str, text: str, position: tuple[float, float, float], anchor: str = "top-left") -> None:
+        """Show (or move) the label ``name``, its text ``label_px`` high, its ``anchor`` at ``position``."""
         scale = self.label_px / VISER_LABEL_PX
         handle = self.labels.get(name)
-        if not _differs(self.written, name, (text, position, scale)) and handle is not None and handle.visible:
+        if not _differs(self.written, name, (text, position, scale, anchor)) and handle is not None and handle.visible:
             return
         if handle is None:
             self.labels[name] = self.client.scene.add_label(f"{self.labels_root}/{name}", text, position=position,
-                                                            font_screen_scale=scale)
+                                                            font_screen_scale=scale, anchor=anchor)
         else:
             handle.text, handle.position, handle.visible, handle.font_screen_scale = text, position, True, scale
+            handle.anchor = anchor
 
     def hide_label(self, name: str) -> None:
         """Hide the label ``name`` (and forget it: a redraw does not show it again)."""

@@ -5,18 +5,19 @@ from __future__ import annotations
 
 import ast
 import inspect
-import math
+import re
 import textwrap
 
 from cbm import TrackingParams
+from cbm.methods import METHODS
 
 WORDS = {
     # (parameter set, field): (label, hint in plain words)
     ("cbm", "sigma1"): ("σ1 angle (°)", "Two neighbour vectors (from an object to one of its neighbours, eq. 6-7) "
                         "count as the same neighbour only if they point within this angle of each other (eq. 8)."),
-    ("cbm", "sigma2"): ("σ2 L1 (m)", "Two neighbour vectors count as the same neighbour only if their tips are at most "
-                        "this far apart, |Δx| + |Δy| in metres (eq. 8). Larger: more candidate matches, more of them "
-                        "wrong."),
+    ("cbm", "sigma2"): ("σ2 distance (m)", "Two neighbour vectors count as the same neighbour only if their "
+                        "tips are at most this far apart, |Δx| + |Δy| in metres (eq. 8). Larger: more candidate "
+                        "matches, more of them wrong."),
     ("cbm", "sigma3"): ("σ3 voting (m)", "In the consensus vote, a candidate pair backs another when their "
                         "neighbourhoods agree within this distance, |Δx| + |Δy| in metres (the released code's "
                         "vote, beyond the paper's eq. 10); pairs nobody backs are dropped."),
@@ -137,23 +138,33 @@ def error_words(error: BaseException) -> str:
     return f"an unexpected error in the app ({type(error).__name__}: {error})"
 
 
-FAR_BETTER = 10_000.0
-"""Beyond this likelihood ratio, "far better": a number of times would only impress."""
+def margin_words(count: int, runner_up: int) -> str:
+    """The consensus vote as the app prints it (its margin is the difference): the winning anchor's
+    pairs and the runner-up's."""
+    return f"{count} pairs vs {runner_up} for the runner-up"
 
 
-def times_better(log_ratio: float) -> str:
-    """A natural-log likelihood ratio in words: "about 3000 times better", "far better" beyond ``FAR_BETTER``."""
-    ratio = math.exp(min(log_ratio, 700.0))
-    if ratio > FAR_BETTER:
-        return "far better"
-    if ratio < 10:
-        return f"{ratio:.1f} times better"
-    return f"about {float(f'{ratio:.2g}'):g} times better"
+FIELD_ERROR = re.compile(r"^(\w+Params)\.(\w+) (must .*)$", re.S)
+"""A parameter class's own complaint about one field (``CBMParams.sigma2 must be at most 10, got 25``)."""
 
 
-def margin_words(margin: int, count: int, runner_up: int) -> str:
-    """The consensus margin as the app prints it: the margin, then the winner's and the runner-up's counts."""
-    return f"{margin} ({count} vs {runner_up})"
+def field_label(cls: str, name: str) -> str:
+    """The label the app shows for field ``name`` of the parameter class named ``cls``."""
+    if cls == "ScenarioParams":
+        return SCENARIO_WORDS.get(name, name)
+    key = TRACKING if cls == "TrackingParams" else next(
+        (m.params_key for m in METHODS.values() if m.params.__name__ == cls), "")
+    return WORDS.get((key, name), (name, ""))[0]
+
+
+def setting_words(error: BaseException) -> str:
+    """A refused setting in the app's words: the control's label for the field a parameter class
+    names (``σ2 distance (m) must be at most 10, got 25``), any other message as it is."""
+    found = FIELD_ERROR.match(str(error))
+    if found is None:
+        return str(error)
+    cls, name, rest = found.groups()
+    return f"{field_label(cls, name)} {rest}"
 
 
 SCENARIO_WORDS = {

@@ -17,7 +17,7 @@ import numpy as np
 from cbm import MatchResult, Reuse, match, se2
 from cbm.methods import METHODS
 from evaluation.agents import agent_pose, choose_ego
-from evaluation.diagnosis import Finding, diagnose
+from evaluation.diagnosis import Finding, diagnose_failure
 from evaluation.fusion import fused_against_truth
 from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
@@ -249,10 +249,11 @@ class Explorer:
         alone = pooled_from = None
         if METHODS[settings.method].over_time:
             done = self.over_time.frame(settings, index, lambda j: self._timed_trial(settings, j), progress, stop)
-            result, findings, alone, pooled_from = done.result, [], done.alone, done.since
+            result, alone, pooled_from = done.result, done.alone, done.since
         else:
-            result, findings = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
+            result = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
+        findings = diagnose_failure(result, trial, metrics, limit, result.explanation)
         world_to_ego = se2.inverse(trial.ego_pose)
         objects = inputs.trial
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
@@ -285,16 +286,15 @@ class Explorer:
 
 
 def _run(settings: Settings, trial: Trial, frame: FrameInputs, peers: list[Trial],
-         reuse: Reuse | None = None) -> tuple[MatchResult, list[Finding]]:
-    """The selected method's result and, for the methods that build CBM's sets, why it failed: CBM
-    explains the run that answered (``explain=True``), for the diagnosis and the views. ``peers``: the
-    other CAVs' trials; ``reuse``: what earlier runs on the same input built that the thresholds do not change."""
+         reuse: Reuse | None = None) -> MatchResult:
+    """The selected method's result; for the methods that build CBM's sets, CBM explains the run
+    that answered (``explain=True``), for the diagnosis and the views. ``peers``: the other CAVs'
+    trials; ``reuse``: what earlier runs on the same input built that the thresholds do not change."""
     method = METHODS[settings.method]
     if not method.explains:
-        return run_method(settings.method, trial, settings.params, frame, peers), []
-    result = match(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse=reuse,
-                   explain=True)
-    return result, diagnose(result, trial, result.explanation)
+        return run_method(settings.method, trial, settings.params, frame, peers)
+    return match(trial.ego_boxes, trial.cav_boxes, trial.init, method.resolved(settings.params), reuse=reuse,
+                 explain=True)
 
 
 def signed_gap(frame: Frame, ego: str | None, cav: str | None) -> float | None:

@@ -57,8 +57,8 @@ class ViewOptions:
     points_every: int = 10
     """Subsampling of the LiDAR points: every ``points_every``-th point is drawn."""
     follow: bool = True
-    """While stepping or playing, the camera moves only when something that matters (an agent, a
-    wrong or missed pair) would leave the view; off: it stays still."""
+    """The camera frames every frame shown (the agents and the pairs that explain it), unless a person
+    moved it; off: it stays still."""
     sight: bool = False
     """Each agent's sight (range protocol): the area its sensor sees, a translucent fill in its colour,
     with the shadows behind the boxes under line of sight (``app.session.seen``)."""

@@ -56,8 +56,8 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
 
     first = ui.metrics(page)
     page.get_by_role("tab", name="Method").click()
-    sigma2 = ui.slider(page, "σ2 L1 (m)")
-    _type_into(page, "σ2 L1 (m)", "0.25")
+    sigma2 = ui.slider(page, "σ2 distance (m)")
+    _type_into(page, "σ2 distance (m)", "0.25")
     ui.wait_until(lambda: ui.metrics(page) != first)
     assert session.settings.cbm.sigma2 == 0.25
     assert session.last.settings.cbm.sigma2 == 0.25
@@ -79,9 +79,9 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     assert other is not session
     assert other.settings.cbm.sigma2 == 3.0 and other.settings.frame == 0
     second.get_by_role("tab", name="Method").click()
-    assert ui.slider(second, "σ2 L1 (m)").get_attribute("aria-valuenow") == "3"
+    assert ui.slider(second, "σ2 distance (m)").get_attribute("aria-valuenow") == "3"
     assert ui.header(second).startswith("Frame 0")
-    _type_into(second, "σ2 L1 (m)", "10")
+    _type_into(second, "σ2 distance (m)", "10")
     ui.wait_until(lambda: other.last.settings.cbm.sigma2 == 10.0)
     assert session.settings.cbm.sigma2 == 0.25 and session.settings.frame == 5
     page.get_by_role("tab", name="Method").click()
@@ -89,7 +89,7 @@ def test_scene_controls_and_sessions(browser, server: ExplorerServer) -> None:
     second.close()
 
     page.get_by_role("tab", name="Method").click()
-    _type_into(page, "σ2 L1 (m)", "3")
+    _type_into(page, "σ2 distance (m)", "3")
     ui.wait_until(lambda: session.last.settings.cbm.sigma2 == 3.0)
     for k in range(6, 16):
         _type_into(page, "frame", str(k))

@@ -164,7 +164,7 @@ def test_a_sigma2_edit_shows_its_result_and_resends_only_what_changed(browser, s
     session = ui.session(server, 1)
     assert "σ2 3.00 m" in ui.metrics(page)
     page.get_by_role("tab", name="Method").click()
-    _type_into(page, "σ2 L1 (m)", "2.5")
+    _type_into(page, "σ2 distance (m)", "2.5")
     ui.wait_until(lambda: "σ2 2.50 m" in ui.metrics(page))
     assert session.last.settings.cbm.sigma2 == 2.5
     assert all(session.stage.view.updates[name] == 1 for name in STILL)

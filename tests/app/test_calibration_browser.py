@@ -29,7 +29,7 @@ def test_flagged_frames_are_listed_and_go_to_frame_shows_one(browser, server) ->
     page.get_by_role("tab", name="Explore").click()
     page.get_by_text("Dataset calibration").click()
     page.get_by_role("button", name="check the dataset's calibration").click()
-    page.get_by_text("1 of 3 judged frame checks disagree").wait_for(timeout=60_000)
+    page.get_by_text("1 of 3 frames checked disagrees").wait_for(timeout=60_000)
     assert session.controls.explore.flagged.options == ("frame 2 (000012): roadside unit, 1.50 m / 0.00°",)
     page.get_by_role("button", name="go to frame").click()
     ui.wait_until(lambda: session.last.frame_index == 2 and ui.header(page).startswith("Frame 2"), timeout=60)

@@ -14,9 +14,9 @@ def test_frame_view_and_unused_methods_do_not_count_and_the_rest_is_named_with_u
     assert differences(settings, settings.with_params("icp", max_iterations=3)) == []
     other = settings.with_scenario(sigma_p=0.9, seed=3).with_params("cbm", sigma2=5.0)
     found = differences(settings, other)
-    assert [d.label for d in found] == ["σ2 L1 (m)", "position noise σp (m)", "seed"]
-    assert now_words(found) == "σ2 L1 (m) 3 (now 5), position noise σp (m) 0.2 (now 0.9), seed 0 (now 3)"
-    assert change_lines(found).splitlines()[0] == "- σ2 L1 (m): 5 → 3"
+    assert [d.label for d in found] == ["σ2 distance (m)", "position noise σp (m)", "seed"]
+    assert now_words(found) == "σ2 distance (m) 3 (now 5), position noise σp (m) 0.2 (now 0.9), seed 0 (now 3)"
+    assert change_lines(found).splitlines()[0] == "- σ2 distance (m): 5 → 3"
 
 
 def test_a_change_of_method_names_both_methods_and_the_cav() -> None:

@@ -1,43 +1,82 @@
-"""CBM's verdict on its own pose in the app: a warning light when it has not enough evidence, the
-evidence margin over the runner-up pose otherwise (key numbers and the metrics table)."""
+"""CBM's confidence in the app (issue 47, item 3): one quantity with its scale and threshold (the
+evidence margin, "sure from 8") in the key numbers, the metrics table and the caption, and words that
+never call a failed frame right: "CBM was sure, and wrong" with the diagnosis's reason."""
 import dataclasses
 import math
 from types import SimpleNamespace
 
-import loaders
-from app.panels.keynumbers import WARNING_ID, key_numbers_html
-from app.scene.text import evidence_rows
+from app.panels.keynumbers import WARNING_ID, WRONG_ID, key_numbers_html
+from app.scene.captions import caption_lines
+from app.scene.confidence import verdict
+from app.scene.text import confidence_rows, metrics_markdown
 from app.session.explorer import Explorer
+from app.session.presets import discover
 from app.session.settings import Settings
+from evaluation.diagnosis import Finding
 from evaluation.metrics import TrialMetrics
 
 
-def _metrics(abstained: bool) -> TrialMetrics:
+def _metrics(rte: float) -> TrialMetrics:
     return TrialMetrics(n_ego=5, n_cav=5, n_true=2, n_matched=2, n_correct=2, precision=1.0, recall=1.0, ad=0.0,
-                        rre=0.1, rte=0.2, runtime_s=0.01, margin=1.0, estimated=True, abstained=abstained)
+                        rre=0.1, rte=rte, runtime_s=0.01, margin=1.0, estimated=True, abstained=False)
 
 
-def test_an_abstention_lights_the_warning_with_its_reason():
-    result = SimpleNamespace(abstained=True, reason="fewer than 3 objects could be paired",
-                             evidence_margin=math.nan, hypotheses=1)
-    page = key_numbers_html(SimpleNamespace(metrics=_metrics(True), frame_index=4, others=(), result=result))
-    assert WARNING_ID in page and "not enough evidence" in page and "fewer than 3 objects" in page
-    assert evidence_rows(result) == ["| evidence | ⚠ not enough evidence: fewer than 3 objects could be paired |"]
+def _outcome(result, rte: float, findings=()) -> SimpleNamespace:
+    return SimpleNamespace(metrics=_metrics(rte), frame_index=4, others=(), result=result, findings=list(findings))
 
 
-def test_a_verified_pose_shows_its_margin_and_other_methods_show_nothing():
-    result = SimpleNamespace(abstained=False, reason="", evidence_margin=12.34, hypotheses=3)
-    page = key_numbers_html(SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=result))
-    assert WARNING_ID not in page and "confidence: 12.3" in page
-    assert evidence_rows(result) == ["| evidence | margin 12.3 over the runner-up pose (of 3 hypotheses) |"]
+WRONG = [Finding("wrong_anchor", "the winning anchor ego a ↔ CAV b was wrong", "its winning anchor was a wrong pair"),
+         Finding("few_right_pairs", "the pose rests on 4 right pairs …", "its 4 right pairs are too few for the noise")]
+
+
+def test_a_sure_pose_on_a_failed_frame_is_called_wrong_with_its_reason():
+    sure = SimpleNamespace(abstained=False, reason="", evidence_margin=12.24, hypotheses=3)
+    page = key_numbers_html(_outcome(sure, rte=3.7, findings=WRONG))
+    assert "CBM was sure, and wrong</b>: evidence margin 12.2, sure from 8; its 4 right pairs are too few" in page
+    assert WRONG_ID in page and WARNING_ID not in page
+    assert confidence_rows(sure, False, WRONG) == [
+        "| confidence | CBM was sure, and wrong: evidence margin 12.2, sure from 8; its 4 right pairs are too few "
+        "for the noise |"]
+    assert verdict(sure, True) == "CBM is sure: evidence margin 12.2, sure from 8"
+
+
+def test_an_abstention_says_not_sure_rightly_or_though_the_pose_is_right():
+    few = SimpleNamespace(abstained=True, reason="fewer than 3 objects could be paired", evidence_margin=math.nan,
+                          hypotheses=1)
+    page = key_numbers_html(_outcome(few, rte=4.0))
+    assert WARNING_ID in page and "CBM was not sure, rightly" in page and "fewer than 3 objects" in page
+    assert "no evidence margin, sure from 8" in page
+    close = SimpleNamespace(abstained=True, reason="a different pose explains the scene almost as well",
+                            evidence_margin=6.2, hypotheses=4)
+    assert verdict(close, True) == "CBM was not sure, though the pose is right: evidence margin 6.2, sure from 8"
+    assert confidence_rows(close, True, [])[0].startswith("| confidence | ⚠ CBM was not sure")
+
+
+def test_no_rival_pose_is_an_infinite_margin_and_other_methods_show_none():
     alone = SimpleNamespace(abstained=False, reason="", evidence_margin=math.inf, hypotheses=1)
-    assert evidence_rows(alone) == ["| evidence | 1 hypothesis, no rival anchor set to test |"]
+    assert verdict(alone, True) == "CBM is sure: evidence margin ∞, sure from 8"
     icp = SimpleNamespace(pairs=None)
-    assert evidence_rows(icp) == [] and "confidence" not in key_numbers_html(
-        SimpleNamespace(metrics=_metrics(False), frame_index=4, others=(), result=icp))
+    assert confidence_rows(icp, False, WRONG) == [] and "CBM" not in key_numbers_html(_outcome(icp, rte=3.0))
 
 
-def test_the_shipped_scene_shows_cbms_confidence():
-    outcome = Explorer(loaders.open("argoverse2")).compute(dataclasses.replace(Settings(), frame=0))
+def test_the_heavy_noise_frames_that_contradicted_themselves_no_longer_do(explorer: Explorer):
+    """Frame 75 said "confidence 30.1 (far better than the runner-up)" and frame 22 "12.2" on failed
+    frames; frame 45's panel showed a consensus margin and an evidence margin side by side."""
+    settings = discover()[0]["heavy-noise"].apply(Settings())
+    for frame in (75, 22):
+        outcome = explorer.compute(dataclasses.replace(settings, frame=frame))
+        page, table = key_numbers_html(outcome), outcome.findings
+        assert "CBM was sure, and wrong" in page and "sure from 8" in page and table
+        assert "far better" not in page and "confidence:" not in page
+        assert caption_lines(outcome)[-1].startswith("CBM was sure, and wrong · evidence margin")
+    outcome = explorer.compute(dataclasses.replace(settings, frame=45))
+    text = metrics_markdown(outcome)
+    assert "consensus margin" not in text and "| consensus vote | 7 pairs vs 5 for the runner-up |" in text
+    assert "| confidence | ⚠ CBM was not sure, rightly: evidence margin 6.7, sure from 8; " in text
+
+
+def test_the_shipped_scene_shows_cbms_confidence(explorer: Explorer):
+    outcome = explorer.compute(dataclasses.replace(Settings(), frame=0))
     assert not outcome.result.abstained and outcome.result.hypotheses >= 1
-    assert "confidence:" in key_numbers_html(outcome) and WARNING_ID not in key_numbers_html(outcome)
+    page = key_numbers_html(outcome)
+    assert "<b>CBM is sure</b>: evidence margin" in page and "sure from 8" in page and WARNING_ID not in page

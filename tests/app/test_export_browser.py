@@ -1,5 +1,5 @@
 """What leaves the app looks like the app (issue 24, item 10), in a real browser at 1280x720: the
-recording's controls and metrics in the first screen and its consensus margin as the app prints it
+recording's controls and metrics in the first screen and its consensus vote as the app prints it
 (the screenshot with the control panel: ``test_fixes_browser``)."""
 from __future__ import annotations
 
@@ -25,7 +25,7 @@ def test_the_recording_fits_the_first_screen_and_words_the_margin_as_the_app(bro
     page.get_by_role("button", name="next ▶").click()
     ui.wait_until(lambda: len(tab.recording) == 2 and tab.last.frame_index == 1 and tab.last_drawing is not None
                   and tab.last_drawing.metrics_markdown.startswith("**Frame 1**"), 60)
-    app_margin = re.search(r"\| consensus margin \| ([^|]+) \|", tab.last_drawing.metrics_markdown).group(1).strip()
+    app_margin = re.search(r"\| consensus vote \| ([^|]+) \|", tab.last_drawing.metrics_markdown).group(1).strip()
     page.get_by_role("tab", name="Explore").click()
     with page.expect_download(timeout=60_000) as download:
         page.get_by_role("button", name="recording of the frames computed (HTML)").click()
@@ -42,7 +42,7 @@ def test_the_recording_fits_the_first_screen_and_words_the_margin_as_the_app(bro
     shown.keyboard.press("ArrowRight")
     shown.locator("#frame-title").get_by_text(f"Frame {tab.last.frame_index}").wait_for(timeout=10_000)
     assert shown.evaluate("window.scrollY") == 0
-    row = shown.locator("#metrics tr").filter(has_text="consensus margin").inner_text()
+    row = shown.locator("#metrics tr").filter(has_text="consensus vote").inner_text()
     assert row.split("\t")[-1].strip() == app_margin, (row, app_margin)
     canvas = shown.locator("#view").bounding_box()
     assert canvas["width"] > 600 and canvas["y"] + canvas["height"] <= ui.FIRST_SCREEN["height"]

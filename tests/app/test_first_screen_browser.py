@@ -55,7 +55,7 @@ def test_the_presets_list_shows_the_preset_in_use(browser, server) -> None:
     page.get_by_text("In use: teaching.").first.wait_for(timeout=20_000)
     assert picked.input_value() == "teaching"
     page.get_by_role("tab", name="Method").click()
-    sigma2, before = ui.slider(page, "σ2 L1 (m)"), tab.settings.cbm.sigma2
+    sigma2, before = ui.slider(page, "σ2 distance (m)"), tab.settings.cbm.sigma2
     sigma2.focus()
     sigma2.press("ArrowRight")
     ui.wait_until(lambda: tab.settings.cbm.sigma2 != before, 60)

@@ -84,7 +84,7 @@ def test_every_control_is_labelled_in_words_and_the_page_is_named(browser, serve
     ui.pick_option(page, "method", "CBM")
     page.get_by_text("σ1 and σ2: how alike two objects' neighbourhoods must be to match").first.wait_for(
         timeout=10_000)
-    ui.slider(page, "σ2 L1 (m)").hover()
+    ui.slider(page, "σ2 distance (m)").hover()
     page.get_by_text(re.compile(r"their tips are at most this far apart, \|Δx\| \+ \|Δy\|")).first.wait_for(
         timeout=10_000)
     ui.slider(page, "σ3 voting (m)").hover()

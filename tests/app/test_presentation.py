@@ -42,7 +42,8 @@ def test_presentation_drawing_has_the_palette_large_labels_and_a_caption(explore
     m = outcome.metrics
     assert captions.caption_lines(outcome) == [f"Frame {outcome.frame_index} · success",
                                                f"precision {m.precision:.2f} · recall {m.recall:.2f}",
-                                               f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°"]
+                                               f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°",
+                                               "CBM is sure · evidence margin ∞, sure from 8"]
     assert "Frame 0 · success<br>" in captions.caption_html(outcome) and len(shown.agents) == 2
 
 

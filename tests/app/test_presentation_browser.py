@@ -78,9 +78,11 @@ def test_presentation_mode_and_dark_theme(browser, server: ExplorerServer) -> No
     assert _colour(tab.stage.view.lines["missed"]) == okabe.missed.color
     caption = page.locator("#cbm-caption")
     caption.wait_for(timeout=20_000)
+    margin = tab.last.result.evidence_margin
     assert caption.inner_text().splitlines() == [f"Frame {FRAME} · {'success' if is_success(m) else 'failed'}",
                                                  f"precision {m.precision:.2f} · recall {m.recall:.2f}",
-                                                 f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°"]
+                                                 f"RTE {m.rte:.2f} m · RRE {m.rre:.2f}°",
+                                                 f"CBM is sure · evidence margin {margin:.1f}, sure from 8"]
     assert ui.in_first_screen(caption)
     page.locator("#cbm-key-numbers").wait_for(state="hidden", timeout=20_000)
     labels = tab.stage.view.labels.values()

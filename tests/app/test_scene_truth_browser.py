@@ -27,6 +27,12 @@ pytestmark = [pytest.mark.browser, ui.requires_chromium]
 FREE = (320.0, 200.0, 1280.0 - 440.0, 660.0)
 """(left, top, right, bottom) page pixels of the scene clear of the panel, the key numbers (floating at
 the canvas's top, at most 190 px tall with three CAVs) and notifications."""
+NEAR_M = 20.0
+"""Metres from the ego within which a failed frame's wrong pair is framed."""
+CANVAS = (24.0, 24.0, 1280.0 - 412.0, 696.0)
+"""(left, top, right, bottom) page pixels of the canvas, less a margin (notifications closed)..."""
+KEY_NUMBERS = (500.0, 0.0, 1280.0 - 388.0, 200.0)
+"""... and of the key numbers floating at its top right."""
 
 
 @contextlib.contextmanager
@@ -163,11 +169,11 @@ def overlapping_wrong_gaps(outcome) -> np.ndarray:
 
 def frame_with_an_overlapping_wrong_pair(explorer: Explorer, settings: Settings, camera) -> int:
     """The first frame where CBM pairs two boxes less than 0.5 m apart wrongly (the line of such a
-    pair has no length) and the pair shows in the free part of the page under ``camera``."""
+    pair has no length), near the ego (the camera frames a failed frame's wrong pairs nearest first)."""
     for frame in range(len(explorer)):
         outcome = explorer.compute(dataclasses.replace(settings, frame=frame))
         _, wrong, _ = classified_pairs(outcome.result.pairs, outcome.trial.gt_pairs)
-        if len(wrong) and (in_free_part(camera, outcome.trial.ego_boxes[wrong[:, 0], :2])
+        if len(wrong) and ((np.hypot(*outcome.trial.ego_boxes[wrong[:, 0], :2].T) < NEAR_M)
                            & (overlapping_wrong_gaps(outcome) < 0.5)).any():
             return frame
     raise AssertionError("no frame with a wrong pair whose boxes overlap in view")
@@ -179,6 +185,7 @@ def test_a_wrong_pair_whose_boxes_overlap_is_marked_on_its_boxes(browser, explor
         page, tab, camera, frame = opened_at(browser, server, lambda settings, camera:
                                              frame_with_an_overlapping_wrong_pair(explorer, settings, camera))
         ui.wait_until(lambda: ui.header(page) == f"Frame {frame}", 60)
+        camera = settled_camera(tab)
         outcome, drawing = tab.last, tab.last_drawing
         assert outcome.metrics.n_matched > outcome.metrics.n_correct
         ui.close_notifications(page)
@@ -203,12 +210,17 @@ def in_free_part(camera, xy: np.ndarray) -> np.ndarray:
     return (FREE[0] < where[:, 0]) & (where[:, 0] < FREE[2]) & (FREE[1] < where[:, 1]) & (where[:, 1] < FREE[3])
 
 
+def within(where: np.ndarray, box: tuple[float, float, float, float]) -> np.ndarray:
+    return (box[0] < where[:, 0]) & (where[:, 0] < box[2]) & (box[1] < where[:, 1]) & (where[:, 1] < box[3])
+
+
 def overlapping_wrong_pair(outcome, camera) -> tuple[int, int]:
     """The wrong pair (ego row, CAV row) in the free part of the page whose drawn boxes are closest
     (its match line shortest), less than half a metre apart."""
     _, wrong, _ = classified_pairs(outcome.result.pairs, outcome.trial.gt_pairs)
     gaps = overlapping_wrong_gaps(outcome)
-    inside = in_free_part(camera, outcome.trial.ego_boxes[wrong[:, 0], :2])
+    where = pixels.project(camera, np.c_[outcome.trial.ego_boxes[wrong[:, 0], :2], np.zeros(len(wrong))])
+    inside = within(where, CANVAS) & ~within(where, KEY_NUMBERS)
     assert inside.any(), "no wrong pair in view"
     k = int(np.argmin(np.where(inside, gaps, np.inf)))
     assert gaps[k] < 0.5, gaps[k]

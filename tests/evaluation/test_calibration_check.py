@@ -52,7 +52,7 @@ def test_cli_writes_table_plot_and_flagged_frames(shifted, tmp_path, capsys):
     out = tmp_path / "check"
     assert main(["--dataset", str(shifted), "--check-calibration", "--out", str(out)]) == 0
     printed = capsys.readouterr().out
-    assert printed.startswith("1 of 3 judged frame checks disagree with the dataset's transform by more than 1 m")
+    assert printed.startswith("1 of 3 frames checked disagrees with the dataset's transform by more than 1 m")
     assert "| 2 | 000012 | vehicle | infrastructure |" in printed
     with (out / "calibration_check.csv").open() as file:
         table = list(csv.DictReader(file))

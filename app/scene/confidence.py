@@ -1,0 +1,63 @@
+"""CBM's confidence in its pose as the app says it: one quantity with its scale and threshold, the
+evidence margin (how much better its pose explains the scene than the best different pose, as a
+natural-log likelihood ratio: 8 is 3000 times likelier; ``cbm.hypotheses``), sure from
+``SURE_FROM``; and words that never call a failed frame right ("CBM was sure, and wrong: ...",
+with the diagnosis's reason). Methods that do not verify their pose have no confidence to show."""
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+from evaluation.diagnosis import SURE_FROM, Finding
+
+REASONS = ("noise", "wrong_pairs", "few_right_pairs", "wrong_anchor", "distance_limit", "heading_fold",
+           "not_the_fit", "no_anchor", "single_pair", "no_estimate", "few_covisible", "nothing_paired", "unexplained")
+"""The findings that say best why a frame failed, the most telling first (the key numbers give one)."""
+
+
+def margin_words(result: object) -> str | None:
+    """``evidence margin 12.2, sure from 8`` (``∞``: no different pose explains the scene at all);
+    None for a result with no verified margin."""
+    margin = getattr(result, "evidence_margin", math.nan)
+    if margin != margin:
+        return None
+    shown = "∞" if math.isinf(margin) else f"{margin:.1f}"
+    return f"evidence margin {shown}, sure from {SURE_FROM:g}"
+
+
+def reason(findings: Sequence[Finding]) -> str:
+    """The diagnosis's most telling finding, in a few words ("" without one)."""
+    ranked = sorted(findings, key=lambda f: REASONS.index(f.code) if f.code in REASONS else len(REASONS))
+    return ranked[0].brief if ranked else ""
+
+
+def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> str | None:
+    """CBM's confidence against the truth, in words: sure or not (from the evidence margin, or its
+    reason for not being sure), and whether that was right; None for a method that does not verify."""
+    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False):
+        return None
+    margin = margin_words(result)
+    numbers = margin or f"no evidence margin, sure from {SURE_FROM:g}"
+    why = reason(findings)
+    because = f"; {why}" if why and not success else ""
+    if getattr(result, "abstained", False):
+        doubt = getattr(result, "reason", "") if margin is None else ""
+        head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"
+        return f"{head}: {doubt + '; ' if doubt else ''}{numbers}{because}"
+    if success:
+        return f"CBM is sure: {numbers}"
+    return f"CBM was sure, and wrong: {numbers}{because}"
+
+
+def sure_words(result: object) -> str | None:
+    """A CAV's confidence in a few words, its threshold said once elsewhere (``SURE_WORDS``): ``CBM
+    sure, margin 25.3``; None for a method that does not verify."""
+    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False):
+        return None
+    sure = "CBM not sure" if getattr(result, "abstained", False) else "CBM sure"
+    margin = getattr(result, "evidence_margin", math.nan)
+    return sure if margin != margin else f"{sure}, margin {'∞' if math.isinf(margin) else f'{margin:.1f}'}"
+
+
+SURE_WORDS = f"CBM sure from evidence margin {SURE_FROM:g}"
+"""The threshold, said once above several CAVs' ``sure_words``."""

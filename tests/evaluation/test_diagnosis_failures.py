@@ -1,0 +1,65 @@
+"""Every failed frame has a diagnosis (issue 47, item 3): the rules any method's failure answers to,
+on constructed cases (the shipped scene's failed frames: ``tests/app/test_failure_picture.py``)."""
+import numpy as np
+
+from cbm.hypotheses import EVIDENCE_MARGIN
+from cbm.methods import METHODS
+from evaluation.diagnosis import SURE_FROM, diagnose_failure, least_squares_on
+from evaluation.metrics import evaluate, is_success
+from evaluation.scenario import ScenarioParams, make_trial
+from support.scenes import street_scene
+
+
+def trial_of(world, **scenario):
+    return make_trial(world, np.arange(len(world)), ScenarioParams(**scenario))
+
+
+def given(trial, pairs):
+    """A result that paired ``pairs`` and fitted them by least squares (a method's answer, made to order)."""
+    return METHODS["oracle"](trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=np.asarray(pairs).reshape(-1, 2))
+
+
+def findings(trial, result):
+    oracle = least_squares_on(trial, trial.gt_pairs)
+    return diagnose_failure(result, trial, evaluate(result, trial), oracle)
+
+
+def test_the_sure_threshold_is_cbms_own():
+    assert SURE_FROM == EVIDENCE_MARGIN
+
+
+def test_a_frame_the_noise_alone_fails_says_so():
+    trial = trial_of(street_scene(40, np.random.default_rng(0)), eta=0.3, sigma_p=1.5, sigma_theta=10.0, seed=4)
+    oracle = least_squares_on(trial, trial.gt_pairs)
+    assert not is_success(oracle), "least squares on the true pairs fails here (else this proves nothing)"
+    found = findings(trial, given(trial, trial.gt_pairs))
+    assert found[0].code == "noise" and found[0].message.startswith("least squares on the true pairs is off by")
+    assert found[0].message.endswith("too: the noise, not the matching")
+
+
+def test_wrong_pairs_are_named_and_the_right_ones_alone_would_do():
+    trial = trial_of(street_scene(40, np.random.default_rng(1)), eta=0.6, sigma_p=0.1, seed=2)
+    truth = np.asarray(trial.gt_pairs)
+    wrong = np.c_[truth[:3, 0], truth[3:6, 1]]
+    result = given(trial, np.r_[truth[6:], wrong])
+    assert not is_success(evaluate(result, trial)), "the wrong pairs pull the pose off (else this proves nothing)"
+    found = {f.code: f for f in findings(trial, result)}
+    assert "3 of its" in found["wrong_pairs"].message and "alone is off by only" in found["wrong_pairs"].message
+    assert found["wrong_pairs"].brief.startswith("3 of its")
+
+
+def test_a_pose_on_too_few_right_pairs_is_the_few_right_pairs():
+    trial = trial_of(street_scene(60, np.random.default_rng(3)), eta=0.8, sigma_p=0.6, sigma_theta=5.0, seed=9)
+    truth = np.asarray(trial.gt_pairs)
+    near = truth[np.argsort(np.hypot(*trial.ego_boxes[truth[:, 0], :2].T))[:2]]
+    result = given(trial, near)
+    assume = is_success(least_squares_on(trial, truth)) and not is_success(evaluate(result, trial))
+    assert assume, "two pairs fail where all succeed (else this proves nothing)"
+    found = {f.code for f in findings(trial, result)}
+    assert "few_right_pairs" in found
+
+
+def test_nothing_paired_and_no_estimate_are_findings_too():
+    trial = trial_of(street_scene(30, np.random.default_rng(4)), eta=0.6, seed=1)
+    none = METHODS["none"](trial.ego_boxes, trial.cav_boxes, trial.init)
+    assert [f.code for f in findings(trial, none)] == ["nothing_paired"]
