@@ -1,6 +1,7 @@
 """The Explore tab's texts: a sequence run's aggregate, a search's ranking, the worst frames."""
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
 from typing import Any
 
@@ -75,7 +76,7 @@ def worst_markdown(rows: Sequence[dict[str, Any]], metric: str, findings: dict[i
              f"| frame | {' | '.join(m.label for m in shown)} | why it failed |", "|---|" + "---|" * (len(shown) + 1)]
     for row in rows:
         why = "; ".join(f.message for f in findings.get(row["frame"], [])) or "—"
-        values = " | ".join(m.unit.shown(row[m.key], "—", suffix=True) for m in shown)
+        values = " | ".join(m.unit.shown(row.get(m.key, math.nan), "—", suffix=True) for m in shown)
         lines.append(f"| {row['frame']} | {values} | {why} |")
     return "\n".join(lines)
 

@@ -36,8 +36,8 @@ def test_the_rankings_and_the_table_are_the_registrys_trial_metrics() -> None:
     rows = worst.rank([_row(0, ad=0.5), _row(1, ad=2.0, recall=math.nan)], "AD")
     assert [row["frame"] for row in rows] == [1, 0]
     text = worst_markdown(rows, "AD", {})
-    assert "| frame | RTE | RRE | precision | recall | AD | consensus margin | why it failed |" in text
-    assert "| 1 | 0.10 m | 0.10° | 1.00 | — | 2.00 m | 10.0 pairs | — |" in text
+    assert "| frame | RTE | RRE | precision | recall | AD | consensus margin | latency error | why it failed |" in text
+    assert "| 1 | 0.10 m | 0.10° | 1.00 | — | 2.00 m | 10.0 pairs | — | — |" in text
 
 
 def test_jumping_to_a_worst_frame_reproduces_its_row(small_explorer: Explorer) -> None:
