@@ -171,9 +171,7 @@ def _pair_inputs(frame: Frame, protocol: Protocol, ego: str, chosen: str, note: 
     """The inputs of the trial of ``ego`` and the CAV ``chosen``, drawing from stream ``stream``."""
     inputs = frame_trial_inputs(frame, ego, chosen)
     gap = capture_gap(frame, ego, chosen)
-    if gap:
-        note += f"; the CAV captured {1000 * gap:.0f} ms before the ego (the dataset's timestamps)"
-    if (gap or window_s) and not frame.sequence.tracked:
+    if window_s and not frame.sequence.tracked:
         note += "; the dataset's frames are samples whose objects are not tracked: no late message is made"
     inputs["cav_reported_pose"] = frame.predicted_pose(chosen)
     said = inputs["visibility"] or {}

@@ -38,7 +38,7 @@ def test_dair_v2x_samples_make_no_late_message_and_say_so(tmp_path) -> None:
     delayed = ScenarioParams(protocol="range", sensor_range=200.0, delay_ms=200.0)
     inputs = frame_inputs(sequence[2], "range", window_s=delayed.window_s)
     assert inputs.gap_s == pytest.approx(0.098)
-    assert "captured 98 ms before the ego" in inputs.note and "no late message is made" in inputs.note
+    assert "no late message is made" in inputs.note
     assert inputs.build(delayed, seed=0).message_age_s == 0.0, "pair 1's label indices are other objects"
 
 
