@@ -24,13 +24,17 @@ from .session.baseline import Baseline
 from .session.coalesce import Coalescer
 from .session.explorer import Explorer, Outcome
 from .session.history import FrameHistory, row_over_time, settings_key, sweep_rows
-from .session.kernels import COMPILING, Kernels
+from .session.kernels import BASELINES, COMPILING, Kernels
 from .session.offers import offers_of
 from .session.over_time import Stopped
 from .session.progress import announced
 from .session.recording import Recording
 from .session.settings import Settings
 from .stage import Stage
+
+COMPUTING_AFTER = 0.3
+"""Seconds a recompute of the same method takes before the status line and the key numbers say it is
+computing (the verdict on screen is then stale; a quicker one replaces it before anyone reads it)."""
 
 
 class ClientSession:
@@ -150,17 +154,20 @@ class ClientSession:
         frame runs interpreted, its note says so, and the tab recomputes once they are ready; a
         large frame waits for them, as does any frame when they are only loaded from the cache. The
         status line says what it waits for when that takes a moment."""
-        say = self.controls.metrics.say
-        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO):
-            self._compiled_note_due = True
-            with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
+        if not self.kernels.ready_for(settings.method) and self._waits_for_kernels(settings):
+            self._compiled_note_due = self._compiled_note_due or not self.kernels.ready
+            whose = "CBM's" if not self.kernels.ready else f"{METHODS[settings.method].label}'s"
+            with announced(lambda s: self._waiting(settings, f"Preparing {whose} compiled kernels (first start "
+                                                             f"only)… {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):
-                self.kernels.wait()
+                self.kernels.wait(method=settings.method)
         self._stop_catching_up.clear()
+        if self.last is None or self.last.settings.method != settings.method:
+            self._waiting(settings, "")
         try:
-            with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting, \
-                    stoppable(lambda: self.worker.superseded):
-                outcome = self.explorer.compute(settings, self._catching_up(), self._stopping)
+            with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s"), after=COMPUTING_AFTER), \
+                    self.kernels.running() as interpreting, stoppable(lambda: self.worker.superseded):
+                outcome = self.explorer.compute(settings, self._catching_up(settings), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
         except Stopped as stopped:
             if self.worker.superseded:
@@ -176,9 +183,23 @@ class ClientSession:
         return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
                                            self.explorer.sequence[outcome.frame_index]), outcome, pinned)
 
-    def _catching_up(self):
+    def _waiting(self, settings: Settings, status: str) -> None:
+        """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
+        numbers the method computing in place of the verdict on screen (another method's, or stale)."""
+        if status:
+            self.controls.metrics.say(status)
+        frame = min(max(settings.frame, 0), len(self.explorer) - 1)
+        self.stage.key_numbers.problem(f"{METHODS[settings.method].label} computing frame {frame}…"
+                                       + (f" {status}" if status else ""))
+
+    def _waits_for_kernels(self, settings: Settings) -> bool:
+        """Whether ``settings`` wait for their kernels rather than run interpreted: a baseline's
+        always (``kernels.BASELINES``), CBM's when they load from the cache or the frame is large."""
+        return settings.method in BASELINES or self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO
+
+    def _catching_up(self, settings: Settings):
         """A method over time's report while it computes the frames before the one asked for: the
-        status line and the stop button, at most four times a second."""
+        status line, the key numbers and the stop button, at most four times a second."""
         shown = [0.0]
 
         def report(done: int, of: int) -> None:
@@ -186,7 +207,7 @@ class ClientSession:
             if done < of and now - shown[0] >= 0.25:
                 shown[0] = now
                 self.controls.metrics.stop.visible = True
-                self.controls.metrics.say(f"CBM over time computes the frames in order: frame {done} of {of}…")
+                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…")
         return report
 
     def _stopping(self) -> bool:
@@ -226,13 +247,31 @@ class ClientSession:
         self.client.flush()
         self.history.add(outcome)
         if outcome.alone is not None:
-            done = self.explorer.over_time.done(outcome.settings)
-            self.history.merge(outcome.settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
-                                                  for frame, d in done.items()})
+            self._merge_over_time(outcome.settings)
         self.recording.add(outcome)
         self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
         self._note = ""
         self.last, self.last_drawing = outcome, picture
+        if outcome.alone is not None and self.kernels.ready:
+            self._fill_over_time(outcome)
+
+    def _merge_over_time(self, settings: Settings) -> None:
+        """The timeline's rows of every frame a method over time computed under ``settings``."""
+        done = self.explorer.over_time.done(settings)
+        self.history.merge(settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
+                                      for frame, d in done.items()})
+
+    def _fill_over_time(self, outcome: Outcome) -> None:
+        """Per-frame CBM on the frames a catch-up passed (the timeline's grey line), after the frame
+        asked for is shown and until a newer setting waits; then the timeline again."""
+        try:
+            with stoppable(lambda: self.worker.superseded):
+                filled = self.explorer.fill_over_time(outcome.settings, lambda: self.worker.superseded)
+        except Cancelled:
+            return
+        if filled and not self._closed.is_set():
+            self._merge_over_time(outcome.settings)
+            self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
 
     def _failed(self, error: BaseException) -> None:
         """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
