@@ -22,11 +22,12 @@ from evaluation.fusion import fused_against_truth
 from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
 from evaluation.sweep import run_method
-from evaluation.trials import frame_cav_inputs, frame_inputs
+from evaluation.trials import NoTrial, frame_cav_inputs, frame_inputs
 from loaders import Sequence, is_roadside, is_vehicle
 
 from .names import agent_name
-from .over_time import Runs
+from .over_time import FrameOverTime, Runs
+from .rows import RowStore
 from .settings import MAX_CAVS, Settings
 
 TRIALS_KEPT = 8
@@ -167,6 +168,8 @@ class Explorer:
         self._trials_lock = threading.Lock()
         self.over_time = Runs()
         """The frames a method over time computed so far, per settings (``app.session.over_time``)."""
+        self.rows = RowStore()
+        """The sweep rows computed so far, per settings (``app.session.rows``)."""
 
     def forget(self) -> None:
         """Forget what was kept for the tabs (the edit cache, the recent trials, the runs over time)
@@ -175,6 +178,7 @@ class Explorer:
             self._trials.clear()
             self._inputs.clear()
         self.over_time.clear()
+        self.rows.clear()
         self.reuse.clear()
 
     def __len__(self) -> int:
@@ -263,6 +267,16 @@ class Explorer:
         shown needs none)."""
         inputs = self.trial_inputs(settings, index)
         return inputs, inputs.build(settings.scenario, settings.scenario.seed), float(self.sequence.timestamps[index])
+
+    def over_time_frames(self, settings: Settings, last: int, progress: Callable[[int, int], None],
+                         stop: Callable[[], bool]) -> dict[int, FrameOverTime]:
+        """Every frame up to ``last`` that a method over time answers under ``settings``, by frame,
+        computing the frames not yet computed (``Stopped`` as in ``compute``)."""
+        try:
+            self.over_time.frame(settings, last, lambda j: self._timed_trial(settings, j), progress, stop)
+        except NoTrial:
+            pass
+        return {j: done for j, done in self.over_time.done(settings).items() if j <= last}
 
     def fill_over_time(self, settings: Settings, stop: Callable[[], bool]) -> int:
         """Per-frame CBM on the frames a method over time computed under ``settings`` without it
