@@ -46,6 +46,8 @@ class ClientSession:
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
         self.client, self.explorer, self.kernels = client, explorer, kernels
         self._note = ""
+        self._play_note = ""
+        """How fast a play that cannot keep up goes (``playing_words``), beside each frame it shows."""
         self._compiled_note_due = False
         """A result ran interpreted or waited for the compile: the next compiled one says how long it took."""
         self._lock = threading.Lock()
@@ -116,6 +118,8 @@ class ClientSession:
 
     def set_playing(self, playing: bool) -> None:
         (self._playing.set if playing else self._playing.clear)()
+        if not playing:
+            self._play_note = ""
 
     def reset_camera(self, oblique: bool = False) -> None:
         self.stage.reset_camera(oblique)
@@ -123,9 +127,12 @@ class ClientSession:
     def hide_click_label(self) -> None:
         self.stage.hide_click_label()
 
-    def refresh(self) -> None:
-        """Recompute the settings on screen (the pinned baseline changed)."""
-        self.worker.submit(self._settings)
+    def refresh(self, frame_camera: bool = False) -> None:
+        """Recompute the settings on screen (the pinned baseline changed); ``frame_camera``: the
+        camera frames the result."""
+        with self._lock:
+            self._frame_for = self._settings if frame_camera else self._frame_for
+            self.worker.submit(self._settings)
 
     def add_frames(self, settings: Settings, rows: list[dict]) -> None:
         """A sequence run's rows join the timeline when they are the current settings'."""
@@ -181,7 +188,8 @@ class ClientSession:
             self.controls.metrics.stop.visible = False
         self._note_kernels(interpreting)
         return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
-                                           self.explorer.sequence[outcome.frame_index]), outcome, pinned)
+                                           self.explorer.sequence[outcome.frame_index]), outcome, pinned,
+                                      self.baseline.beside)
 
     def _waiting(self, settings: Settings, status: str) -> None:
         """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
@@ -242,7 +250,7 @@ class ClientSession:
         jumped, self._frame_for = self._frame_for == outcome.settings, None
         with self.client.atomic():
             self.stage.show(outcome, picture, reframe=jumped)
-            self.controls.metrics.show(picture.metrics_markdown, self._note)
+            self.controls.metrics.show(picture.metrics_markdown, self._note or self._play_note)
             self.controls.refresh(outcome, picture)
         self.client.flush()
         self.history.add(outcome)
@@ -289,9 +297,26 @@ class ClientSession:
         self.notify(f"{method} cannot run on this frame", error_words(error), "red")
 
     def _play(self) -> None:
+        """Step a frame at the play speed, each shown before the next is asked for: a frame that takes
+        longer than its share slows the play down (never skips a frame), and the status line says so."""
         while not self._closed.is_set():
             self._playing.wait()
             if self._closed.is_set():
                 return
+            asked, started = max(1, int(self.controls.frame.speed.value)), time.monotonic()
             self.step(1)
-            time.sleep(1.0 / max(1, int(self.controls.frame.speed.value)))
+            while not self.worker.wait_idle(timeout=0.5):
+                if self._closed.is_set():
+                    return
+            spent = time.monotonic() - started
+            self._play_note = playing_words(asked, spent) if self._playing.is_set() else ""
+            time.sleep(max(0.0, 1.0 / asked - spent))
+
+
+def playing_words(asked: int, spent: float) -> str:
+    """What the status line says of a play whose last frame took ``spent`` seconds at ``asked``
+    frames per second: nothing while it keeps up."""
+    if spent <= 1.05 / asked:
+        return ""
+    return (f"Playing at {1.0 / spent:.1f} frames/s of the {asked} asked: every frame is shown, and each takes "
+            f"{spent:.2f} s to compute and show.")
