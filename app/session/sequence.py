@@ -106,6 +106,14 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
     return SequenceRun(settings, tuple(rows), len(frames), tuple(skipped), cancelled=done < len(frames))
 
 
+def known_frames(explorer: Explorer, settings: Settings) -> int:
+    """How many frames of ``settings`` a run would take rather than compute: the rows known, or the
+    frames a method over time computed."""
+    if METHODS[settings.method].over_time:
+        return max(len(explorer.rows.of(settings)), len(explorer.over_time.done(settings)))
+    return len(explorer.rows.of(settings))
+
+
 def _frames_run(explorer: Explorer, settings: Settings, frames: list[int], task: Task | None,
                 chunk: int) -> tuple[list[dict[str, Any]], list[int]]:
     """The sweep's rows of ``frames`` run in chunks, and the frames without a trial, until cancelled."""
