@@ -165,14 +165,15 @@ class ClientSession:
             self._compiled_note_due = self._compiled_note_due or not self.kernels.ready
             whose = "CBM's" if not self.kernels.ready else f"{METHODS[settings.method].label}'s"
             with announced(lambda s: self._waiting(settings, f"Preparing {whose} compiled kernels (first start "
-                                                             f"only)… {s:.0f} s"),
+                                                             f"only)… {s:.0f} s", f"{whose} kernels first: {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):
                 self.kernels.wait(method=settings.method)
         self._stop_catching_up.clear()
         if self.last is None or self.last.settings.method != settings.method:
             self._waiting(settings, "")
         try:
-            with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s"), after=COMPUTING_AFTER), \
+            with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s", f"{s:.1f} s"),
+                           after=COMPUTING_AFTER), \
                     self.kernels.running() as interpreting, stoppable(lambda: self.worker.superseded):
                 outcome = self.explorer.compute(settings, self._catching_up(settings), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
@@ -191,14 +192,15 @@ class ClientSession:
                                            self.explorer.sequence[outcome.frame_index]), outcome, pinned,
                                       self.baseline.beside)
 
-    def _waiting(self, settings: Settings, status: str) -> None:
+    def _waiting(self, settings: Settings, status: str, progress: str = "") -> None:
         """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
-        numbers the method computing in place of the verdict on screen (another method's, or stale)."""
+        numbers the method computing in place of the verdict on screen (another method's, or stale),
+        with its ``progress``."""
         if status:
             self.controls.metrics.say(status)
         frame = min(max(settings.frame, 0), len(self.explorer) - 1)
         self.stage.key_numbers.problem(f"{METHODS[settings.method].label} computing frame {frame}…"
-                                       + (f" {status}" if status else ""))
+                                       + (f" ({progress})" if progress else ""))
 
     def _waits_for_kernels(self, settings: Settings) -> bool:
         """Whether ``settings`` wait for their kernels rather than run interpreted: a baseline's
@@ -215,7 +217,8 @@ class ClientSession:
             if done < of and now - shown[0] >= 0.25:
                 shown[0] = now
                 self.controls.metrics.stop.visible = True
-                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…")
+                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…",
+                              f"the frames before it first: {done} of {of}")
         return report
 
     def _stopping(self) -> bool:

@@ -7,12 +7,14 @@ preset, the tab's ``Explorer`` computes frame ``--frame`` once, then ``--edits``
 from the edit to its outcome (``Explorer.compute``: every frame before in order, the frame's trial,
 its metrics) and to its drawing (``app.scene.drawing.draw``, what the tab sends). Then a step to the
 next frame (the frames before are kept) and the calibrator's own share: its steps alone over the
-same trials, built beforehand, the floor of any exact recompute. Each checkout runs in a process of
-its own, the checkouts alternating round by round on the same machine (a loaded machine shifts both
-alike); the table gives the medians over the rounds and their ratio (the first checkout's over the
-last's).
+same trials, built beforehand, the floor of any exact recompute. With ``--browser``, the same edits
+typed into the Scenario tab of a tab open in headless chromium, each timed from the typing to the
+tab having sent the frame computed under it (its scene, panels and key numbers, in one batch).
+Each checkout runs in a process of its own, the checkouts alternating round by round on the same
+machine (a loaded machine shifts both alike); the table gives the medians over the rounds and their
+ratio (the first checkout's over the last's).
 
-    python bench/bench_over_time.py [--roots . ../before] [--rounds 3] [--edits 5] [--frame 150]
+    python bench/bench_over_time.py [--roots . ../before] [--rounds 3] [--edits 5] [--frame 150] [--browser]
 """
 from __future__ import annotations
 
@@ -28,6 +30,42 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve()
 PACKAGES = ("cbm", "loaders", "evaluation", "app")
+
+
+def typed_edits(frame: int, edits: int) -> dict[str, float]:
+    """Milliseconds from typing each new σp into a tab's Scenario tab to the tab having sent its
+    frame ``frame`` computed under it (CBM over time, ``drift-heavy``)."""
+    from playwright.sync_api import sync_playwright
+
+    import loaders
+    from app.server import ExplorerServer
+    from app.session.explorer import Explorer
+    from app.session.presets import discover
+    from app.session.settings import Settings
+    from support.browser import ARGS, CHROMIUM, label, wait_until
+
+    settings = dataclasses.replace(discover()[0]["drift-heavy"].apply(Settings()), frame=frame)
+    server = ExplorerServer(Explorer(loaders.open("argoverse2")), settings, port=0)
+    spent = []
+    with sync_playwright() as playwright:
+        browser = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
+        page = browser.new_page(viewport={"width": 1400, "height": 900})
+        page.goto(server.url)
+        wait_until(lambda: server.sessions and next(iter(server.sessions.values())).last is not None, 300)
+        tab = next(iter(server.sessions.values()))
+        control = label(page, "position noise σp (m)").get_attribute("for")
+        box = page.locator(f'[id="{control}"]').locator(
+            "xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]").locator("input.mantine-NumberInput-input")
+        for k in range(edits):
+            value = round(settings.scenario.sigma_p + 0.01 * (k + 1), 2)
+            started = time.perf_counter()
+            box.fill(f"{value:g}")
+            wait_until(lambda v=value: tab.last.settings.scenario.sigma_p == v and not tab.worker.superseded, 120)
+            spent.append(1000 * (time.perf_counter() - started))
+            wait_until(lambda: tab.worker.wait_idle(0.01), 120)
+        browser.close()
+    server.stop()
+    return {f"σp typed at frame {frame} -> frame sent (browser)": statistics.median(spent)}
 
 
 def one_round(frame: int, edits: int) -> dict[str, float]:
@@ -81,8 +119,9 @@ def _check_checkout() -> None:
 
 def run_round(root: Path, args: argparse.Namespace) -> dict[str, float]:
     """One round measured in a process whose packages are ``root``'s."""
-    env = dict(os.environ, PYTHONPATH=str(root))
-    command = [sys.executable, str(HERE), "--one", "--frame", str(args.frame), "--edits", str(args.edits)]
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(root), str(root / "tests")]))
+    command = [sys.executable, str(HERE), "--one", "--frame", str(args.frame), "--edits", str(args.edits),
+               *(["--browser"] if args.browser else [])]
     out = subprocess.run(command, cwd=root, env=env, capture_output=True, text=True)
     if out.returncode != 0:
         last = (out.stderr.strip().splitlines() or [f"exit status {out.returncode}"])[-1]
@@ -107,12 +146,16 @@ def main() -> int:
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--edits", type=int, default=5)
     parser.add_argument("--frame", type=int, default=150)
+    parser.add_argument("--browser", action="store_true", help="also type the edits in a browser tab")
     parser.add_argument("--one", action="store_true", help=argparse.SUPPRESS)
     args = parser.parse_args()
     if args.one:
         if sys.path[0] == str(HERE.parent):
             del sys.path[0]
-        print(json.dumps(one_round(args.frame, args.edits)))
+        measured = one_round(args.frame, args.edits)
+        if args.browser:
+            measured.update(typed_edits(args.frame, args.edits))
+        print(json.dumps(measured))
         return 0
     roots = [root.resolve() for root in args.roots]
     for root in roots:
