@@ -67,6 +67,8 @@ class ClientSession:
         for note in explorer.sequence.notes:
             self.notify("How this dataset is read", note, "blue")
         self._playing = threading.Event()
+        self._shown = threading.Event()
+        """Set when a result is shown (or fails): the play loop asks for the next frame then."""
         self._closed = threading.Event()
         self._stop_catching_up = threading.Event()
         self.worker: Coalescer[Settings, tuple[Outcome, Drawing]] = Coalescer(
@@ -263,6 +265,7 @@ class ClientSession:
         self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
         self._note = ""
         self.last, self.last_drawing = outcome, picture
+        self._shown.set()
         if outcome.alone is not None and self.kernels.ready:
             self._fill_over_time(outcome)
 
@@ -287,6 +290,7 @@ class ClientSession:
     def _failed(self, error: BaseException) -> None:
         """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
         (or above the last frame's, marked as such), and in the key numbers."""
+        self._shown.set()
         if isinstance(error, (Stopped, Cancelled)):
             return
         message = unusable_markdown(self.explorer, self._settings, error)
@@ -307,8 +311,9 @@ class ClientSession:
             if self._closed.is_set():
                 return
             asked, started = max(1, int(self.controls.frame.speed.value)), time.monotonic()
+            self._shown.clear()
             self.step(1)
-            while not self.worker.wait_idle(timeout=0.5):
+            while not (self._shown.wait(timeout=0.5) or self.worker.wait_idle(timeout=0.0)):
                 if self._closed.is_set():
                     return
             spent = time.monotonic() - started
