@@ -132,6 +132,8 @@ class ComparePanel:
     def __init__(self, gui: viser.GuiApi, tab: CompareTab) -> None:
         self.tab = tab
         self.comparison: Comparison | None = None
+        self.marked: list[Difference] | None = None
+        """The settings the table says differ from the controls' (None: no table yet)."""
         self._closed = threading.Event()
         self.runner = Runner(self._open(self._progress), self._open(self._failed), self._open(self._finished),
                              name=f"compare-{tab.client.client_id}", waiting=self._open(self._waiting))
@@ -209,18 +211,21 @@ class ComparePanel:
                         f"tab's method, {short(second)} pinned and drawn {where} (unpin under the timeline)", "blue")
 
     def reflect(self, settings: Settings) -> None:
-        """Follow the tab's frame, and mark the table when the settings moved since it ran."""
+        """Follow the tab's frame, and mark the table when the settings moved since it ran (the table
+        redrawn only when what differs changed)."""
         assign(self.frame, value=min(settings.frame, self.frame.max))
-        if self.comparison is not None:
-            assign(self.table, content=table_markdown(self.comparison, stale(self.comparison, settings)))
+        found = None if self.comparison is None else stale(self.comparison, settings)
+        if found != self.marked:
+            self.marked = found
+            assign(self.table, content=table_markdown(self.comparison, found))
 
     def close(self) -> None:
         self._closed.set()
         self.runner.cancel()
 
     def _done(self, comparison: Comparison, cancelled: bool) -> None:
-        self.comparison = comparison
-        assign(self.table, content=table_markdown(comparison, stale(comparison, self.tab.settings)))
+        self.comparison, self.marked = comparison, stale(comparison, self.tab.settings)
+        assign(self.table, content=table_markdown(comparison, self.marked))
         send(self.chart, chart_data(comparison, len(self.tab.explorer)), chart_series(comparison))
         self._list_beaten()
 

@@ -79,7 +79,7 @@ def test_the_baselines_kernels_compile_after_cbms_in_a_subprocess_and_their_meth
     assert kernels.wait(timeout=120)
     kernels.when_ready(lambda: called.append("freealign"), method="freealign")
     assert kernels.ready_for("cbm") and kernels.ready_for("icp") and not kernels.ready_for("freealign")
-    assert not kernels.wait(timeout=0.1, method="v2xregpp") and called == []
+    assert kernels.ready_for("v2xregpp") and not kernels.wait(timeout=0.1, method="freealign") and called == []
     release.set()
     assert kernels.wait(timeout=300, method="freealign")
     assert asked == [("matching", "selection"), kernels_module.BASELINE_PARTS] and called == ["freealign"]
