@@ -1,6 +1,7 @@
 """The ``cbm-explorer`` command (also ``python serve.py``): the live CBM calibration explorer in the browser.
 
-    cbm-explorer [--dataset PATH_OR_NAME] [--preset NAME] [--host 127.0.0.1] [--port 8080] [--allow-host NAME]
+    cbm-explorer [--dataset PATH_OR_NAME] [--data FOLDER ...] [--preset NAME] [--host 127.0.0.1] [--port 8080]
+                 [--allow-host NAME]
     cbm-explorer --list-presets
 """
 from __future__ import annotations
@@ -20,11 +21,12 @@ from .panels.registry import tabs_help
 from .scene.words import plural
 from .server import AddressError, ExplorerServer, check_free, host_port, is_loopback
 from .session import kernels
+from .session.datasets import Catalogue, DataError, data_roots, start_dataset
 from .session.explorer import Explorer
 from .session.offers import offers_of
 from .session.presets import PresetError, discover
 from .session.settings import Settings
-from .session.start import first_usable
+from .session.start import FEWEST_SHARED, first_usable
 
 
 class _Parser(argparse.ArgumentParser):
@@ -44,6 +46,9 @@ def parse(argv: list[str]) -> argparse.Namespace:
                      formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--dataset", default="argoverse2",
                         help="dataset folder or file, or a name: argoverse2 (shipped), synthetic[:count[:seed=S]]")
+    parser.add_argument("--data", action="extend", nargs="+", default=[], metavar="FOLDER",
+                        help="folders whose datasets the page offers besides the shipped scene, found at start "
+                             "(repeatable); nothing outside them is listed or read")
     parser.add_argument("--preset", default="default",
                         help="preset to start from (a shipped one or one saved in your presets folder)")
     parser.add_argument("--detections", default=None, metavar="STAGE1_BOXES_JSON",
@@ -135,8 +140,9 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     kernels.prepare()
     try:
+        roots = data_roots(args.data)
         sequence = loaders.open(args.dataset, detections=args.detections)
-    except loaders.LoaderError as error:
+    except (DataError, loaders.LoaderError) as error:
         return _fail(str(error))
     if len(sequence) == 0:
         return _fail(f"{args.dataset}: the dataset has no frames")
@@ -154,12 +160,14 @@ def main(argv: list[str] | None = None) -> int:
         return _fail(f"--preset {args.preset}: {refused}")
     explorer = Explorer(sequence)
     if usable_frame(explorer, settings) is None:
-        _warn(f"no frame has a usable pair of agents (ego and CAV) under the {settings.scenario.protocol} protocol "
-              f"among {len(sampled_frames(len(sequence)))} frames tried: CBM cannot run; the page says what is "
-              f"missing")
+        _warn(f"no frame has {FEWEST_SHARED} objects seen by both an ego and a CAV under the "
+              f"{settings.scenario.protocol} protocol among {len(sampled_frames(len(sequence)))} frames tried: CBM "
+              f"cannot run; the page says what is missing")
+    catalogue = Catalogue(start_dataset(args.dataset), explorer, roots)
     stopping = _stop_on_signals()
     try:
-        server = ExplorerServer(explorer, settings, host=args.host, port=args.port, allowed_hosts=args.allow_host)
+        server = ExplorerServer(explorer, settings, host=args.host, port=args.port, allowed_hosts=args.allow_host,
+                                catalogue=catalogue)
     except OSError as error:
         return _fail(f"cannot listen on {host_port(args.host, args.port)}: {error}")
     if starting:
@@ -167,7 +175,9 @@ def main(argv: list[str] | None = None) -> int:
     if not local:
         _warn(f"listening on {args.host}, beyond this machine: the app has no authentication, anyone who can "
               f"reach this address can use it")
-    print(f"CBM Explorer on {sequence.name} ({plural(len(sequence), 'frame')}): open {server.url}", flush=True)
+    offered = f"; {len(catalogue.names)} datasets offered" if len(catalogue.names) > 1 else ""
+    print(f"CBM Explorer on {sequence.name} ({plural(len(sequence), 'frame')}{offered}): open {server.url}",
+          flush=True)
     server.kernels.when_ready(lambda: print(kernels_ready_line(server.kernels), flush=True))
     while not stopping.wait(0.1):
         pass

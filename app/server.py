@@ -1,4 +1,6 @@
-"""The viser server: one ``ClientSession`` per browser tab over one shared ``Explorer``."""
+"""The viser server: one ``ClientSession`` per browser tab over the ``Explorer`` of the dataset it
+shows (one per dataset, shared by the tabs showing it); a tab picks another dataset among those
+offered (``app.session.datasets``) and its session is rebuilt on it, without a restart."""
 from __future__ import annotations
 
 import concurrent.futures
@@ -12,13 +14,15 @@ from collections.abc import Iterable
 import viser
 
 from cbm import return_memory
+from loaders import LoaderError
 
 from .guard import RequestGuard, checking_requests
 from .scene.presentation import THEME
 from .session import kernels
+from .session.datasets import Catalogue, DataError, Dataset, settings_on
 from .session.explorer import Explorer
 from .session.settings import Settings
-from .session.start import start_of
+from .session.start import runs_on, start_of
 from .tab import ClientSession
 
 RESOLVE_SECONDS = 5.0
@@ -124,9 +128,13 @@ class ExplorerServer:
     waits for them."""
 
     def __init__(self, explorer: Explorer, settings: Settings, host: str = "127.0.0.1", port: int = 8080,
-                 verbose: bool = False, allowed_hosts: Iterable[str] = ()) -> None:
+                 verbose: bool = False, allowed_hosts: Iterable[str] = (), catalogue: Catalogue | None = None) -> None:
         check_free(host, port)
         self.explorer = explorer
+        self.catalogue = catalogue or Catalogue(Dataset(explorer.sequence.name, explorer.sequence.name, "start"),
+                                                explorer, shipped=False)
+        """The datasets a tab may pick (``explorer``'s alone unless given)."""
+        self.start_settings = settings
         self.settings, self.start_note = start_of(explorer, settings)
         self.kernels = kernels.prepare()
         self.sessions: dict[int, ClientSession] = {}
@@ -155,10 +163,28 @@ class ExplorerServer:
         return f"http://{host_port(self.server.get_host(), self.server.get_port())}"
 
     def _connected(self, client: viser.ClientHandle) -> None:
+        self._open(client, self.catalogue.first, self.explorer, self.settings, self.start_note)
+
+    def _open(self, client: viser.ClientHandle, name: str, explorer: Explorer, settings: Settings,
+              note: str | None) -> None:
+        """A new session of ``client`` on the dataset ``name``, under the title and the dataset picker
+        (shown when more than one dataset is offered); ``note``: where it starts, when not on its frame."""
         client.gui.add_html(TITLE_HTML, order=-1.0)
-        session = ClientSession(client, self.explorer, self.settings, self.kernels)
-        if self.start_note:
-            session.notify(f"Starting on frame {self.settings.frame}", self.start_note, "blue")
+        if len(self.catalogue.names) > 1:
+            picker = client.gui.add_dropdown("dataset", self.catalogue.names, initial_value=name, order=-0.5,
+                                             hint="the shipped scene and the datasets found in the data folders")
+
+            def picked(event: viser.GuiEvent) -> None:
+                if event.client is not None and picker.value != name:
+                    threading.Thread(target=self._switch, args=(client, picker, name), name="open-dataset",
+                                     daemon=True).start()
+
+            picker.on_update(picked)
+        session = ClientSession(client, explorer, settings, self.kernels)
+        if note:
+            moved = runs_on(explorer, settings, settings.frame)
+            session.notify(f"Starting on frame {settings.frame}" if moved else "Too few objects seen by both agents",
+                           note, "blue" if moved else "yellow")
         with self._lock:
             gone = client.client_id in self._gone
             self._gone.discard(client.client_id)
@@ -166,6 +192,32 @@ class ExplorerServer:
                 self.sessions[client.client_id] = session
         if gone:
             session.close()
+
+    def _switch(self, client: viser.ClientHandle, picker: viser.GuiDropdownHandle, shown: str) -> None:
+        """Rebuild ``client``'s session on the dataset its picker names (the ``Explorer`` opened on the
+        first ask and shared), with its settings where the dataset offers them, on the first frame
+        CBM can run on; a dataset that does not open is named in one line and the tab stays."""
+        name = picker.value
+        with self._lock:
+            session = self.sessions.get(client.client_id)
+        if session is None:
+            return
+        session.notify(f"Opening {name}", "this tab shows it when it is loaded", "blue")
+        try:
+            explorer = self.catalogue.explorer(name)
+        except (DataError, LoaderError, OSError) as error:
+            session.notify(f"{name} not opened", str(error).splitlines()[0], "red")
+            picker.value = shown
+            return
+        settings, note = start_of(explorer, settings_on(session.settings, explorer, self.start_settings))
+        with self._lock:
+            if self.sessions.get(client.client_id) is not session:
+                return
+            del self.sessions[client.client_id]
+        session.close()
+        client.gui.reset()
+        client.scene.reset()
+        self._open(client, name, explorer, settings, note)
 
     def _disconnected(self, client: viser.ClientHandle) -> None:
         with self._lock:
@@ -184,7 +236,8 @@ class ExplorerServer:
         memory resident otherwise, and each new tab's grows it (issue 40: +200 MB a closed tab)."""
         gc.collect()
         if last:
-            self.explorer.forget()
+            for explorer in self.catalogue.explorers:
+                explorer.forget()
         else:
             return_memory()
 

@@ -24,13 +24,17 @@ from .session.baseline import Baseline
 from .session.coalesce import Coalescer
 from .session.explorer import Explorer, Outcome
 from .session.history import FrameHistory, row_over_time, settings_key, sweep_rows
-from .session.kernels import COMPILING, Kernels
+from .session.kernels import BASELINES, COMPILING, Kernels
 from .session.offers import offers_of
 from .session.over_time import Stopped
 from .session.progress import announced
 from .session.recording import Recording
 from .session.settings import Settings
 from .stage import Stage
+
+COMPUTING_AFTER = 0.3
+"""Seconds a recompute of the same method takes before the status line and the key numbers say it is
+computing (the verdict on screen is then stale; a quicker one replaces it before anyone reads it)."""
 
 
 class ClientSession:
@@ -42,6 +46,8 @@ class ClientSession:
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
         self.client, self.explorer, self.kernels = client, explorer, kernels
         self._note = ""
+        self._play_note = ""
+        """How fast a play that cannot keep up goes (``playing_words``), beside each frame it shows."""
         self._compiled_note_due = False
         """A result ran interpreted or waited for the compile: the next compiled one says how long it took."""
         self._lock = threading.Lock()
@@ -62,6 +68,8 @@ class ClientSession:
         for note in explorer.sequence.notes:
             self.notify("How this dataset is read", note, "blue")
         self._playing = threading.Event()
+        self._shown = threading.Event()
+        """Set when a result is shown (or fails): the play loop asks for the next frame then."""
         self._closed = threading.Event()
         self._stop_catching_up = threading.Event()
         self.worker: Coalescer[Settings, tuple[Outcome, Drawing]] = Coalescer(
@@ -113,6 +121,8 @@ class ClientSession:
 
     def set_playing(self, playing: bool) -> None:
         (self._playing.set if playing else self._playing.clear)()
+        if not playing:
+            self._play_note = ""
 
     def reset_camera(self, oblique: bool = False) -> None:
         self.stage.reset_camera(oblique)
@@ -123,9 +133,12 @@ class ClientSession:
     def fly_to(self, key: str) -> None:
         self.stage.fly_to(key)
 
-    def refresh(self) -> None:
-        """Recompute the settings on screen (the pinned baseline changed)."""
-        self.worker.submit(self._settings)
+    def refresh(self, frame_camera: bool = False) -> None:
+        """Recompute the settings on screen (the pinned baseline changed); ``frame_camera``: the
+        camera frames the result."""
+        with self._lock:
+            self._frame_for = self._settings if frame_camera else self._frame_for
+            self.worker.submit(self._settings)
 
     def add_frames(self, settings: Settings, rows: list[dict]) -> None:
         """A sequence run's rows join the timeline when they are the current settings'."""
@@ -154,17 +167,21 @@ class ClientSession:
         frame runs interpreted, its note says so, and the tab recomputes once they are ready; a
         large frame waits for them, as does any frame when they are only loaded from the cache. The
         status line says what it waits for when that takes a moment."""
-        say = self.controls.metrics.say
-        if not self.kernels.ready and (self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO):
-            self._compiled_note_due = True
-            with announced(lambda s: say(f"Preparing CBM's compiled kernels (first start only)… {s:.0f} s"),
+        if not self.kernels.ready_for(settings.method) and self._waits_for_kernels(settings):
+            self._compiled_note_due = self._compiled_note_due or not self.kernels.ready
+            whose = "CBM's" if not self.kernels.ready else f"{METHODS[settings.method].label}'s"
+            with announced(lambda s: self._waiting(settings, f"Preparing {whose} compiled kernels (first start "
+                                                             f"only)… {s:.0f} s", f"{whose} kernels first: {s:.0f} s"),
                            after=0.0, every=1.0, since=self.kernels.started):
-                self.kernels.wait()
+                self.kernels.wait(method=settings.method)
         self._stop_catching_up.clear()
+        if self.last is None or self.last.settings.method != settings.method:
+            self._waiting(settings, "")
         try:
-            with announced(lambda s: say(f"Computing… {s:.1f} s")), self.kernels.running() as interpreting, \
-                    stoppable(lambda: self.worker.superseded):
-                outcome = self.explorer.compute(settings, self._catching_up(), self._stopping)
+            with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s", f"{s:.1f} s"),
+                           after=COMPUTING_AFTER), \
+                    self.kernels.running() as interpreting, stoppable(lambda: self.worker.superseded):
+                outcome = self.explorer.compute(settings, self._catching_up(settings), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
         except Stopped as stopped:
             if self.worker.superseded:
@@ -178,11 +195,27 @@ class ClientSession:
             self.controls.metrics.stop.visible = False
         self._note_kernels(interpreting)
         return outcome, with_baseline(draw(outcome, self.explorer.map_segments,
-                                           self.explorer.sequence[outcome.frame_index]), outcome, pinned)
+                                           self.explorer.sequence[outcome.frame_index]), outcome, pinned,
+                                      self.baseline.beside)
 
-    def _catching_up(self):
+    def _waiting(self, settings: Settings, status: str, progress: str = "") -> None:
+        """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
+        numbers the method computing in place of the verdict on screen (another method's, or stale),
+        with its ``progress``."""
+        if status:
+            self.controls.metrics.say(status)
+        frame = min(max(settings.frame, 0), len(self.explorer) - 1)
+        self.stage.key_numbers.problem(f"{METHODS[settings.method].label} computing frame {frame}…"
+                                       + (f" ({progress})" if progress else ""))
+
+    def _waits_for_kernels(self, settings: Settings) -> bool:
+        """Whether ``settings`` wait for their kernels rather than run interpreted: a baseline's
+        always (``kernels.BASELINES``), CBM's when they load from the cache or the frame is large."""
+        return settings.method in BASELINES or self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO
+
+    def _catching_up(self, settings: Settings):
         """A method over time's report while it computes the frames before the one asked for: the
-        status line and the stop button, at most four times a second."""
+        status line, the key numbers and the stop button, at most four times a second."""
         shown = [0.0]
 
         def report(done: int, of: int) -> None:
@@ -190,7 +223,8 @@ class ClientSession:
             if done < of and now - shown[0] >= 0.25:
                 shown[0] = now
                 self.controls.metrics.stop.visible = True
-                self.controls.metrics.say(f"CBM over time computes the frames in order: frame {done} of {of}…")
+                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…",
+                              f"the frames before it first: {done} of {of}")
         return report
 
     def _stopping(self) -> bool:
@@ -225,22 +259,42 @@ class ClientSession:
         jumped, self._frame_for = self._frame_for == outcome.settings, None
         with self.client.atomic():
             self.stage.show(outcome, picture, reframe=jumped)
-            self.controls.metrics.show(picture.metrics_markdown, self._note)
+            self.controls.metrics.show(picture.metrics_markdown, self._note or self._play_note)
             self.controls.refresh(outcome, picture)
         self.client.flush()
         self.history.add(outcome)
         if outcome.alone is not None:
-            done = self.explorer.over_time.done(outcome.settings)
-            self.history.merge(outcome.settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
-                                                  for frame, d in done.items()})
+            self._merge_over_time(outcome.settings)
         self.recording.add(outcome)
         self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
         self._note = ""
         self.last, self.last_drawing = outcome, picture
+        self._shown.set()
+        if outcome.alone is not None and self.kernels.ready:
+            self._fill_over_time(outcome)
+
+    def _merge_over_time(self, settings: Settings) -> None:
+        """The timeline's rows of every frame a method over time computed under ``settings``."""
+        done = self.explorer.over_time.done(settings)
+        self.history.merge(settings, {frame: row_over_time(d.metrics, d.alone_metrics, d.result.track.event)
+                                      for frame, d in done.items()})
+
+    def _fill_over_time(self, outcome: Outcome) -> None:
+        """Per-frame CBM on the frames a catch-up passed (the timeline's grey line), after the frame
+        asked for is shown and until a newer setting waits; then the timeline again."""
+        try:
+            with stoppable(lambda: self.worker.superseded):
+                filled = self.explorer.fill_over_time(outcome.settings, lambda: self.worker.superseded)
+        except Cancelled:
+            return
+        if filled and not self._closed.is_set():
+            self._merge_over_time(outcome.settings)
+            self.controls.metrics.show_timeline_soon(timeline_of(self, outcome.frame_index))
 
     def _failed(self, error: BaseException) -> None:
         """A frame CBM cannot run on: a lasting message of what is missing, in place of the metrics
         (or above the last frame's, marked as such), and in the key numbers."""
+        self._shown.set()
         if isinstance(error, (Stopped, Cancelled)):
             return
         message = unusable_markdown(self.explorer, self._settings, error)
@@ -254,9 +308,27 @@ class ClientSession:
         self.notify(f"{method} cannot run on this frame", error_words(error), "red")
 
     def _play(self) -> None:
+        """Step a frame at the play speed, each shown before the next is asked for: a frame that takes
+        longer than its share slows the play down (never skips a frame), and the status line says so."""
         while not self._closed.is_set():
             self._playing.wait()
             if self._closed.is_set():
                 return
+            asked, started = max(1, int(self.controls.frame.speed.value)), time.monotonic()
+            self._shown.clear()
             self.step(1)
-            time.sleep(1.0 / max(1, int(self.controls.frame.speed.value)))
+            while not (self._shown.wait(timeout=0.5) or self.worker.wait_idle(timeout=0.0)):
+                if self._closed.is_set():
+                    return
+            spent = time.monotonic() - started
+            self._play_note = playing_words(asked, spent) if self._playing.is_set() else ""
+            time.sleep(max(0.0, 1.0 / asked - spent))
+
+
+def playing_words(asked: int, spent: float) -> str:
+    """What the status line says of a play whose last frame took ``spent`` seconds at ``asked``
+    frames per second: nothing while it keeps up."""
+    if spent <= 1.05 / asked:
+        return ""
+    return (f"Playing at {1.0 / spent:.1f} frames/s of the {asked} asked: every frame is shown, and each takes "
+            f"{spent:.2f} s to compute and show.")

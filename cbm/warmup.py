@@ -11,7 +11,11 @@ Run it in a subprocess to fill the cache without holding the caller's interprete
 compiler is mostly Python), then call ``warm_up(VARIANTS[:1])`` in the caller to load the kernels.
 The compiler runs on one core, so ``compile_side_by_side`` compiles the two halves of the kernels in
 two processes at once: local matching's (``compile_matching``) and the selection's
-(``compile_selection``); each finds the other's in the cache afterwards.
+(``compile_selection``); each finds the other's in the cache afterwards. The baselines' kernels
+(FreeAlign's subgraph search; V2X-Reg++ runs on CBM's fitting kernels) are a part of their own
+(``compile_baselines``), compiled after CBM's (``compile_side_by_side(parts=BASELINE_PARTS)``) and
+loaded with ``load_kernels(baselines=True)``: CBM comes first, and a fresh install compiles them in about ten
+seconds more.
 """
 from __future__ import annotations
 
@@ -20,6 +24,7 @@ import subprocess
 import sys
 import time
 from collections.abc import Callable, Sequence
+from importlib import import_module
 from pathlib import Path
 
 import numpy as np
@@ -66,20 +71,29 @@ def scene(n: int = 30, seed: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarra
     return boxes, cav, se2.make(1.0, 1.0, np.radians(2.0)) @ truth
 
 
-def load_kernels() -> float:
+def load_kernels(baselines: bool = False) -> float:
     """Load the kernels numba's cache holds into this process (compiling what it lacks) with one
-    small match at the defaults; the seconds it took."""
-    return warm_up(VARIANTS[:1])
+    small match at the defaults (with ``baselines``: the baselines' instead, ``compile_baselines``);
+    the seconds it took."""
+    if not baselines:
+        return warm_up(VARIANTS[:1])
+    started = time.perf_counter()
+    compile_baselines()
+    return time.perf_counter() - started
 
 
-def kernels_cached() -> bool:
-    """Whether numba's on-disk cache holds kernels of every module that has some, compiled by this
-    numba from these sources (a stale entry reads as none): then loading them takes a fraction of
-    a second. (A module's inlined kernels, or the ones only a variant calls, may be missing.)"""
+def kernels_cached(baselines: bool = False) -> bool:
+    """Whether numba's on-disk cache holds kernels of every module of CBM's that has some (with
+    ``baselines``: of every baseline's module instead), compiled by this numba from these sources (a
+    stale entry reads as none): then loading them takes a fraction of a second. (A module's inlined
+    kernels, or the ones only a variant calls, may be missing.)"""
+    if baselines:
+        import_module(".baselines.freealign", __package__)
     found: dict[str, bool] = {}
     for _, _, dispatcher in kernels():
         module = dispatcher.py_func.__module__
-        found[module] = found.get(module, False) or bool(dispatcher._cache._cache_file._load_index())
+        if module.startswith(f"{__package__}.baselines.") == baselines:
+            found[module] = found.get(module, False) or bool(dispatcher._cache._cache_file._load_index())
     return all(found.values())
 
 
@@ -144,7 +158,21 @@ def compile_selection() -> None:
     same_pose(init, init)
 
 
-PARTS = {"matching": compile_matching, "selection": compile_selection}
+def compile_baselines() -> None:
+    """Compile the kernels of the baselines that have some (FreeAlign's common subgraph search) and
+    what V2X-Reg++ calls of CBM's, with first calls."""
+    from .baselines.freealign import match_freealign
+    from .baselines.v2xregpp import match_v2xregpp
+
+    ego, cav, init = scene()
+    match_v2xregpp(ego, cav, init)
+    match_freealign(ego, cav, init)
+
+
+PARTS = {"matching": compile_matching, "selection": compile_selection, "baselines": compile_baselines}
+CBM_PARTS = ("matching", "selection")
+"""CBM's two halves, compiled side by side."""
+BASELINE_PARTS = ("baselines",)
 RUN_PART = "import sys, cbm.warmup; sys.exit(cbm.warmup.main())"
 """What a compiling process runs (``main`` with ``--part``)."""
 
@@ -153,15 +181,16 @@ class CompileFailed(RuntimeError):
     """A compiling process ended with an error."""
 
 
-def compile_side_by_side(processes: list[subprocess.Popen] | None = None, timeout: float | None = None) -> float:
-    """Both halves of the kernels at once, each in a process of its own (``main`` with ``--part
-    NAME``; ``processes`` receives them, to be stopped by the caller if need be). Returns the
-    seconds the slower half spent compiling (or loading from the cache), without the processes'
-    start-up; raises ``CompileFailed`` when one fails, ``subprocess.TimeoutExpired`` past ``timeout``
-    seconds."""
+def compile_side_by_side(processes: list[subprocess.Popen] | None = None, timeout: float | None = None,
+                         parts: Sequence[str] = CBM_PARTS) -> float:
+    """The ``parts`` of the kernels (by default both halves of CBM's) at once, each in a process of
+    its own (``main`` with ``--part NAME``; ``processes`` receives them, to be stopped by the caller
+    if need be). Returns the seconds the slowest part spent compiling (or loading from the cache),
+    without the processes' start-up; raises ``CompileFailed`` when one fails,
+    ``subprocess.TimeoutExpired`` past ``timeout`` seconds."""
     root = Path(__file__).resolve().parents[1]
     started = [subprocess.Popen([sys.executable, "-c", RUN_PART, "--part", part], cwd=root, text=True,
-                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL) for part in PARTS]
+                                stdout=subprocess.PIPE, stderr=subprocess.DEVNULL) for part in parts]
     if processes is not None:
         processes += started
     seconds = []
@@ -194,7 +223,9 @@ def main() -> int:
         return 0
     halves = compile_side_by_side()
     print(f"halves side by side: {halves:.2f} s", flush=True)
-    print(f"total {halves + warm_up(report=_print):.2f} s", flush=True)
+    baselines = compile_side_by_side(parts=BASELINE_PARTS)
+    print(f"baselines: {baselines:.2f} s", flush=True)
+    print(f"total {halves + baselines + warm_up(report=_print):.2f} s", flush=True)
     return 0
 
 

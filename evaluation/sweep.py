@@ -230,9 +230,6 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
     made = []
     for position, frame in zip(positions, frames):
         trial = frame.build(scenario, sweep.seed)
-        base = {"frame": frame.index, **dataclasses.asdict(scenario),
-                "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
-        init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
         peers = frame.peer_trials(scenario, sweep.seed) if any(METHODS[m].takes_peers for _, m in methods) else []
         for k, method in methods:
             for j, (params, tracking) in enumerate(sweep.points(method)):
@@ -241,18 +238,30 @@ def run_task(sweep: Sweep, positions: tuple[int, ...], frames: tuple[FrameInputs
                                                     agent=frame.trial.get("cav_id"))
                 else:
                     result = run_method(method, trial, params, frame, peers)
-                made.append(((position, number, k, j), (base, method, params, tracking, init_error, trial, frame,
-                                                        result)))
+                made.append(((position, number, k, j), (frame, method, params, tracking, trial, result)))
     final = {key: iter(calibrator.smoothed()) for key, calibrator in calibrators.items()
              if METHODS[sweep.methods[key[0]]].offline}
     rows = []
-    for key, (base, method, params, tracking, init_error, trial, frame, result) in made:
+    for key, (frame, method, params, tracking, trial, result) in made:
         result = next(final[key[2:]]) if key[2:] in final else result
-        row = _row(sweep, base, method, params, tracking, evaluate(result, trial), init_error)
-        if sweep.fusion:
-            row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
-        rows.append((key, row))
+        rows.append((key, trial_row(sweep, frame, scenario, method, (params, tracking), trial, result)))
     return rows
+
+
+def trial_row(sweep: Sweep, frame: FrameInputs, scenario: ScenarioParams, method: str,
+              point: tuple[Any, TrackingParams | None], trial: Trial, result: Any) -> dict[str, Any]:
+    """The row of ``method``'s ``result`` on ``trial``, the trial of ``frame`` under ``scenario``, at its
+    grid ``point`` (``Sweep.points``): every column of ``sweep.columns()``, the fused detections when
+    the sweep asks for them. Every row of a run is made here, and so is a row of a result computed
+    elsewhere (a frame the app computed), which then reads as the run's."""
+    params, tracking = point
+    base = {"frame": frame.index, **dataclasses.asdict(scenario),
+            "ego_id": _text(frame.trial.get("ego_id")), "cav_id": _text(frame.trial.get("cav_id"))}
+    init_error = {"init_rre": rre(trial.init, trial.T_true), "init_rte": rte(trial.init, trial.T_true)}
+    row = _row(sweep, base, method, params, tracking, evaluate(result, trial), init_error)
+    if sweep.fusion:
+        row.update(fusion_columns(trial, fusion_pose(method, result, trial), frame, sweep.seed))
+    return row
 
 
 def frame_time(frame: FrameInputs) -> float:

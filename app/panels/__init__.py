@@ -7,6 +7,7 @@ touch another panel; ``show`` moves its controls to given settings (the app's ow
 re-fire callbacks, ``actions.on_user``)."""
 from __future__ import annotations
 
+import contextlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -18,6 +19,9 @@ from ..session.settings import Settings
 from . import frame, metrics, numbers
 from .actions import TabActions
 from .registry import found
+
+FIRST = -1.0
+"""The order of a panel that is a folder of another's tab (``Panel.inside``): first in the tab."""
 
 
 @dataclass
@@ -71,9 +75,12 @@ def build(gui: viser.GuiApi, tab: TabActions) -> Controls:
     navigation = frame.build_navigation(gui, tab.settings, len(tab.explorer))
     status = metrics.build_status(gui)
     tabs = gui.add_tab_group()
-    parts = {}
+    parts, opened = {}, {}
     for name, panel in found().items():
-        with tabs.add_tab(panel.title):
+        if panel.inside is None:
+            opened[panel.title] = tabs.add_tab(panel.title)
+        with opened[panel.inside or panel.title], (contextlib.nullcontext() if panel.inside is None else
+                                                   gui.add_folder(panel.title, order=FIRST, expand_by_default=False)):
             parts[name] = panel.build(gui, tab)
         if panel.bind is not None:
             panel.bind(parts[name], tab)

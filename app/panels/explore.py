@@ -1,11 +1,10 @@
 """The Explore tab: sequence run, worst frames, context inspector, parameter search, export.
 
-Long work (a sequence run, a search, a screenshot) runs off the GUI threads; a sequence run or a
-search at a time, with the progress bar and a cancel button. Results are plain values
-(``SequenceRun``, ``SearchResult``) that the tab keeps and shows; once the controls move to other
-settings, a run's outputs name the settings they were computed under, *jump there* asks before
-setting them, and the per-frame export runs the current settings first.
-"""
+Long work (a sequence run, a search, a screenshot) runs off the GUI threads, one at a time, with the
+progress bar and a cancel button. Results are plain values (``SequenceRun``, ``SearchResult``) that
+the tab keeps and shows; once the controls move to other settings, a run's outputs name the settings
+they were computed under, *jump there* asks before setting them, and the per-frame export runs the
+current settings first (the frames computed already taken: ``Explorer.rows``)."""
 from __future__ import annotations
 
 import dataclasses
@@ -29,7 +28,7 @@ from ..session.calibration import CalibrationCheck
 from ..session.explorer import Outcome
 from ..session.markup import no_html
 from ..session.search import OBJECTIVE_LABELS, SearchResult, run_search
-from ..session.sequence import SequenceRun, run_sequence
+from ..session.sequence import SequenceRun, known_frames, run_sequence
 from . import confirm
 from .actions import TabActions, assign
 from .plot import add_run_plots, run_data, send
@@ -317,9 +316,10 @@ class ExplorePanel:
             self._export(self.run, suffix, encode)
             return
         why = "no run yet" if self.run is None else f"the last run used other settings: {now_words(found)}"
+        known = f"{known_frames(self.tab.explorer, self.tab.settings)} of {len(self.tab.explorer)} frames"
         if self.start_run(then=lambda run: self._export(run, suffix, encode)):
-            self.tab.notify("Running the current settings first", f"{why}. The file downloads when every frame "
-                            "is done.", "blue")
+            self.tab.notify("Running the current settings first", f"{why}; {known} computed already are taken. "
+                            "The file downloads when every frame is done.", "blue")
 
     def _export(self, run: SequenceRun, suffix: str, encode: Callable[[list[dict]], bytes]) -> None:
         name = export.slug(self.tab.explorer.sequence.name)

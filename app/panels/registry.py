@@ -35,6 +35,9 @@ class Panel:
     """Its controls, built inside its tab: the part the browser tab calls (see the module)."""
     bind: Callable[[Any, TabActions], None] | None = None
     """Connects the built part's controls to the browser tab (None: ``build`` did)."""
+    inside: str | None = None
+    """The title of the tab it is a folder of, first in it and folded (None: a tab of its own). Its
+    ``order`` comes after that tab's."""
 
 
 def found() -> dict[str, Panel]:
@@ -47,5 +50,6 @@ def found() -> dict[str, Panel]:
 
 
 def tabs_help() -> str:
-    """The tabs of the control panel and what each is for, one line each."""
-    return "\n".join(f"  {panel.title}: {panel.help}" for panel in found().values())
+    """The tabs of the control panel and what each is for, one line each (a folder of a tab after it)."""
+    return "\n".join(f"  {panel.title}: {panel.help}" if panel.inside is None else
+                     f"    {panel.title} (in {panel.inside}): {panel.help}" for panel in found().values())

@@ -10,6 +10,7 @@ from cbm import se2
 from evaluation.metric_registry import TRIAL_METRICS
 
 from ..session.explorer import Outcome
+from . import beside as pinned_beside
 from . import geometry, planes
 from .differences import differences, now_words
 from .drawing import Drawing, Lines, no_lines
@@ -43,13 +44,15 @@ def _row(name: str, current: float, pinned: float, unit: str, digits: int) -> st
     return f"| {name} | {number(current, unit, digits)} | {number(pinned, unit, digits)} | {shown} |"
 
 
-def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
-    """Current against pinned on this frame, and the difference (current − pinned)."""
+def comparison_markdown(outcome: Outcome, pinned: Outcome, beside: bool = False) -> str:
+    """Current against pinned on this frame, and the difference (current − pinned); ``beside``: the
+    pinned run is drawn beside the current one."""
     m, p = outcome.metrics, pinned.metrics
     found = differences(pinned.settings, outcome.settings)
     settings = f"Pinned under other settings: {now_words(found)}." if found else "Pinned under the same settings."
+    drawn = "drawn beside, on the left" if beside else f"its matches: {PINNED_WORDS}"
     return "\n".join([
-        f"**Pinned baseline** (same frame and CAV; its matches: {PINNED_WORDS})",
+        f"**Pinned baseline** (same frame and CAV; {drawn})",
         "",
         f"*{settings}*",
         "",
@@ -61,12 +64,15 @@ def comparison_markdown(outcome: Outcome, pinned: Outcome) -> str:
     ])
 
 
-def with_baseline(picture: Drawing, outcome: Outcome, pinned: Outcome | None) -> Drawing:
+def with_baseline(picture: Drawing, outcome: Outcome, pinned: Outcome | None, beside: bool = False) -> Drawing:
     """``picture`` with the ``pinned`` node (empty unless a baseline is pinned and the view asks
-    for its lines) and, when pinned, the comparison below the metrics."""
-    show = pinned is not None and outcome.settings.view.pinned_lines
-    lines = {**picture.lines, "pinned": Lines(pinned_segments(outcome, pinned) if show else no_lines(),
-                                              as_shown(PINNED_LINES), 1.5)}
+    for its lines) and, when pinned, the comparison below the metrics; ``beside``: the pinned run in
+    a copy of the scene of its own instead of its lines (``beside.with_pinned_beside``)."""
+    show = pinned is not None and outcome.settings.view.pinned_lines and not beside
+    meshes, copy = pinned_beside.empty()
+    lines = {**picture.lines, **copy, "pinned": Lines(pinned_segments(outcome, pinned) if show else no_lines(),
+                                                      as_shown(PINNED_LINES), 1.5)}
     text = picture.metrics_markdown if pinned is None else \
-        f"{picture.metrics_markdown}\n\n{comparison_markdown(outcome, pinned)}"
-    return dataclasses.replace(picture, lines=lines, metrics_markdown=text)
+        f"{picture.metrics_markdown}\n\n{comparison_markdown(outcome, pinned, beside)}"
+    drawn = dataclasses.replace(picture, meshes={**picture.meshes, **meshes}, lines=lines, metrics_markdown=text)
+    return pinned_beside.with_pinned_beside(drawn, outcome, pinned) if pinned is not None and beside else drawn

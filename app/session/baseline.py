@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import dataclasses
 import threading
+from collections.abc import Mapping
 
 from .explorer import Explorer, Outcome
 from .history import FrameHistory, Row, row_of, settings_key
@@ -20,6 +21,8 @@ class Baseline:
     def __init__(self) -> None:
         self.settings: Settings | None = None
         self.rows: dict[int, Row] = {}
+        self.beside = False
+        """Drawn as a copy of the scene of its own beside the current one (else its lines over it)."""
         self._outcomes: dict[tuple[int, str], Outcome] = {}
         self._lock = threading.Lock()
 
@@ -27,18 +30,20 @@ class Baseline:
     def pinned(self) -> bool:
         return self.settings is not None
 
-    def pin(self, settings: Settings, history: FrameHistory, shown: Outcome | None) -> None:
-        """Keep ``settings``, the history's rows when they are theirs, and the outcome on screen."""
+    def pin(self, settings: Settings, history: FrameHistory, shown: Outcome | None,
+            rows: Mapping[int, Row] | None = None, beside: bool = False) -> None:
+        """Keep ``settings``, their ``rows`` (by default the history's, when they are theirs) and the
+        outcome on screen; ``beside``: drawn beside the current run rather than over it."""
         with self._lock:
-            self.settings = settings_key(settings)
-            self.rows = dict(history.rows) if history.matches(settings) else {}
+            self.settings, self.beside = settings_key(settings), beside
+            self.rows = dict(rows) if rows is not None else dict(history.rows) if history.matches(settings) else {}
             self._outcomes = {}
             if shown is not None and settings_key(shown.settings) == self.settings:
                 self._outcomes[(shown.frame_index, shown.settings.cav)] = shown
 
     def unpin(self) -> None:
         with self._lock:
-            self.settings, self.rows, self._outcomes = None, {}, {}
+            self.settings, self.rows, self._outcomes, self.beside = None, {}, {}, False
 
     def outcome(self, explorer: Explorer, current: Settings) -> Outcome | None:
         """The pinned settings' outcome on ``current``'s frame and CAV (computed once, then kept);

@@ -22,17 +22,21 @@ from evaluation.fusion import fused_against_truth
 from evaluation.metrics import TrialMetrics, evaluate
 from evaluation.scenario import FrameInputs, Trial
 from evaluation.sweep import run_method
-from evaluation.trials import frame_cav_inputs, frame_inputs
+from evaluation.trials import NoTrial, frame_cav_inputs, frame_inputs
 from loaders import Frame, Sequence, is_roadside, is_vehicle
 
 from .names import agent_name
-from .over_time import Runs
+from .over_time import FrameOverTime, Runs
+from .rows import RowStore
 from .seen import Late, Sight, late, sights
 from .settings import MAX_CAVS, Settings
 
 TRIALS_KEPT = 8
 """Trials an ``Explorer`` keeps (with their oracle limit): a threshold or method edit, or the
 pinned baseline, recomputes on a trial already made."""
+INPUTS_KEPT = 1024
+"""Frames' trial inputs an ``Explorer`` keeps (a few kB each): a scenario edit other than the
+protocol, the range or the delay rebuilds only the trials (a method over time rebuilds every frame's)."""
 
 
 @dataclass(frozen=True)
@@ -182,16 +186,21 @@ class Explorer:
         self.reuse = Reuse()
         """What CBM built for the last few inputs that a threshold edit does not change (``cbm.engine.EditCache``)."""
         self._trials: OrderedDict[tuple, tuple[FrameInputs, Trial, TrialMetrics]] = OrderedDict()
+        self._inputs: OrderedDict[tuple, FrameInputs] = OrderedDict()
         self._trials_lock = threading.Lock()
         self.over_time = Runs()
         """The frames a method over time computed so far, per settings (``app.session.over_time``)."""
+        self.rows = RowStore()
+        """The sweep rows computed so far, per settings (``app.session.rows``)."""
 
     def forget(self) -> None:
         """Forget what was kept for the tabs (the edit cache, the recent trials, the runs over time)
         and hand the memory back to the system: called when the last tab closes."""
         with self._trials_lock:
             self._trials.clear()
+            self._inputs.clear()
         self.over_time.clear()
+        self.rows.clear()
         self.reuse.clear()
 
     def __len__(self) -> int:
@@ -212,10 +221,22 @@ class Explorer:
 
     def trial_inputs(self, settings: Settings, index: int) -> FrameInputs:
         """Frame ``index``'s trial inputs under ``settings`` (``evaluation.trials.frame_inputs``), as
-        ``compute`` and the sequence runs use them; ``ValueError`` when the frame makes no trial."""
+        ``compute`` and the sequence runs use them, kept for the ``INPUTS_KEPT`` used last; ``ValueError``
+        when the frame makes no trial."""
         scenario = settings.scenario
-        return frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range,
+        key = (index, settings.cav, scenario.protocol, scenario.sensor_range, scenario.window_s)
+        with self._trials_lock:
+            found = self._inputs.get(key)
+            if found is not None:
+                self._inputs.move_to_end(key)
+                return found
+        made = frame_inputs(self.sequence[index], scenario.protocol, settings.cav, sensor_range=scenario.sensor_range,
                             window_s=scenario.window_s)
+        with self._trials_lock:
+            self._inputs[key] = made
+            while len(self._inputs) > INPUTS_KEPT:
+                self._inputs.popitem(last=False)
+        return made
 
     def trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, TrialMetrics]:
         """Frame ``index``'s trial inputs and trial under ``settings`` (its scenario and CAV choice, all
@@ -265,9 +286,26 @@ class Explorer:
                        _kept={} if result.explanation is None else {"cbm": result})
 
     def _timed_trial(self, settings: Settings, index: int) -> tuple[FrameInputs, Trial, float]:
-        """Frame ``index``'s inputs and trial (``trial``) and its time in seconds, for a method over time."""
-        inputs, trial, _ = self.trial(settings, index)
-        return inputs, trial, float(self.sequence.timestamps[index])
+        """Frame ``index``'s inputs and trial and its time in seconds, for a method over time: the
+        trial built as ``trial`` builds it, without the oracle's limit (a frame on the way to the one
+        shown needs none)."""
+        inputs = self.trial_inputs(settings, index)
+        return inputs, inputs.build(settings.scenario, settings.scenario.seed), float(self.sequence.timestamps[index])
+
+    def over_time_frames(self, settings: Settings, last: int, progress: Callable[[int, int], None],
+                         stop: Callable[[], bool]) -> dict[int, FrameOverTime]:
+        """Every frame up to ``last`` that a method over time answers under ``settings``, by frame,
+        computing the frames not yet computed (``Stopped`` as in ``compute``)."""
+        try:
+            self.over_time.frame(settings, last, lambda j: self._timed_trial(settings, j), progress, stop)
+        except NoTrial:
+            pass
+        return {j: done for j, done in self.over_time.done(settings).items() if j <= last}
+
+    def fill_over_time(self, settings: Settings, stop: Callable[[], bool]) -> int:
+        """Per-frame CBM on the frames a method over time computed under ``settings`` without it
+        (``Runs.fill_alone``), until ``stop()``; the frames filled."""
+        return self.over_time.fill_alone(settings, lambda j: self._timed_trial(settings, j), stop)
 
     def other_cavs(self, settings: Settings, index: int) -> tuple[CavOutcome, ...]:
         """The CAVs of frame ``index`` beyond the first (``evaluation.trials.frame_cav_inputs``), at

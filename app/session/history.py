@@ -45,9 +45,10 @@ def row_of(metrics: TrialMetrics) -> Row:
                not is_success(metrics))
 
 
-def row_over_time(metrics: TrialMetrics, alone: TrialMetrics, event: str) -> Row:
-    """The timeline row of a frame over time: its metrics, per-frame CBM's RTE and the track's event."""
-    return row_of(metrics)._replace(alone_rte=alone.rte, event=event)
+def row_over_time(metrics: TrialMetrics, alone: TrialMetrics | None, event: str) -> Row:
+    """The timeline row of a frame over time: its metrics, per-frame CBM's RTE (NaN while not
+    computed yet) and the track's event."""
+    return row_of(metrics)._replace(alone_rte=math.nan if alone is None else alone.rte, event=event)
 
 
 def row_of_outcome(outcome: Outcome) -> Row:

@@ -4,6 +4,11 @@ The frames' inputs come from the trial builder (``evaluation.trials.sequence_inp
 protocol and CAV -- as ``Explorer.compute`` builds them -- and every trial is built by
 ``FrameInputs.build`` inside ``evaluation.sweep``, so each row is the number the tab shows on that frame.
 Frames run in chunks; a cancel stops at the next chunk and keeps the rows done so far.
+
+A frame whose row is known (``Explorer.rows``: an earlier run's, a comparison's) is not run again.
+A method over time continues the frames the tab computed (``Explorer.over_time``: stepping through
+them, or a jump ahead) and its rows are made from them by the sweep's own ``trial_row``: a frame
+answered over time depends on every frame before it, so its rows come from one chain of frames.
 """
 from __future__ import annotations
 
@@ -19,11 +24,12 @@ from cbm.methods import METHODS
 from evaluation.ap import pooled_ap
 from evaluation.fusion import decoded
 from evaluation.scenario import FrameInputs
-from evaluation.sweep import Sweep, run, summarise
+from evaluation.sweep import Sweep, run, summarise, trial_row
 from evaluation.trials import sequence_inputs
 
 from .background import Task
 from .explorer import Explorer
+from .over_time import Stopped
 from .settings import Settings
 
 CHUNK = 8
@@ -83,11 +89,34 @@ class SequenceRun:
 
 def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = None,
                  frames: Sequence[int] | None = None, chunk: int = CHUNK) -> SequenceRun:
-    """``settings`` over ``frames`` (default: all), in chunks, reporting progress to ``task`` and
-    stopping early (``cancelled=True``, the rows of the chunks done) when it is cancelled: between
-    chunks, or within one when the engine raises ``Cancelled`` (``background.Runner`` runs it under
-    ``stoppable``)."""
+    """``settings`` over ``frames`` (default: all), the rows known taken (``Explorer.rows``) and the
+    others run in chunks, reporting progress to ``task`` and stopping early (``cancelled=True``, the
+    rows done) when it is cancelled: between chunks, or within one when the engine raises
+    ``Cancelled`` (``background.Runner`` runs it under ``stoppable``). A method over time runs every
+    frame up to the last of ``frames`` in order (``over_time_rows``)."""
     frames = list(range(len(explorer)) if frames is None else frames)
+    known = explorer.rows.of(settings)
+    if METHODS[settings.method].over_time and not set(frames) <= set(known):
+        rows, skipped = over_time_rows(explorer, settings, frames, task)
+    else:
+        rows, skipped = _frames_run(explorer, settings, [f for f in frames if f not in known], task, chunk)
+        rows = sorted([*rows, *(known[f] for f in frames if f in known)], key=lambda row: row["frame"])
+    explorer.rows.add(settings, rows)
+    done = len(rows) + len(skipped)
+    return SequenceRun(settings, tuple(rows), len(frames), tuple(skipped), cancelled=done < len(frames))
+
+
+def known_frames(explorer: Explorer, settings: Settings) -> int:
+    """How many frames of ``settings`` a run would take rather than compute: the rows known, or the
+    frames a method over time computed."""
+    if METHODS[settings.method].over_time:
+        return max(len(explorer.rows.of(settings)), len(explorer.over_time.done(settings)))
+    return len(explorer.rows.of(settings))
+
+
+def _frames_run(explorer: Explorer, settings: Settings, frames: list[int], task: Task | None,
+                chunk: int) -> tuple[list[dict[str, Any]], list[int]]:
+    """The sweep's rows of ``frames`` run in chunks, and the frames without a trial, until cancelled."""
     sweep = sweep_for(settings)
     rows: list[dict[str, Any]] = []
     skipped: list[int] = []
@@ -102,8 +131,29 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
         skipped.extend(missing)
         if task is not None:
             task.report((start + chunk) / len(frames))
-    done = len(rows) + len(skipped)
-    return SequenceRun(settings, tuple(rows), len(frames), tuple(skipped), cancelled=done < len(frames))
+    return rows, skipped
+
+
+def over_time_rows(explorer: Explorer, settings: Settings, frames: list[int],
+                   task: Task | None) -> tuple[list[dict[str, Any]], list[int]]:
+    """The rows of ``frames`` under a method over time, from the tab's frames over time (computing
+    those up to the last of ``frames`` not yet computed, in order), and the frames without a trial;
+    a cancel keeps the frames done."""
+    last = max(frames, default=-1)
+    report = (lambda done, of: None) if task is None else (lambda done, of: task.report((done + 1) / (of + 1)))
+    try:
+        done = explorer.over_time_frames(settings, last, report, lambda: task is not None and task.cancelled)
+    except (Stopped, Cancelled):
+        done = explorer.over_time.done(settings)
+    sweep, scenario = sweep_for(settings), settings.scenario
+    point = sweep.points(settings.method)[0]
+    computed = max(done, default=-1) if task is not None and task.cancelled else last
+    rows = []
+    for j in (f for f in frames if f in done):
+        inputs = explorer.trial_inputs(settings, j)
+        rows.append(trial_row(sweep, inputs, scenario, settings.method, point, inputs.build(scenario, scenario.seed),
+                              done[j].result))
+    return rows, [f for f in frames if f not in done and f <= computed]
 
 
 def _float(value: Any) -> float:

@@ -33,7 +33,7 @@ def test_warm_up_calls_match_once_per_variant() -> None:
 def test_the_kernels_get_ready_when_the_subprocess_cannot_run(monkeypatch: pytest.MonkeyPatch,
                                                               tmp_path: Path) -> None:
     monkeypatch.setattr(sys, "executable", str(tmp_path / "no-such-python"))
-    monkeypatch.setattr(kernels_module, "kernels_cached", lambda: False)
+    monkeypatch.setattr(kernels_module, "kernels_cached", lambda baselines=False: False)
     kernels = Kernels()
     assert kernels.wait(timeout=300)
     assert kernels.compile_seconds is None and kernels.load_seconds is not None
@@ -44,7 +44,7 @@ def test_a_frame_runs_interpreted_while_the_kernels_compile(monkeypatch: pytest.
     ends the waiting callbacks run and CBM runs compiled."""
     release, called = threading.Event(), []
     monkeypatch.setattr(kernels_module, "compile_side_by_side", lambda *args, **kwargs: release.wait(60) and 0.0)
-    monkeypatch.setattr(kernels_module, "kernels_cached", lambda: False)
+    monkeypatch.setattr(kernels_module, "kernels_cached", lambda baselines=False: False)
     kernels = Kernels()
     ego, cav, init = scene()
     expected = match(ego, cav, init, CBMParams())
@@ -60,6 +60,32 @@ def test_a_frame_runs_interpreted_while_the_kernels_compile(monkeypatch: pytest.
     assert called == [True]
 
 
+def test_the_baselines_kernels_compile_after_cbms_in_a_subprocess_and_their_methods_wait(
+        monkeypatch: pytest.MonkeyPatch) -> None:
+    """Issue 47 item 7: FreeAlign's kernels took 12.5 s to compile on its first use, inside a tab's
+    recompute. They compile in a process of their own once CBM's are ready; until then the methods
+    that run them are not ready, and their callbacks wait."""
+    asked, release, called = [], threading.Event(), []
+
+    def compiling(processes, timeout=None, parts=("matching", "selection")):
+        asked.append(tuple(parts))
+        if parts == kernels_module.BASELINE_PARTS:
+            release.wait(60)
+        return 0.0
+
+    monkeypatch.setattr(kernels_module, "compile_side_by_side", compiling)
+    monkeypatch.setattr(kernels_module, "kernels_cached", lambda baselines=False: False)
+    kernels = Kernels()
+    assert kernels.wait(timeout=120)
+    kernels.when_ready(lambda: called.append("freealign"), method="freealign")
+    assert kernels.ready_for("cbm") and kernels.ready_for("icp") and not kernels.ready_for("freealign")
+    assert kernels.ready_for("v2xregpp") and not kernels.wait(timeout=0.1, method="freealign") and called == []
+    release.set()
+    assert kernels.wait(timeout=300, method="freealign")
+    assert asked == [("matching", "selection"), kernels_module.BASELINE_PARTS] and called == ["freealign"]
+    assert kernels.baseline_seconds is not None
+
+
 def test_the_cache_is_found_filled_or_empty(tmp_path: Path) -> None:
     """``kernels_cached`` in a new process: False on an empty cache, True once ``--part`` filled both halves."""
     env = {"NUMBA_CACHE_DIR": str(tmp_path), "PATH": "/usr/bin:/bin"}
@@ -70,6 +96,25 @@ def test_the_cache_is_found_filled_or_empty(tmp_path: Path) -> None:
                        capture_output=True)
     after = subprocess.run(asked, cwd=REPO, env=env, capture_output=True, text=True, check=True).stdout.split()
     assert (before, after) == (["False"], ["True"])
+
+
+def test_cbms_cache_is_found_without_the_baselines_and_theirs_apart(tmp_path: Path) -> None:
+    """CBM's kernels found cached whether the baselines' are or not (before, a FreeAlign never run
+    made every start compile CBM's again), and the baselines' found once their part filled them."""
+    env = {"NUMBA_CACHE_DIR": str(tmp_path), "PATH": "/usr/bin:/bin"}
+    asked = [sys.executable, "-c", "import cbm.methods; from cbm.warmup import kernels_cached; "
+             "print(kernels_cached(), kernels_cached(baselines=True))"]
+
+    def found() -> list[str]:
+        return subprocess.run(asked, cwd=REPO, env=env, capture_output=True, text=True, check=True).stdout.split()
+
+    for part in ("matching", "selection"):
+        subprocess.run([sys.executable, "-m", "cbm.warmup", "--part", part], cwd=REPO, env=env, check=True,
+                       capture_output=True)
+    halves = found()
+    subprocess.run([sys.executable, "-m", "cbm.warmup", "--part", "baselines"], cwd=REPO, env=env, check=True,
+                   capture_output=True)
+    assert (halves, found()) == (["True", "False"], ["True", "True"])
 
 
 def test_a_slow_block_is_announced_until_it_ends_and_a_quick_one_not_at_all() -> None:

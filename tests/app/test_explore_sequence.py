@@ -7,6 +7,7 @@ import math
 import pytest
 
 from app.panels.reports import sequence_markdown
+from app.session import sequence
 from app.session.background import Task
 from app.session.explorer import Explorer
 from app.session.sequence import CHUNK, run_sequence, sweep_for
@@ -21,6 +22,12 @@ def sind(**changes) -> Settings:
     settings = Settings()
     return dataclasses.replace(settings, scenario=dataclasses.replace(settings.scenario, protocol="sind",
                                                                       sigma_p=0.3, sigma_theta=3.0, **changes))
+
+
+@pytest.fixture(autouse=True)
+def no_rows_known(small_explorer: Explorer) -> None:
+    """Each test runs its frames afresh (a run takes the rows an earlier one computed)."""
+    small_explorer.rows.clear()
 
 
 def _same(a, b) -> bool:
@@ -82,7 +89,6 @@ def test_a_cancel_inside_a_chunk_stops_in_the_engine_and_keeps_the_chunks_done(s
     CBM's engine stops at its next check instead of finishing the chunk, and the chunks done are kept."""
     import threading
 
-    from app.session import sequence
     from app.session.background import Runner, Slots
 
     chunks, original, ended, results = [], sequence.run, threading.Event(), []
@@ -100,3 +106,36 @@ def test_a_cancel_inside_a_chunk_stops_in_the_engine_and_keeps_the_chunks_done(s
     assert ended.wait(300)
     (run, cancelled), = results
     assert cancelled and run.cancelled and len(run.rows) == CHUNK and len(chunks) == 2
+
+
+def test_a_run_takes_the_rows_known_and_runs_only_the_frames_missing(small_explorer: Explorer, monkeypatch) -> None:
+    """Issue 47 item 7: an export or a comparison after a run computes no frame again."""
+    ran, original = [], sequence.run
+    monkeypatch.setattr(sequence, "run", lambda sweep, inputs: ran.extend(i.index for i in inputs) or
+                        original(sweep, inputs))
+    first = run_sequence(small_explorer, sind(seed=5), frames=range(6))
+    again = run_sequence(small_explorer, dataclasses.replace(sind(seed=5), frame=3).with_view(ghosts=True),
+                         frames=range(10))
+    assert ran == [*range(6), *range(6, 10)]
+    assert again.rows[:6] == first.rows and [row["frame"] for row in again.rows] == list(range(10))
+    run_sequence(small_explorer, sind(seed=6), frames=range(2))
+    assert ran[-2:] == [0, 1]
+
+
+def test_a_method_over_time_continues_the_frames_the_tab_computed_and_gives_the_sweeps_rows(
+        small_explorer: Explorer) -> None:
+    """The rows of CBM over time come from the tab's own frames over time (a jump to frame 20
+    computed 0-20: the run computes the rest only), and are the evaluation's rows of the same chain."""
+    from evaluation.sweep import run
+
+    settings = dataclasses.replace(sind(seed=2), method="cbm-time").with_scenario(localization="drifting")
+    small_explorer.compute(dataclasses.replace(settings, frame=20))
+    stepped = []
+    ours = run_sequence(small_explorer, settings, Task(lambda fraction: stepped.append(fraction)), frames=range(30))
+    assert 0 < len(stepped) <= 9 and not ours.cancelled
+    inputs, _ = sequence.frame_inputs(small_explorer, settings, range(30))
+    theirs = run(sweep_for(settings), inputs)
+    assert [row["frame"] for row in ours.rows] == [row["frame"] for row in theirs]
+    for mine, sweep_row in zip(ours.rows, theirs):
+        assert mine.keys() == sweep_row.keys()
+        assert all(_same(mine[k], sweep_row[k]) for k in mine if k != "runtime_s"), mine["frame"]

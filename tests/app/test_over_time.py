@@ -18,6 +18,8 @@ from app.session.over_time import Stopped
 from app.session.presets import discover
 from app.session.settings import Settings
 from app.walkthrough.steps import walkthrough
+from cbm import match
+from cbm.methods import METHODS
 
 
 @pytest.fixture(scope="module")
@@ -101,3 +103,58 @@ def test_the_drift_sliders_act_only_on_a_drifting_error():
     settings = Settings()
     assert unread_reason(settings, "loc_tau") == "the localization error does not drift"
     assert unread_reason(settings.with_scenario(localization="drifting"), "loc_tau") is None
+
+
+def _params(settings: Settings):
+    return METHODS[settings.method].resolved(settings.params)
+
+
+def _same_answer(a, b) -> bool:
+    return np.array_equal(a.pairs, b.pairs) and np.allclose(a.transform, b.transform) and a.abstained == b.abstained
+
+
+def test_a_jump_ahead_computes_per_frame_cbm_for_the_frame_shown_and_the_rest_after(explorer, drifting):
+    """Issue 47 item 7: the frames before the one asked for step the calibrator only; per-frame CBM
+    on them comes afterwards (``fill_over_time``) and is the answer ``cbm.match`` gives on their trials."""
+    settings = at(drifting.with_scenario(seed=11), 30)
+    outcome = explorer.compute(settings)
+    done = explorer.over_time.done(settings)
+    assert outcome.alone is not None and done[30].alone is outcome.alone
+    waiting = [j for j, d in done.items() if d.alone is None]
+    assert waiting and 30 not in waiting
+    assert explorer.fill_over_time(settings, stop=lambda: False) == len(waiting)
+    done = explorer.over_time.done(settings)
+    assert all(d.alone is not None and d.alone_metrics is not None for d in done.values())
+    for j in (waiting[0], waiting[-1]):
+        _, trial, _ = explorer.trial(settings, j)
+        assert _same_answer(done[j].alone, match(trial.ego_boxes, trial.cav_boxes, trial.init, _params(settings)))
+
+
+def test_a_frame_answered_by_per_frame_cbm_takes_its_answer_as_per_frame_cbms(explorer, drifting):
+    """Before the error is seen to persist the calibrator runs per-frame CBM itself: that answer is
+    per-frame CBM's beside it, without a second run."""
+    settings = at(drifting.with_scenario(seed=12), 6)
+    explorer.compute(settings)
+    done = explorer.over_time.done(settings)
+    watched = [j for j, d in done.items() if d.result.track.predicted is None]
+    assert watched and all(done[j].alone is not None for j in watched)
+    for j in watched:
+        _, trial, _ = explorer.trial(settings, j)
+        assert _same_answer(done[j].alone, match(trial.ego_boxes, trial.cav_boxes, trial.init, _params(settings)))
+
+
+def test_filling_per_frame_cbm_stops_when_asked(explorer, drifting):
+    settings = at(drifting.with_scenario(seed=13), 25)
+    explorer.compute(settings)
+    calls = []
+    filled = explorer.fill_over_time(settings, stop=lambda: calls.append(1) or len(calls) > 3)
+    assert filled == 3
+    assert sum(d.alone is None for d in explorer.over_time.done(settings).values()) > 0
+
+
+def test_a_noise_edit_reuses_every_frames_trial_inputs(explorer, drifting):
+    settings = at(drifting, 3)
+    before = [explorer.trial_inputs(settings, j) for j in range(4)]
+    edited = settings.with_scenario(sigma_p=settings.scenario.sigma_p + 0.1)
+    assert all(explorer.trial_inputs(edited, j) is inputs for j, inputs in enumerate(before))
+    assert explorer.trial_inputs(edited.with_scenario(sensor_range=30.0), 0) is not before[0]

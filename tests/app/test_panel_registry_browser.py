@@ -46,7 +46,7 @@ def notes_tab(tmp_path: Path, monkeypatch: pytest.MonkeyPatch) -> None:
 
 
 def test_a_registered_panel_is_listed_last_and_in_the_help(notes_tab, capsys: pytest.CaptureFixture) -> None:
-    assert list(registry.found()) == ["scenario", "method", "view", "presets", "explore", "walkthrough",
+    assert list(registry.found()) == ["scenario", "method", "view", "presets", "explore", "compare", "walkthrough",
                                       "throwaway_notes"]
     with pytest.raises(SystemExit):
         parse(["--help"])

@@ -45,19 +45,20 @@ def test_dair_infrastructure_is_a_roadside_unit_and_the_fallback_a_note(browser,
     page.close()
 
 
-def test_interaction_starts_on_the_first_frame_cbm_can_run_on(browser, tmp_path_factory) -> None:
-    """INTERACTION's frame 0 holds no ego and CAV under the range protocol: the tab starts on the first
-    frame that does, and says so."""
+def test_interaction_with_two_cars_says_no_frame_has_enough_shared_objects(browser, tmp_path_factory) -> None:
+    """INTERACTION's test recording holds two cars: from frame 30 on they are an ego and a CAV, but
+    neither sees an object the other sees, so CBM can stand by a pose on no frame (issue 47: it
+    opened on frame 30 as if it could, and failed). The tab starts on frame 30 and says why."""
     explorer = Explorer(loaders.open(releases.FIXTURES / "interaction" / "vehicle_tracks_000.csv"))
     settings = Settings()
-    first = first_usable(explorer, settings, range(len(explorer)))
-    assert first is not None and first > 0 and not runs_on(explorer, settings, 0)
+    assert first_usable(explorer, settings, range(len(explorer))) is None and not runs_on(explorer, settings, 30)
     with ui.scenario_server(explorer, tmp_path_factory.mktemp("presets")) as running:
         page = ui.open_page(browser, running)
         tab = ui.session(running, 1)
-        assert tab.last.frame_index == first and ui.header(page) == f"Frame {first}"
-        page.get_by_text(f"Starting on frame {first}").first.wait_for(timeout=30_000)
-        assert page.get_by_text("CBM cannot run on this frame").count() == 0
+        assert tab.last.frame_index == 30 and ui.header(page) == "Frame 30"
+        page.get_by_text("Too few objects seen by both agents").first.wait_for(timeout=30_000)
+        page.get_by_text("has 3 objects seen by both an ego and a CAV under the range protocol (at most 0)").first\
+            .wait_for(timeout=30_000)
         page.close()
 
 

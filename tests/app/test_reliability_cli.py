@@ -105,14 +105,14 @@ def test_a_dataset_without_a_usable_pair_warns_at_start(dataset: str, tmp_path: 
     with serving("--dataset", dataset, "--port", "0", presets=tmp_path) as (process, _):
         process.send_signal(signal.SIGTERM)
         process.wait(timeout=10)
-        assert "no frame has a usable pair of agents" in process.stderr.read()
+        assert "no frame has 3 objects seen by both an ego and a CAV" in process.stderr.read()
 
 
 def test_a_usable_dataset_starts_without_that_warning(tmp_path: Path) -> None:
-    with serving("--dataset", "synthetic:5", "--port", "0", presets=tmp_path) as (process, _):
+    with serving("--dataset", "synthetic:20", "--port", "0", presets=tmp_path) as (process, _):
         process.send_signal(signal.SIGTERM)
         process.wait(timeout=10)
-        assert "usable pair" not in process.stderr.read()
+        assert "seen by both" not in process.stderr.read()
 
 
 def test_viser_moving_to_another_port_is_caught_after_start(monkeypatch: pytest.MonkeyPatch) -> None:
