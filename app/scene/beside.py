@@ -63,8 +63,8 @@ def with_pinned_beside(picture: Drawing, outcome: Outcome, pinned: Outcome) -> D
                 for s in STROKES},
              **{f"pinned_{m}": Lines(getattr(shapes, m), getattr(palette, stroke).color, width)
                 for m, (stroke, width) in MARKS.items()}}
-    titles = {"title_current": (title(outcome, "current"), (TITLE_AT[0], picture.centre_y, TITLE_AT[1])),
-              "title_pinned": (title(pinned, "pinned"), (TITLE_AT[0], float(offset[1]), TITLE_AT[1]))}
+    titles = {"title_current": (title(outcome, "current"), (TITLE_AT, picture.centre_y, planes.LABELS)),
+              "title_pinned": (title(pinned, "pinned"), (TITLE_AT, float(offset[1]), planes.LABELS))}
     agents = tuple(tuple(map(float, se2.translation_of(pose))) for pose in vehicles)
     return dataclasses.replace(picture, meshes={**picture.meshes, **meshes}, lines={**picture.lines, **lines},
                                labels={**picture.labels, **shapes.labels, **titles},

@@ -79,7 +79,8 @@ def test_the_range_protocol_records_its_agents():
 
 
 @pytest.mark.parametrize("grid, message", [
-    ({"sigma2": [2.0]}, "sigma2.*cbm, cbm-no-consensus, cbm-graph, cbm-time, cbm-no-prior, none of which is selected"),
+    ({"sigma2": [2.0]}, "sigma2.*cbm, cbm-no-consensus, cbm-graph, cbm-time, cbm-smooth, cbm-no-prior, none of which "
+                        "is selected"),
     ({"wobble": [1]}, "'wobble' is not a parameter"),
     ({"seed": [1]}, "seed is the sweep's own argument"),
     ({"eta": []}, "'eta' has no values"),
