@@ -24,8 +24,9 @@ from .offers import Offers
 from .sequence import SequenceRun, run_sequence
 from .settings import Settings
 
-COMPARABLE = ("cbm", "cbm-time", "icp", "ricp", "vips", "v2xregpp", "freealign", "oracle")
-"""The methods a comparison offers, in the table's order: CBM, CBM over time, the baselines, the oracle."""
+COMPARABLE = ("cbm", "cbm-time", "cbm-smooth", "icp", "ricp", "vips", "v2xregpp", "freealign", "oracle")
+"""The methods a comparison offers, in the table's order: CBM, CBM over time (and over the whole
+recording, which a comparison's run over every frame allows), the baselines, the oracle."""
 TICKED = ("cbm", "cbm-time", "icp", "v2xregpp", "oracle")
 """Ticked at first: CBM alone and over time, one classic and one recent baseline, and the oracle's reference."""
 COLUMNS = ("success_rate", "success_rate_2", "success_rate_3", "rte_median", "rre_median", "abstain_rate",

@@ -93,10 +93,13 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
     others run in chunks, reporting progress to ``task`` and stopping early (``cancelled=True``, the
     rows done) when it is cancelled: between chunks, or within one when the engine raises
     ``Cancelled`` (``background.Runner`` runs it under ``stoppable``). A method over time runs every
-    frame up to the last of ``frames`` in order (``over_time_rows``)."""
+    frame up to the last of ``frames`` in order (``over_time_rows``); a whole recording's method
+    (``cbm-smooth``) runs them all as one chunk, since its answers need every frame."""
     frames = list(range(len(explorer)) if frames is None else frames)
     known = explorer.rows.of(settings)
-    if METHODS[settings.method].over_time and not set(frames) <= set(known):
+    if METHODS[settings.method].offline and not set(frames) <= set(known):
+        rows, skipped = _frames_run(explorer, settings, frames, task, max(len(frames), 1))
+    elif METHODS[settings.method].over_time and not set(frames) <= set(known):
         rows, skipped = over_time_rows(explorer, settings, frames, task)
     else:
         rows, skipped = _frames_run(explorer, settings, [f for f in frames if f not in known], task, chunk)
@@ -109,7 +112,7 @@ def run_sequence(explorer: Explorer, settings: Settings, task: Task | None = Non
 def known_frames(explorer: Explorer, settings: Settings) -> int:
     """How many frames of ``settings`` a run would take rather than compute: the rows known, or the
     frames a method over time computed."""
-    if METHODS[settings.method].over_time:
+    if METHODS[settings.method].over_time and not METHODS[settings.method].offline:
         return max(len(explorer.rows.of(settings)), len(explorer.over_time.done(settings)))
     return len(explorer.rows.of(settings))
 

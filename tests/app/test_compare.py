@@ -14,11 +14,12 @@ from app.scene.beside import LINES, MESHES, with_pinned_beside
 from app.scene.drawing import draw
 from app.scene.pinned import with_baseline
 from app.session.background import Task
-from app.session.compare import COLUMNS, Comparison, run_comparison
+from app.session.compare import COLUMNS, COMPARABLE, Comparison, run_comparison
 from app.session.explorer import Explorer, classified_pairs
 from app.session.sequence import SequenceRun, run_sequence
 from app.session.settings import Settings
 from evaluation.metric_registry import RUN_METRICS
+from evaluation.sweep import Sweep, run
 
 METHODS = ("cbm", "icp", "oracle")
 
@@ -130,3 +131,16 @@ def test_two_methods_side_by_side_each_in_a_copy_of_its_own(explorer: Explorer) 
     beside = with_baseline(plain, current, pinned, beside=True)
     assert len(beside.lines["pinned"].segments) == 0 and len(beside.meshes["pinned_cav_boxes"].faces)
     assert "drawn beside, on the left" in beside.metrics_markdown
+
+
+def test_the_whole_recordings_method_is_offered_and_smooths_over_every_frame(small_explorer: Explorer) -> None:
+    """CBM over a whole recording answers once every frame is in: a comparison runs it over them all,
+    its rows those of the evaluation's sweep (``cbm.sequence.Smoother`` over the frames)."""
+    assert "cbm-smooth" in COMPARABLE
+    settings = dataclasses.replace(Settings(), method="cbm-smooth")
+    frames = list(range(6))
+    smoothed = run_sequence(small_explorer, settings, frames=frames)
+    inputs = [small_explorer.trial_inputs(settings, f) for f in frames]
+    swept = run(Sweep(methods=("cbm-smooth",), seed=settings.scenario.seed, scenario=settings.scenario,
+                      params={"cbm": settings.cbm}), inputs)
+    assert [row["rte"] for row in smoothed.rows] == pytest.approx([row["rte"] for row in swept], nan_ok=True)
