@@ -33,8 +33,8 @@ from .plot import DOTS, FRAME, LABEL, PADDING, X_AXIS, column, frame_axis, send
 from .registry import Panel
 from .reports import stale_markdown
 
-COLOURS = {"cbm": "#1e9c3c", "cbm-time": "#6a3d9a", "cbm-smooth": "#b15928", "icp": "#e8820c", "ricp": "#8c564b", "vips": "#3478f6",
-           "v2xregpp": "#d62790", "freealign": "#17becf", "oracle": "#555555"}
+COLOURS = {"cbm": "#1e9c3c", "cbm-time": "#6a3d9a", "cbm-smooth": "#b15928", "icp": "#e8820c", "ricp": "#8c564b",
+           "vips": "#3478f6", "v2xregpp": "#d62790", "freealign": "#17becf", "oracle": "#555555"}
 """Each method's line on the chart."""
 HOW = ("overlaid", "side by side")
 NONE_YET = "(run first)"
