@@ -114,7 +114,11 @@ TRACKING_COUNTS = {"chain": 1000, "window": 1000, "lost_after": 100_000, "reacqu
 class SequenceCalibrator:
     """CBM over time for one CAV of one sequence (see the module)."""
 
-    def __init__(self, params: CBMParams | None = None, tracking: TrackingParams | None = None) -> None:
+    def __init__(self, params: CBMParams | None = None, tracking: TrackingParams | None = None, *,
+                 late: bool = True) -> None:
+        """``late``: follow the CAV's messages' age (``cbm.motion``); the smoother's backward pass,
+        where time runs back, does not."""
+        self.follows_late = late
         self.params = CBMParams() if params is None else _of_type("params", params, CBMParams)
         self.tracking = TrackingParams() if tracking is None else _of_type("tracking", tracking, TrackingParams)
         t = self.tracking
@@ -130,7 +134,7 @@ class SequenceCalibrator:
         self.misses = 0
         self.last_time: float | None = None
         self.agent: object = None
-        self.late = LateMessages()
+        self.late = LateMessages() if self.follows_late else None
 
     def step(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None, time_s: float,
              agent: object = None) -> MatchResult:
@@ -153,7 +157,7 @@ class SequenceCalibrator:
     def _state(self) -> tuple:
         """What a step changes, copied (a track is updated in place)."""
         return (copy.copy(self.track), self.persistence.copy(), list(self.rejected), self.misses, self.last_time,
-                self.agent, self.late.copy())
+                self.agent, None if self.late is None else self.late.copy())
 
     def _restore(self, state: tuple) -> None:
         self.track, self.persistence, self.rejected, self.misses, self.last_time, self.agent, self.late = state
@@ -167,7 +171,7 @@ class SequenceCalibrator:
             result = match(ego, cav, init, params)
         else:
             result = match(ego, cav, init @ as_matrix(prior[0]), self._tightened(params, prior[1], cav))
-        result = self.late.corrected(ego, cav, result, time_s)
+        result = result if self.late is None else self.late.corrected(ego, cav, result, time_s)
         found = measurement(result, init, cav, self.floor, time_s)
         chain = self.persistence.add(found, self.rate, self.tracking.drift_share, self.tracking.gate)
         self.last_time = time_s
@@ -361,7 +365,7 @@ class Smoother:
 
     def smoothed(self) -> list[MatchResult]:
         """Every frame's answer from the frames before it and after it (see the module)."""
-        backward = SequenceCalibrator(self.params, self.tracking)
+        backward = SequenceCalibrator(self.params, self.tracking, late=False)
         late_first = [backward.step(ego, cav, init, -t, agent) for ego, cav, init, t, agent in reversed(self.frames)]
         return [combined(ahead, behind) for ahead, behind in zip(self.causal, reversed(late_first))]
 
