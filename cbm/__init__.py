@@ -28,7 +28,8 @@ from .explain import AnchorDetail, Explanation
 from .params import MOST, CBMParams
 from .pipeline import match
 from .result import Fit, MatchResult, TrackNote
-from .sequence import SequenceCalibrator, TrackingParams
+from .sequence import SequenceCalibrator
+from .track import TrackingParams
 
 _COMPILER = {"warm_up", "load_kernels", "kernels_cached", "compile_side_by_side", "CompileFailed"}
 """Names of ``cbm.warmup``, imported on first use: ``python -m cbm.warmup`` then runs the module once."""

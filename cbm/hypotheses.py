@@ -153,6 +153,18 @@ def hypothesis(ego: np.ndarray, cav: np.ndarray, anchor: int, pairs: np.ndarray,
     return Hypothesis(anchor, pairs, found, T, sigma, evidence_sum)
 
 
+def predicted(ego: np.ndarray, cav: np.ndarray, sigma: float, floor: float, widest: float) -> Hypothesis | None:
+    """A pose from the frames before (CBM over time's prediction, the CAV boxes ``cav`` moved by it)
+    as one more hypothesis: the boxes paired one-to-one within ``widest`` of its noise ``sigma``, then
+    refined and scored as an anchor's set is (``refine``); None when fewer than ``MIN_SHARED`` pair."""
+    pairs = gated_assignment(ego, cav, widest * sigma, sigma)
+    if len(pairs) < MIN_SHARED:
+        return None
+    found, T, noise, evidence_sum = refine(ego, cav, pairs, None, None, floor, widest, clutter_density(cav[:, :2]),
+                                           False)
+    return Hypothesis(-1, pairs, found, T, noise, evidence_sum) if len(found) >= MIN_SHARED else None
+
+
 def evidence(ego: np.ndarray, moved: np.ndarray, pairs: np.ndarray, sigma: float, density: float,
              reference: np.ndarray) -> np.ndarray:
     """Each pair's log-likelihood ratio, one object seen twice against a coincidence: its centres'

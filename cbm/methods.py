@@ -34,7 +34,8 @@ from .pipeline import match
 from .posegraph import match_graph
 from .prior_free import PRIOR_FREE, match_without_prior
 from .result import MatchResult
-from .sequence import SequenceCalibrator, Smoother, TrackingParams, match_first_step
+from .sequence import SequenceCalibrator, Smoother, match_first_step
+from .track import TrackingParams
 
 
 @dataclass(frozen=True)
