@@ -41,7 +41,7 @@ def test_a_dataset_cbm_cannot_run_on_says_so_and_the_app_keeps_working(browser, 
         page.close()
         process.send_signal(signal.SIGTERM)
         process.wait(timeout=10)
-        assert process.returncode == 0 and "no frame has a usable pair of agents" in process.stderr.read()
+        assert process.returncode == 0 and "CBM cannot run; the page says what is missing" in process.stderr.read()
 
 
 def test_presets_tab_lists_skipped_files_and_refuses_a_colliding_name(browser, tmp_path: Path) -> None:

@@ -42,7 +42,7 @@ def test_a_wrong_tracking_key_or_value_names_the_table_the_key_and_the_file(tmp_
     with pytest.raises(PresetError, match=r"bad.toml: \[tracking\] unknown key 'gat'"):
         read_preset_file(bad)
     bad.write_text("[tracking]\nchain = 1\n")
-    with pytest.raises(PresetError, match=r"bad.toml: \[tracking\] TrackingParams.chain must be an integer >= 2"):
+    with pytest.raises(PresetError, match=r"bad.toml: \[tracking\] TrackingParams.chain must be an integer from 2 to 1000, got 1"):
         read_preset_file(bad)
 
 
@@ -83,7 +83,7 @@ def test_evaluate_sweeps_a_tracking_parameter_over_a_presets_tracking(tmp_path: 
 
 @pytest.mark.parametrize("args, words", [
     (["--methods", "cbm", "--grid", "tracking.gate=2,5"], "'tracking.gate' is a tracking parameter of a method "
-                                                          "over time (cbm-time); select one"),
+                                                          "over time (cbm-time, cbm-smooth); select one"),
     (["--methods", "cbm-time", "--grid", "tracking.nope=1"], "unknown parameter 'tracking.nope'"),
     (["--methods", "cbm-time", "--grid", "tracking.chain=2.5"], "tracking.chain takes int values, got '2.5'"),
 ])
