@@ -42,7 +42,8 @@ def test_a_wrong_tracking_key_or_value_names_the_table_the_key_and_the_file(tmp_
     with pytest.raises(PresetError, match=r"bad.toml: \[tracking\] unknown key 'gat'"):
         read_preset_file(bad)
     bad.write_text("[tracking]\nchain = 1\n")
-    with pytest.raises(PresetError, match=r"bad.toml: \[tracking\] TrackingParams.chain must be an integer from 2 to 1000, got 1"):
+    with pytest.raises(PresetError,
+                       match=r"bad.toml: \[tracking\] TrackingParams.chain must be an integer from 2 to 1000, got 1"):
         read_preset_file(bad)
 
 
