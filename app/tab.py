@@ -35,6 +35,11 @@ from .stage import Stage
 COMPUTING_AFTER = 0.3
 """Seconds a recompute of the same method takes before the status line and the key numbers say it is
 computing (the verdict on screen is then stale; a quicker one replaces it before anyone reads it)."""
+PREVIEW_FROM = 50
+"""Frames a method over time must compute before the one asked for, from which per-frame CBM's answer
+is shown meanwhile (an edit deep in a sequence shows at once; 50 steps take about a quarter second)."""
+PREVIEW_WORDS = ("**Per-frame CBM on this frame, shown while CBM over time computes the frames before it** "
+                 "(the answer over time replaces it).")
 
 
 class ClientSession:
@@ -181,7 +186,8 @@ class ClientSession:
             with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s", f"{s:.1f} s"),
                            after=COMPUTING_AFTER), \
                     self.kernels.running() as interpreting, stoppable(lambda: self.worker.superseded):
-                outcome = self.explorer.compute(settings, self._catching_up(settings), self._stopping)
+                previewed = self._previewed(settings)
+                outcome = self.explorer.compute(settings, self._catching_up(settings, previewed), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
         except Stopped as stopped:
             if self.worker.superseded:
@@ -198,6 +204,20 @@ class ClientSession:
                                            self.explorer.sequence[outcome.frame_index]), outcome, pinned,
                                       self.baseline.beside)
 
+    def _previewed(self, settings: Settings) -> bool:
+        """Whether per-frame CBM's answer was shown on the frame asked for, marked as such, because a
+        method over time has at least ``PREVIEW_FROM`` frames to compute before it."""
+        if not METHODS[settings.method].over_time or \
+                self.explorer.over_time.to_compute(settings, settings.frame) < PREVIEW_FROM:
+            return False
+        outcome = self.explorer.compute(dataclasses.replace(settings, method="cbm"))
+        picture = draw(outcome, self.explorer.map_segments, self.explorer.sequence[outcome.frame_index])
+        with self.client.atomic():
+            self.stage.show(outcome, picture, reframe=self._frame_for == settings)
+            self.controls.metrics.show(f"{PREVIEW_WORDS}\n\n{picture.metrics_markdown}")
+        self.client.flush()
+        return True
+
     def _waiting(self, settings: Settings, status: str, progress: str = "") -> None:
         """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
         numbers the method computing in place of the verdict on screen (another method's, or stale),
@@ -213,18 +233,19 @@ class ClientSession:
         always (``kernels.BASELINES``), CBM's when they load from the cache or the frame is large."""
         return settings.method in BASELINES or self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO
 
-    def _catching_up(self, settings: Settings):
+    def _catching_up(self, settings: Settings, previewed: bool):
         """A method over time's report while it computes the frames before the one asked for: the
-        status line, the key numbers and the stop button, at most four times a second."""
-        shown = [0.0]
+        status line, the key numbers and the stop button, at most four times a second; ``previewed``:
+        per-frame CBM's answer is on screen meanwhile, and they say so."""
+        shown, meanwhile = [0.0], "; per-frame CBM shown meanwhile" if previewed else ""
 
         def report(done: int, of: int) -> None:
             now = time.monotonic()
             if done < of and now - shown[0] >= 0.25:
                 shown[0] = now
                 self.controls.metrics.stop.visible = True
-                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…",
-                              f"the frames before it first: {done} of {of}")
+                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…"
+                              f"{meanwhile}", f"the frames before it first: {done} of {of}{meanwhile}")
         return report
 
     def _stopping(self) -> bool:

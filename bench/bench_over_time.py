@@ -9,7 +9,8 @@ its metrics) and to its drawing (``app.scene.drawing.draw``, what the tab sends)
 next frame (the frames before are kept) and the calibrator's own share: its steps alone over the
 same trials, built beforehand, the floor of any exact recompute. With ``--browser``, the same edits
 typed into the Scenario tab of a tab open in headless chromium, each timed from the typing to the
-tab having sent the frame computed under it (its scene, panels and key numbers, in one batch).
+tab having sent the frame computed under it (its scene, panels and key numbers, in one batch), and to
+the page showing per-frame CBM's answer on it, marked, while the frames before are computed.
 Each checkout runs in a process of its own, the checkouts alternating round by round on the same
 machine (a loaded machine shifts both alike); the table gives the medians over the rounds and their
 ratio (the first checkout's over the last's).
@@ -46,7 +47,7 @@ def typed_edits(frame: int, edits: int) -> dict[str, float]:
 
     settings = dataclasses.replace(discover()[0]["drift-heavy"].apply(Settings()), frame=frame)
     server = ExplorerServer(Explorer(loaders.open("argoverse2")), settings, port=0)
-    spent = []
+    spent, previewed = [], []
     with sync_playwright() as playwright:
         browser = playwright.chromium.launch(executable_path=CHROMIUM, args=ARGS)
         page = browser.new_page(viewport={"width": 1400, "height": 900})
@@ -56,16 +57,20 @@ def typed_edits(frame: int, edits: int) -> dict[str, float]:
         control = label(page, "position noise σp (m)").get_attribute("for")
         box = page.locator(f'[id="{control}"]').locator(
             "xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]").locator("input.mantine-NumberInput-input")
+        preview = page.get_by_text("shown while CBM over time computes the frames before it")
         for k in range(edits):
             value = round(settings.scenario.sigma_p + 0.01 * (k + 1), 2)
             started = time.perf_counter()
             box.fill(f"{value:g}")
+            preview.first.wait_for(timeout=120_000)
+            previewed.append(1000 * (time.perf_counter() - started))
             wait_until(lambda v=value: tab.last.settings.scenario.sigma_p == v and not tab.worker.superseded, 120)
             spent.append(1000 * (time.perf_counter() - started))
             wait_until(lambda: tab.worker.wait_idle(0.01), 120)
         browser.close()
     server.stop()
-    return {f"σp typed at frame {frame} -> frame sent (browser)": statistics.median(spent)}
+    return {f"σp typed at frame {frame} -> per-frame CBM shown, marked (browser)": statistics.median(previewed),
+            f"σp typed at frame {frame} -> frame sent (browser)": statistics.median(spent)}
 
 
 def one_round(frame: int, edits: int) -> dict[str, float]:

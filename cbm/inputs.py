@@ -61,9 +61,9 @@ def checked_transform(name: str, T: np.ndarray) -> np.ndarray:
     array = _real_array(name, T)
     if array.shape != (3, 3) or not np.isfinite(array).all():
         raise ValueError(f"{name} must be a finite (3, 3) SE(2) matrix; got shape {array.shape}")
-    rotation = array[:2, :2]
-    if not (np.allclose(rotation.T @ rotation, np.eye(2), atol=1e-6) and np.linalg.det(rotation) > 0
-            and np.allclose(array[2], [0.0, 0.0, 1.0])):
+    (a, b, _), (c, d, _), last = array.tolist()
+    orthonormal = max(abs(a * a + c * c - 1.0), abs(b * b + d * d - 1.0), abs(a * b + c * d)) <= 1e-6
+    if not (orthonormal and a * d - b * c > 0 and max(abs(last[0]), abs(last[1]), abs(last[2] - 1.0)) <= 1e-8):
         raise ValueError(f"{name} must be a rigid SE(2) transform (rotation block orthonormal, last row 0 0 1)")
     return array
 

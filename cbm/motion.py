@@ -20,7 +20,6 @@ its moving pairs make it, moves it towards the frame's age, which jitters with t
 """
 from __future__ import annotations
 
-import copy
 import dataclasses
 from collections import deque
 from dataclasses import dataclass, field
@@ -86,8 +85,7 @@ class EgoTracks:
             links, self.motion = ego_motion(self.boxes, ego, self.motion)
             carried = np.full((len(self.positions), len(ego), 2), np.nan)
             linked = links >= 0
-            for k, frame in enumerate(self.positions):
-                carried[k, linked] = se2.apply_points(self.motion, frame[links[linked]])
+            carried[:, linked] = self.positions[:, links[linked]] @ self.motion[:2, :2].T + self.motion[:2, 2]
             self.positions = np.concatenate([carried, current])[-WINDOW:]
         self.boxes = ego
         self.times.append(float(time_s))
@@ -217,7 +215,10 @@ class LateMessages:
     age: AgeEstimate = field(default_factory=AgeEstimate)
 
     def copy(self) -> LateMessages:
-        return copy.deepcopy(self)
+        """A copy that a step on this one leaves as it is (its arrays are replaced, never written)."""
+        t = self.tracks
+        return LateMessages(EgoTracks(deque(t.times, maxlen=WINDOW), t.positions, t.boxes, t.motion),
+                            AgeEstimate(deque(self.age.found, maxlen=AGE_FRAMES)))
 
     def _pairs(self, ego: np.ndarray, cav: np.ndarray, result: MatchResult,
                velocity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

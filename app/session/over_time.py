@@ -106,6 +106,12 @@ class Runs:
             found = run.done[index]
         return found if found.alone is not None else self._with_alone(run, index, trial_of)
 
+    def to_compute(self, settings: Settings, index: int) -> int:
+        """How many frames a request for frame ``index`` under ``settings`` computes (it and those
+        before it not yet computed)."""
+        found = self._found(settings)
+        return max(0, index + 1 - (0 if found is None else found.next_frame))
+
     def fill_alone(self, settings: Settings, trial_of: TrialOf, stop: Callable[[], bool]) -> int:
         """Per-frame CBM on every frame done under ``settings`` that lacks it, the latest first,
         until ``stop()`` says so; the frames filled."""

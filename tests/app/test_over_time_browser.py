@@ -73,6 +73,40 @@ def test_the_stop_button_stops_a_jump_ahead_and_keeps_the_frames_done(browser, s
     page.close()
 
 
+def test_an_edit_deep_in_the_sequence_shows_per_frame_cbm_at_once_marked_until_the_answer_over_time(
+        browser, server, monkeypatch) -> None:
+    """The catch-up under the edited σp is held at its third frame until the page showed the frame
+    with per-frame CBM's answer, marked, so the preview is seen however busy the machine."""
+    seen, steps = threading.Event(), []
+    step = Runs._step
+
+    def held(run, settings, j, trial_of) -> None:
+        steps.append(j)
+        if len(steps) == 3:
+            seen.wait(60)
+        step(run, settings, j, trial_of)
+
+    page = ui.open_page(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    ui.load_preset(page, "drift-heavy")
+    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    ui.go_to_frame(page, tab, 49)
+    monkeypatch.setattr(Runs, "_step", staticmethod(held))
+    page.get_by_role("tab", name="Scenario").click()
+    control = ui.label(page, "position noise σp (m)").get_attribute("for")
+    page.locator(f'[id="{control}"]').locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]") \
+        .locator("input.mantine-NumberInput-input").fill(f"{tab.settings.scenario.sigma_p + 0.01:g}")
+    preview = page.get_by_text("shown while CBM over time computes the frames before it")
+    preview.first.wait_for(timeout=60_000)
+    assert "over time" not in ui.metrics(page) and len(steps) <= 3
+    ui.wait_until(lambda: "per-frame CBM shown meanwhile" in page.locator("#cbm-key-numbers").inner_text(), 60)
+    seen.set()
+    ui.wait_until(lambda: tab.last is not None and tab.last.settings == tab.settings and preview.count() == 0, 120)
+    assert "over time" in ui.metrics(page) and len(steps) == 50
+    page.close()
+
+
 def test_the_scenario_tab_offers_the_drifting_error_and_the_steps_end_over_time(browser, server) -> None:
     page = ui.open_page(browser, server)
     tab = ui.session(server, 1)
