@@ -164,13 +164,13 @@ class Persistence:
         return Persistence(self.window, deque(self.kept))
 
     def add(self, found: Measurement | None, rate: np.ndarray, share: float, gate: float) -> list[Measurement]:
-        """Keep ``found``; return the longest chain ending at it, oldest first (empty for None)."""
+        """Keep ``found``; return the longest chain ending at it, oldest first (empty for None): that
+        of the latest of the kept measurements with the longest chains that ``found`` agrees with."""
         chain: list[Measurement] = []
         if found is not None:
-            for earlier, earlier_chain in self.kept:
-                longer = earlier is not None and len(earlier_chain) >= len(chain)
-                if longer and agree(found, earlier, rate, share, gate):
-                    chain = earlier_chain
+            longest_first = sorted(((len(c), k) for k, (m, c) in enumerate(self.kept) if m is not None), reverse=True)
+            k = next((k for _, k in longest_first if agree(found, self.kept[k][0], rate, share, gate)), None)
+            chain = [] if k is None else self.kept[k][1]
             chain = [*chain[max(0, len(chain) + 1 - self.window):], found]
         self.kept.append((found, chain))
         while len(self.kept) > self.window:
