@@ -123,7 +123,7 @@ class SequenceCalibrator:
         else:
             result = match(ego, cav, init @ as_matrix(prior[0]), self._tightened(params, prior[1], cav))
             result = self._pooled(ego, cav, init @ as_matrix(prior[0]), prior[1], result)
-        result = result if self.late is None else self.late.corrected(ego, cav, result, time_s)
+        result = result if self.late is None else self.late.corrected(ego, cav, result, time_s, params.welsch_floor)
         found = measurement(result, init, cav, self.floor, time_s)
         chain = self.persistence.add(found, self.rate, self.tracking.drift_share, self.tracking.gate)
         self.last_time = time_s
