@@ -43,6 +43,7 @@ class Stage:
         self._lock = threading.RLock()
         """Held while the scene or the camera changes: a result shown, a reset, a flight, a person's move."""
         self._later = Later(RELAY_S)
+        self._closed = False
         self.view = SceneView(client)
         self.camera = TabCamera(client)
         self.camera.on_measured = self.reset_camera
@@ -118,11 +119,18 @@ class Stage:
                                     picture.label_px, planes.LABELS)
         return markers, frozenset(label for mark in away for label in mark.labels)
 
+    def close(self) -> None:
+        """No more follow-ups of a person's camera moves: the tab's scene is about to be removed (another
+        dataset, or the tab closed), and a layout then would write to removed labels."""
+        with self._lock:
+            self._closed = True
+            self._later.close()
+
     def _follow_person(self) -> None:
         """A person moved the camera: the labels are laid out for its scale and the edge markers point
         from where it stands."""
         with self._lock:
-            if self.shown is None:
+            if self._closed or self.shown is None:
                 return
             outcome, picture = self.shown
             self.view.area = self._canvas_area()

@@ -166,6 +166,7 @@ class ClientSession:
         self._playing.set()
         self.controls.close()
         self.worker.close()
+        self.stage.close()
 
     def _compute(self, settings: Settings) -> tuple[Outcome, Drawing]:
         """The outcome of ``settings`` and its drawing. Until CBM's kernels are compiled a small

@@ -36,7 +36,7 @@ def server(tmp_path_factory: pytest.TempPathFactory):
 
 
 def session_of(server: ExplorerServer, page_count: int):
-    ui.wait_until(lambda: len(server.sessions) == page_count)
+    ui.wait_until(lambda: len(server.sessions) == page_count, 60)
     return max(server.sessions.items())[1]
 
 
@@ -59,7 +59,8 @@ def test_a_picked_dataset_opens_in_the_tab_on_the_first_frame_cbm_can_run_on(bro
     ui.wait_until(lambda: server.sessions.get(client) not in (None, first)
                   and server.sessions[client].explorer is crossing and server.sessions[client].last is not None, 120)
     tab = server.sessions[client]
-    assert tab.last.frame_index == 10 and ui.header(page) == "Frame 10"
+    assert tab.last.frame_index == 10
+    ui.wait_until(lambda: ui.header(page) == "Frame 10", 60)
     page.get_by_text("Starting on frame 10").first.wait_for(timeout=30_000)
     page.get_by_text("frame 10, the first with enough, is shown").first.wait_for(timeout=30_000)
     assert first.worker.superseded and len(server.sessions) == 1
