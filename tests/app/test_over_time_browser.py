@@ -21,6 +21,18 @@ def server(small_explorer: Explorer, tmp_path_factory: pytest.TempPathFactory):
         yield running
 
 
+def held_at_third(steps: list[int], release: threading.Event):
+    """``Runs._step`` recording each frame it steps in ``steps`` and holding the third until ``release``."""
+    step = Runs._step
+
+    def held(run, settings, j, trial_of) -> None:
+        steps.append(j)
+        if len(steps) == 3:
+            release.wait(60)
+        step(run, settings, j, trial_of)
+    return staticmethod(held)
+
+
 def test_choosing_cbm_over_time_and_jumping_ahead_shows_the_frames_pooled(browser, server) -> None:
     page = ui.open_page(browser, server)
     tab = ui.session(server, 1)
@@ -39,15 +51,7 @@ def test_the_stop_button_stops_a_jump_ahead_and_keeps_the_frames_done(browser, s
     """The catch-up is held at its third frame until the stop button was clicked, so the click
     always lands while frames are still being computed, however busy the machine."""
     clicked, steps = threading.Event(), []
-    step = Runs._step
-
-    def held(run, settings, j, trial_of) -> None:
-        steps.append(j)
-        if len(steps) == 3:
-            clicked.wait(60)
-        step(run, settings, j, trial_of)
-
-    monkeypatch.setattr(Runs, "_step", staticmethod(held))
+    monkeypatch.setattr(Runs, "_step", held_at_third(steps, clicked))
     page = ui.open_page(browser, server)
     tab = ui.session(server, 1)
     ui.close_notifications(page)
@@ -78,21 +82,13 @@ def test_an_edit_deep_in_the_sequence_shows_per_frame_cbm_at_once_marked_until_t
     """The catch-up under the edited σp is held at its third frame until the page showed the frame
     with per-frame CBM's answer, marked, so the preview is seen however busy the machine."""
     seen, steps = threading.Event(), []
-    step = Runs._step
-
-    def held(run, settings, j, trial_of) -> None:
-        steps.append(j)
-        if len(steps) == 3:
-            seen.wait(60)
-        step(run, settings, j, trial_of)
-
     page = ui.open_page(browser, server)
     tab = ui.session(server, 1)
     ui.close_notifications(page)
     ui.load_preset(page, "drift-heavy")
     ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
     ui.go_to_frame(page, tab, 49)
-    monkeypatch.setattr(Runs, "_step", staticmethod(held))
+    monkeypatch.setattr(Runs, "_step", held_at_third(steps, seen))
     page.get_by_role("tab", name="Scenario").click()
     control = ui.label(page, "position noise σp (m)").get_attribute("for")
     page.locator(f'[id="{control}"]').locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]") \
