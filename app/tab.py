@@ -38,6 +38,7 @@ computing (the verdict on screen is then stale; a quicker one replaces it before
 PREVIEW_FROM = 50
 """Frames a method over time must compute before the one asked for, from which per-frame CBM's answer
 is shown meanwhile (an edit deep in a sequence shows at once; 50 steps take about a quarter second)."""
+MEANWHILE = "per-frame CBM shown meanwhile"
 PREVIEW_WORDS = ("**Per-frame CBM on this frame, shown while CBM over time computes the frames before it** "
                  "(the answer over time replaces it).")
 
@@ -51,6 +52,8 @@ class ClientSession:
     def __init__(self, client: viser.ClientHandle, explorer: Explorer, settings: Settings, kernels: Kernels) -> None:
         self.client, self.explorer, self.kernels = client, explorer, kernels
         self._note = ""
+        self._meanwhile = ""
+        """Said beside what the tab waits for while per-frame CBM's answer stands in (``_preview``)."""
         self._play_note = ""
         """How fast a play that cannot keep up goes (``playing_words``), beside each frame it shows."""
         self._compiled_note_due = False
@@ -173,6 +176,7 @@ class ClientSession:
         frame runs interpreted, its note says so, and the tab recomputes once they are ready; a
         large frame waits for them, as does any frame when they are only loaded from the cache. The
         status line says what it waits for when that takes a moment."""
+        self._meanwhile = ""
         if not self.kernels.ready_for(settings.method) and self._waits_for_kernels(settings):
             self._compiled_note_due = self._compiled_note_due or not self.kernels.ready
             whose = "CBM's" if not self.kernels.ready else f"{METHODS[settings.method].label}'s"
@@ -187,8 +191,8 @@ class ClientSession:
             with announced(lambda s: self._waiting(settings, f"Computing… {s:.1f} s", f"{s:.1f} s"),
                            after=COMPUTING_AFTER), \
                     self.kernels.running() as interpreting, stoppable(lambda: self.worker.superseded):
-                previewed = self._previewed(settings)
-                outcome = self.explorer.compute(settings, self._catching_up(settings, previewed), self._stopping)
+                self._preview(settings)
+                outcome = self.explorer.compute(settings, self._catching_up(settings), self._stopping)
                 pinned = self.baseline.outcome(self.explorer, settings)
         except Stopped as stopped:
             if self.worker.superseded:
@@ -205,19 +209,20 @@ class ClientSession:
                                            self.explorer.sequence[outcome.frame_index]), outcome, pinned,
                                       self.baseline.beside)
 
-    def _previewed(self, settings: Settings) -> bool:
-        """Whether per-frame CBM's answer was shown on the frame asked for, marked as such, because a
-        method over time has at least ``PREVIEW_FROM`` frames to compute before it."""
+    def _preview(self, settings: Settings) -> None:
+        """Per-frame CBM's answer on the frame asked for, marked as such, when a method over time has
+        at least ``PREVIEW_FROM`` frames to compute before it; what the tab says while it waits then
+        says so too (``_meanwhile``)."""
         if not METHODS[settings.method].over_time or \
                 self.explorer.over_time.to_compute(settings, settings.frame) < PREVIEW_FROM:
-            return False
+            return
         outcome = self.explorer.compute(dataclasses.replace(settings, method="cbm"))
         picture = draw(outcome, self.explorer.map_segments, self.explorer.sequence[outcome.frame_index])
         with self.client.atomic():
             self.stage.show(outcome, picture, reframe=self._frame_for == settings)
             self.controls.metrics.show(f"{PREVIEW_WORDS}\n\n{picture.metrics_markdown}")
         self.client.flush()
-        return True
+        self._meanwhile = MEANWHILE
 
     def _waiting(self, settings: Settings, status: str, progress: str = "") -> None:
         """Say what the tab waits for: ``status`` on the status line (none when empty), and in the key
@@ -226,27 +231,27 @@ class ClientSession:
         if status:
             self.controls.metrics.say(status)
         frame = min(max(settings.frame, 0), len(self.explorer) - 1)
+        detail = "; ".join(part for part in (progress, self._meanwhile) if part)
         self.stage.key_numbers.problem(f"{METHODS[settings.method].label} computing frame {frame}…"
-                                       + (f" ({progress})" if progress else ""))
+                                       + (f" ({detail})" if detail else ""))
 
     def _waits_for_kernels(self, settings: Settings) -> bool:
         """Whether ``settings`` wait for their kernels rather than run interpreted: a baseline's
         always (``kernels.BASELINES``), CBM's when they load from the cache or the frame is large."""
         return settings.method in BASELINES or self.kernels.cached or self._objects(settings) > INTERPRETED_UP_TO
 
-    def _catching_up(self, settings: Settings, previewed: bool):
+    def _catching_up(self, settings: Settings):
         """A method over time's report while it computes the frames before the one asked for: the
-        status line, the key numbers and the stop button, at most four times a second; ``previewed``:
-        per-frame CBM's answer is on screen meanwhile, and they say so."""
-        shown, meanwhile = [0.0], "; per-frame CBM shown meanwhile" if previewed else ""
+        status line, the key numbers and the stop button, at most four times a second."""
+        shown = [0.0]
 
         def report(done: int, of: int) -> None:
             now = time.monotonic()
             if done < of and now - shown[0] >= 0.25:
                 shown[0] = now
                 self.controls.metrics.stop.visible = True
-                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…"
-                              f"{meanwhile}", f"the frames before it first: {done} of {of}{meanwhile}")
+                self._waiting(settings, f"CBM over time computes the frames in order: frame {done} of {of}…",
+                              f"the frames before it first: {done} of {of}")
         return report
 
     def _stopping(self) -> bool:
