@@ -42,7 +42,7 @@ import numpy as np
 from . import se2
 from .engine.assignment import gated_assignment
 from .engine.fitting import WELSCH_EFFICIENT_SCALE
-from .hypotheses import predicted
+from .hypotheses import predicted, same_pose
 from .inputs import is_number, shown
 from .motion import LateMessages
 from .params import CBMParams
@@ -86,6 +86,7 @@ class SequenceCalibrator:
         self.last_time: float | None = None
         self.agent: object = None
         self.late = LateMessages() if self.follows_late else None
+        self.measured: tuple[MatchResult, bool] | None = None
 
     def step(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray | None, time_s: float,
              agent: object = None) -> MatchResult:
@@ -117,13 +118,7 @@ class SequenceCalibrator:
               agent: object) -> MatchResult:
         event = self._reset_if_needed(time_s, agent)
         lost = self._lost(time_s)
-        prior = self._trusted_prediction(time_s)
-        if prior is None:
-            result = match(ego, cav, init, params)
-        else:
-            result = match(ego, cav, init @ as_matrix(prior[0]), self._tightened(params, prior[1], cav))
-            result = self._pooled(ego, cav, init @ as_matrix(prior[0]), prior[1], result)
-        result = result if self.late is None else self.late.corrected(ego, cav, result, time_s, params.welsch_floor)
+        result = self._matched(ego, cav, init, params, self._trusted_prediction(time_s), time_s)
         found = measurement(result, init, cav, self.floor, time_s)
         chain = self.persistence.add(found, self.rate, self.tracking.drift_share, self.tracking.gate)
         self.last_time = time_s
@@ -137,6 +132,20 @@ class SequenceCalibrator:
         if self.track is None:
             return self._watched(result, found, chain, event)
         return self._tracked(ego, cav, init, result, found, time_s, event)
+
+    def _matched(self, ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
+                 prior: tuple[np.ndarray, np.ndarray] | None, time_s: float) -> MatchResult:
+        """The frame's measurement: CBM from the trusted prediction ``prior`` (pooled with it) or, without
+        one, per-frame CBM; its pose then fitted again for the message's age (``cbm.motion``).
+        Kept as ``measured``, and whether a prediction guided it (``Smoother``'s backward pass reuses it)."""
+        if prior is None:
+            result = match(ego, cav, init, params)
+        else:
+            result = match(ego, cav, init @ as_matrix(prior[0]), self._tightened(params, prior[1], cav))
+            result = self._pooled(ego, cav, init @ as_matrix(prior[0]), prior[1], result)
+        result = result if self.late is None else self.late.corrected(ego, cav, result, time_s, params.welsch_floor)
+        self.measured = (result, prior is not None)
+        return result
 
     def _reset_if_needed(self, time_s: float, agent: object) -> str:
         """Starts over after time went backwards, a long gap or another agent; names why ("" if not)."""
@@ -178,7 +187,10 @@ class SequenceCalibrator:
                 result: MatchResult) -> MatchResult:
         """CBM's answer, or the track's predicted ``pose`` refined on the pairs it finds, whichever
         explains the frame better (``cbm.hypotheses.predicted``): the frames before count in the
-        matching too, not only in the pose, where a frame alone matches nothing sure."""
+        matching too, not only in the pose, where a frame alone matches nothing sure. Where CBM is
+        sure on the predicted pose itself (``same_pose``), refining from there finds its pairs again."""
+        if result.estimated and not result.abstained and same_pose(result.transform, pose):
+            return result
         W = self.track.W
         sigma = max(self.floor, math.sqrt((P[0, 0] + P[1, 1] + W[0] + W[1]) / 2.0))
         found = predicted(ego, se2.apply_boxes(pose, cav), sigma, self.floor, self.params.refine_gate)
@@ -308,8 +320,12 @@ class Smoother:
     CBM over time runs twice, forward and backward (the frames in reverse order, time counted back),
     and each frame's two answers are combined by their covariances (``TrackNote.covariance``) -- the
     two-filter smoother of Fraser and Potter (1969): ``C = (C_f^-1 + C_b^-1)^-1``,
-    ``g = C (C_f^-1 g_f + C_b^-1 g_b)``, in the pose error ``g = init^-1 T``. Where the two answers
-    disagree beyond ``SMOOTHING_GATE`` standard deviations, or only one side has a covariance, the surer one stands.
+    ``g = C (C_f^-1 g_f + C_b^-1 g_b)``, in the pose error ``g = init^-1 T``. The backward pass
+    matches anew only the frames its prediction guides and none guided forward; elsewhere it takes
+    the forward pass's measurement (per-frame CBM is the same both ways, and from two predictions of
+    one error CBM pairs alike), which keeps the smoother within twice per-frame CBM's time. Where the
+    two answers disagree beyond ``SMOOTHING_GATE`` standard deviations, or only one side has a
+    covariance, the surer one stands.
 
         smoother = Smoother(CBMParams())
         for ego, cav, init, t in frames:          # in time order
@@ -322,6 +338,7 @@ class Smoother:
         self.params, self.tracking = self.forward.params, self.forward.tracking
         self.frames: list[tuple[np.ndarray, np.ndarray, np.ndarray, float, object]] = []
         self.causal: list[MatchResult] = []
+        self.measured: list[tuple[MatchResult, bool]] = []
 
     def step(self, ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndarray, time_s: float,
              agent: object = None) -> MatchResult:
@@ -329,13 +346,31 @@ class Smoother:
         result = self.forward.step(ego_boxes, cav_boxes, init, time_s, agent)
         self.frames.append((ego_boxes, cav_boxes, init, float(time_s), agent))
         self.causal.append(result)
+        self.measured.append(self.forward.measured)
         return result
 
     def smoothed(self) -> list[MatchResult]:
         """Every frame's answer from the frames before it and after it (see the module)."""
-        backward = SequenceCalibrator(self.params, self.tracking, late=False)
-        late_first = [backward.step(ego, cav, init, -t, agent) for ego, cav, init, t, agent in reversed(self.frames)]
+        backward = _Backward(self.params, self.tracking, late=False)
+        late_first = []
+        for (ego, cav, init, t, agent), measured in zip(reversed(self.frames), reversed(self.measured)):
+            backward.given = measured
+            late_first.append(backward.step(ego, cav, init, -t, agent))
         return [combined(ahead, behind) for ahead, behind in zip(self.causal, reversed(late_first))]
+
+
+class _Backward(SequenceCalibrator):
+    """``Smoother``'s backward pass: the forward pass's measurement of a frame, ``given``, stands
+    unless only the backward prediction can guide the matching there."""
+
+    given: tuple[MatchResult, bool] | None = None
+
+    def _matched(self, ego: np.ndarray, cav: np.ndarray, init: np.ndarray, params: CBMParams,
+                 prior: tuple[np.ndarray, np.ndarray] | None, time_s: float) -> MatchResult:
+        if self.given is None or (prior is not None and not self.given[1]):
+            return super()._matched(ego, cav, init, params, prior, time_s)
+        self.measured = self.given
+        return self.given[0]
 
 
 def combined(ahead: MatchResult, behind: MatchResult) -> MatchResult:

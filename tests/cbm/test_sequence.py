@@ -213,3 +213,25 @@ def test_the_smoother_starts_on_the_first_frame_where_the_causal_track_still_wat
         np.mean([error(c, t) for c, t in zip(causal[:4], trials)]) + 1e-9
     assert any(not np.array_equal(smoothed[k].transform, causal[k].transform) for k in early)
     assert [r.pairs.tolist() for r in smoothed] == [r.pairs.tolist() for r in causal]
+
+
+def test_the_smoothers_backward_pass_matches_anew_only_frames_no_forward_prediction_guided(monkeypatch):
+    """The backward pass takes the forward pass's measurement of a frame a prediction guided (a
+    second match of it would pair alike at a match's cost), and matches anew, under its own
+    prediction, the first frames that the forward pass matched alone."""
+    import cbm.sequence
+    from cbm.sequence import Smoother
+
+    trials = frames(30, drifting(16), noise=0.6)
+    smoother = Smoother(CBMParams())
+    for k, t in enumerate(trials):
+        smoother.step(t.ego_boxes, t.cav_boxes, t.init, 0.1 * k, agent="cav")
+    matched = []
+    real = cbm.sequence.match
+    monkeypatch.setattr(cbm.sequence, "match", lambda ego, *rest: matched.append(ego) or real(ego, *rest))
+    smoother.smoothed()
+    anew = [next(k for k, t in enumerate(trials) if np.array_equal(t.ego_boxes, ego)) for ego in matched]
+    guided_forward = [k for k, (_, guided) in enumerate(smoother.measured) if guided]
+    assert guided_forward and anew
+    assert not set(anew) & set(guided_forward)
+    assert set(anew) == set(range(len(trials))) - set(guided_forward) == set(range(5))
