@@ -145,9 +145,19 @@ def agree(a: Measurement, b: Measurement, rate: np.ndarray, share: float, gate: 
     standard deviations of what their noise, a drift at ``rate`` (per-axis variance per second) and
     ``share`` of the error itself allow. An error drawn anew each frame differs by as much as the
     error; one that persists by far less."""
-    size = np.array([max(math.hypot(*a.g[:2]), math.hypot(*b.g[:2]))] * 2 + [max(abs(a.g[2]), abs(b.g[2]))])
-    S = a.R + b.R + np.diag(rate * abs(a.time_s - b.time_s) + (share * size) ** 2)
-    return mahalanobis2(difference(a.g, b.g), S) <= gate ** 2
+    return bool(agreeing(a, [b], rate, share, gate)[0])
+
+
+def agreeing(a: Measurement, others: list[Measurement], rate: np.ndarray, share: float, gate: float) -> np.ndarray:
+    """``agree(a, b)`` for each ``b`` of ``others`` (booleans), computed together."""
+    g = np.array([b.g for b in others])
+    reach = np.maximum(math.hypot(*a.g[:2]), np.hypot(g[:, 0], g[:, 1]))
+    size = np.stack([reach, reach, np.maximum(abs(a.g[2]), np.abs(g[:, 2]))], axis=1)
+    spread = rate * np.abs(a.time_s - np.array([b.time_s for b in others]))[:, None] + (share * size) ** 2
+    S = a.R + np.array([b.R for b in others]) + spread[:, :, None] * np.eye(3)
+    d = a.g - g
+    d[:, 2] = se2.wrap_angle(d[:, 2])
+    return np.einsum("ki,ki->k", d, np.linalg.solve(S, d[:, :, None])[:, :, 0]) <= gate ** 2
 
 
 @dataclass
@@ -168,14 +178,22 @@ class Persistence:
         of the latest of the kept measurements with the longest chains that ``found`` agrees with."""
         chain: list[Measurement] = []
         if found is not None:
-            longest_first = sorted(((len(c), k) for k, (m, c) in enumerate(self.kept) if m is not None), reverse=True)
-            k = next((k for _, k in longest_first if agree(found, self.kept[k][0], rate, share, gate)), None)
-            chain = [] if k is None else self.kept[k][1]
-            chain = [*chain[max(0, len(chain) + 1 - self.window):], found]
+            before = self._longest_agreeing(found, rate, share, gate)
+            chain = [*before[max(0, len(before) + 1 - self.window):], found]
         self.kept.append((found, chain))
         while len(self.kept) > self.window:
             self.kept.popleft()
         return chain
+
+    def _longest_agreeing(self, found: Measurement, rate: np.ndarray, share: float, gate: float) -> list[Measurement]:
+        """The chain of the latest of the kept measurements with the longest chains that ``found``
+        agrees with (empty without one)."""
+        seen = [k for k, (m, _) in enumerate(self.kept) if m is not None]
+        if not seen:
+            return []
+        agrees = agreeing(found, [self.kept[k][0] for k in seen], rate, share, gate)
+        best = max(((len(self.kept[k][1]), k) for k, ok in zip(seen, agrees) if ok), default=None)
+        return [] if best is None else self.kept[best[1]][1]
 
 
 @dataclass
