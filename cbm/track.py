@@ -69,8 +69,7 @@ class TrackingParams:
     lost_after: int = 6
     """Frames in a row whose measurement (not abstained) the track rejected, after which it is lost;
     frames with none, or an abstained one, count nothing (the prediction stands). 3 and 12 changed no
-    answer of the scenes table: there a track is re-acquired, or its prediction grows too uncertain,
-    first."""
+    answer of the scenes table (``bench/bench_accuracy.py --scenes``)."""
     reacquire_after: int = 3
     """Rejected measurements in a row, agreeing with one another, after which the track jumps to them.
     On the scenes table 2 lost a few frames (sparse range-50: 0.007), 5 changed nothing."""
