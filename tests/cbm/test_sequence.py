@@ -235,3 +235,25 @@ def test_the_smoothers_backward_pass_matches_anew_only_frames_no_forward_predict
     assert guided_forward and anew
     assert not set(anew) & set(guided_forward)
     assert set(anew) == set(range(len(trials))) - set(guided_forward) == set(range(5))
+
+
+def test_measurements_pulled_away_frame_by_frame_leave_a_prediction_that_holds_for_seconds():
+    """A wrong pair kept over a few frames moves the measurements alike, as a fast drift would. The
+    track learns no more than ``DRIFT_MOST`` times the set drift rate from them, so that its
+    prediction still answers three seconds of frames without a measurement (before, it grew past
+    ``lost_deg`` within one)."""
+    from cbm.track import DRIFT_MOST, Measurement, Track
+
+    tracking = TrackingParams()
+    rate = np.array([tracking.drift_m ** 2, tracking.drift_m ** 2, np.radians(tracking.drift_deg) ** 2])
+    R = np.diag([0.05 ** 2, 0.05 ** 2, np.radians(0.2) ** 2])
+
+    def measured(k: int, pulled: float) -> Measurement:
+        return Measurement(np.array([2.0 + pulled, -1.0 - pulled, np.radians(3.0 + 6.0 * pulled)]), R, 0.1 * k, None)
+
+    track = Track.started([measured(k, 0.0) for k in range(5)], rate)
+    for k, pulled in enumerate([0.0, 0.3, 0.6, 0.9, 1.2], start=5):
+        track.update(measured(k, pulled), rate)
+    assert np.all(track.q <= DRIFT_MOST * rate + 1e-12)
+    _, P = track.predicted(0.9 + 3.0)
+    assert np.sqrt(P[0, 0] + P[1, 1]) <= tracking.lost_m and np.degrees(np.sqrt(P[2, 2])) <= tracking.lost_deg
