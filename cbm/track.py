@@ -52,12 +52,14 @@ class TrackingParams:
     """Mahalanobis distance (standard deviations, 3 degrees of freedom) within which a measurement
     agrees with the track or another measurement: a right one falls outside with probability 0.6 %."""
     drift_m: float = 0.5
-    """Metres per square root of a second: how fast the error may wander between two frames. On the
+    """Metres per square root of a second: how fast the error may wander between two frames (the
+    track reads a faster wander from the frames, up to twice this: ``cbm.track.DRIFT_MOST``). On the
     scenes table (``bench/bench_accuracy.py --scenes``, every row at once): 0.25 lost 0.007 of S@1
     on average over time (the shipped log's sparse drift-heavy 0.080), 1.0 gained 0.004 of S@1 but
     lost as much S@2 (sparse drift-heavy 0.045 of S@1)."""
     drift_deg: float = 1.0
-    """Degrees per square root of a second, the same for the yaw (not varied apart from ``drift_m``)."""
+    """Degrees per square root of a second, the same for the yaw (not varied apart from ``drift_m``;
+    up to twice it read from the frames)."""
     drift_share: float = 0.1
     """Share of the error itself by which two measurements of one persisting error may differ
     (white noise, a CAV's turn): an error drawn anew every frame differs by as much as the error
