@@ -30,6 +30,7 @@ from cbm import CBMParams, SequenceCalibrator, match  # noqa: E402
 from cbm.methods import METHODS  # noqa: E402
 from evaluation.conditions import CONDITIONS, condition  # noqa: E402
 from evaluation.metrics import evaluate, is_success  # noqa: E402
+from evaluation.sweep import frame_time  # noqa: E402
 from evaluation.trials import sequence_inputs  # noqa: E402
 
 HEADER = ("| scene | objects per agent | per-frame CBM ms | over time ms | smoothed ms | over time / per frame "
@@ -76,7 +77,7 @@ def trials(sequence: loaders.Sequence, scenario, sensor_range: float) -> list:
     """((time_s, cav), trial) of each frame of ``sequence`` that makes one, seed 0."""
     inputs, _ = sequence_inputs(sequence, range(len(sequence)), "range", sensor_range=sensor_range,
                                 window_s=scenario.window_s)
-    return [((float(sequence.timestamps[f.index]), f.cav), f.build(scenario, 0)) for f in inputs]
+    return [((frame_time(f), f.cav), f.build(scenario, 0)) for f in inputs]
 
 
 def row(scene: str, frames: list, rounds: int) -> str:

@@ -369,7 +369,6 @@ class _Backward(SequenceCalibrator):
                  prior: tuple[np.ndarray, np.ndarray] | None, time_s: float) -> MatchResult:
         if self.given is None or (prior is not None and not self.given[1]):
             return super()._matched(ego, cav, init, params, prior, time_s)
-        self.measured = self.given
         return self.given[0]
 
 
