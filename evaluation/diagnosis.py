@@ -17,7 +17,7 @@ import numpy as np
 from cbm import Explanation, MatchResult
 from cbm.methods import METHODS
 
-from .metrics import TrialMetrics, evaluate, is_success
+from .metrics import TrialMetrics, evaluate, is_success, rre, rte
 from .scenario import Trial
 
 SURE_FROM = 8.0
@@ -38,7 +38,7 @@ class Finding:
     code: str
     """One of: few_covisible, no_anchor, single_pair, distance_limit, heading_fold, wrong_anchor (CBM's
     rules), no_estimate, nothing_paired, noise, wrong_pairs, few_right_pairs, not_the_fit, unexplained
-    (any method's)."""
+    (any method's), track, over_time (a method over time's)."""
     message: str
     short: str = ""
     """The finding in a few words (the key numbers' reason); ``message`` when empty."""
@@ -228,7 +228,7 @@ def wrong_pairs(result: MatchResult, trial: Trial) -> Finding | None:
     if not len(right):
         return Finding("wrong_pairs", f"every one of its {len(wrong)} pairs is wrong ({names})",
                        f"every one of its {len(wrong)} pairs is wrong")
-    short = f"{len(wrong)} of its {len(right) + len(wrong)} pairs are wrong"
+    short = f"{len(wrong)} of its {len(right) + len(wrong)} pairs {'is' if len(wrong) == 1 else 'are'} wrong"
     head = f"{short} ({names})"
     if len(right) < 2:
         return Finding("wrong_pairs", f"{head}: one right pair alone fits no pose", short)
@@ -271,15 +271,48 @@ def not_the_fit(result: MatchResult, trial: Trial) -> Finding | None:
                    "its pose is not the fit of its right pairs")
 
 
+def track_moved_it(result: MatchResult, trial: Trial, metrics: TrialMetrics) -> Finding | None:
+    """A method over time failed where the frame's own measurement, which its track was given,
+    succeeds: the frames pooled with it pulled the answer away (``accepted``), or the track set it
+    aside for its prediction (any other event)."""
+    note = getattr(result, "track", None)
+    if note is None or note.measured is None or np.allclose(note.measured, result.transform):
+        return None
+    own_rre, own_rte = rre(note.measured, trial.T_true), rte(note.measured, trial.T_true)
+    if not (own_rre < LIMIT and own_rte < LIMIT):
+        return None
+    own = f"{own_rre:.2f}° / {own_rte:.2f} m"
+    if note.event == "accepted":
+        return Finding("track", f"this frame's own measurement is off by only {own}; pooled with other frames by "
+                                f"the track, the answer is off by {errors(metrics)}: the other frames pulled it away",
+                       f"the frames pooled with it pulled it off this frame's own measurement ({own})")
+    return Finding("track", f"this frame's own measurement, off by only {own}, was set aside by the track "
+                            f"({note.event}); the track's answer is off by {errors(metrics)}",
+                   f"the track set aside this frame's own measurement ({own})")
+
+
+def per_frame_succeeds(metrics: TrialMetrics, alone: TrialMetrics | None) -> Finding | None:
+    """A method over time failed on a frame that per-frame CBM (``alone``) gets right on its own: the
+    other frames made it worse (a track's prediction guided the matching, or its answer, away)."""
+    if alone is None or not is_success(alone):
+        return None
+    return Finding("over_time", f"per-frame CBM on this frame alone is off by only {errors(alone)}: over time, "
+                                f"the other frames led the answer to {errors(metrics)}",
+                   f"per-frame CBM alone gets this frame right ({errors(alone)})")
+
+
 def diagnose_failure(result: MatchResult, trial: Trial, metrics: TrialMetrics, oracle: TrialMetrics,
-                     explanation: Explanation | None = None) -> list[Finding]:
+                     explanation: Explanation | None = None, alone: TrialMetrics | None = None) -> list[Finding]:
     """Every finding on a frame: CBM's rules when the run is explained (``diagnose``), then those any
-    method's failure answers to (none for a frame that succeeded). A failed frame always has one."""
+    method's failure answers to (none for a frame that succeeded), and for a method over time those
+    that compare with the frame's own measurement and with per-frame CBM's metrics ``alone``. A
+    failed frame always has one."""
     findings = diagnose(result, trial, explanation) if explanation is not None else []
     if is_success(metrics):
         return findings
     more = [no_estimate(result), nothing_paired(result), noise_limited(metrics, oracle), wrong_pairs(result, trial),
-            few_right_pairs(result, trial, oracle), not_the_fit(result, trial)]
+            few_right_pairs(result, trial, oracle), not_the_fit(result, trial), track_moved_it(result, trial, metrics),
+            per_frame_succeeds(metrics, alone)]
     known = {f.code for f in findings}
     findings += [f for f in more if f is not None and not (f.code == "no_estimate" and "single_pair" in known)]
     if not findings:

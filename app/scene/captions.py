@@ -9,7 +9,7 @@ from typing import TYPE_CHECKING
 from evaluation.metrics import is_success
 
 from ..session.settings import ViewOptions
-from .confidence import margin_words, verdict
+from .confidence import margin_words, tracked, verdict
 from .seen import caption_line
 from .text import number
 
@@ -37,7 +37,8 @@ def caption_lines(outcome: Outcome) -> list[str]:
     m = outcome.metrics
     which = f"CAV 1 of {len(outcome.others) + 1} · " if outcome.others else ""
     words = verdict(outcome.result, is_success(m))
-    sure = [f"{words.partition(':')[0]} · {margin_words(outcome.result) or 'no evidence margin'}"] if words else []
+    own = "this frame's " if tracked(outcome.result) else ""
+    sure = [f"{words.partition(':')[0]} · {own}{margin_words(outcome.result) or 'no evidence margin'}"] if words else []
     return [f"Frame {outcome.frame_index} · {which}{'success' if is_success(m) else 'failed'}",
             f"precision {number(m.precision)} · recall {number(m.recall)}",
             f"RTE {number(m.rte, ' m')} · RRE {number(m.rre, '°')}", *sure, *caption_line(outcome)]

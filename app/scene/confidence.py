@@ -10,8 +10,9 @@ from collections.abc import Sequence
 
 from evaluation.diagnosis import SURE_FROM, Finding
 
-REASONS = ("noise", "wrong_pairs", "few_right_pairs", "wrong_anchor", "distance_limit", "heading_fold",
-           "not_the_fit", "no_anchor", "single_pair", "no_estimate", "few_covisible", "nothing_paired", "unexplained")
+REASONS = ("track", "over_time", "noise", "wrong_pairs", "few_right_pairs", "wrong_anchor", "distance_limit",
+           "heading_fold", "not_the_fit", "no_anchor", "single_pair", "no_estimate", "few_covisible", "nothing_paired",
+           "unexplained")
 """The findings that say best why a frame failed, the most telling first (the key numbers give one)."""
 
 
@@ -31,15 +32,31 @@ def reason(findings: Sequence[Finding]) -> str:
     return ranked[0].brief if ranked else ""
 
 
+TRACKED = ("accepted", "rejected", "no measurement", "re-acquired")
+"""The events of CBM over time (``cbm.result.TrackNote``) whose answer is the track's: it stands by
+it whatever this frame's own evidence margin, which then speaks of the frame's measurement only."""
+
+
+def tracked(result: object) -> bool:
+    """Whether the answer is a track's (CBM over time), not one frame's."""
+    note = getattr(result, "track", None)
+    return note is not None and note.event in TRACKED
+
+
 def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> str | None:
     """CBM's confidence against the truth, in words: sure or not (from the evidence margin, or its
-    reason for not being sure), and whether that was right; None for a method that does not verify."""
-    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False):
+    reason for not being sure), and whether that was right; for a track's answer, that CBM over time
+    stands by it and this frame's own margin; None for a method that does not verify."""
+    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
         return None
     margin = margin_words(result)
     numbers = margin or f"no evidence margin, sure from {SURE_FROM:g}"
     why = reason(findings)
     because = f"; {why}" if why and not success else ""
+    if tracked(result):
+        head = "CBM over time stands by it" if success else "CBM over time stood by it, and was wrong"
+        own = f"this frame's own {margin}" if margin else "this frame has no evidence margin of its own"
+        return f"{head}: a track of {result.track.pooled} frames; {own}{because}"
     if getattr(result, "abstained", False):
         doubt = getattr(result, "reason", "") if margin is None else ""
         head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"
@@ -51,12 +68,16 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
 
 def sure_words(result: object) -> str | None:
     """A CAV's confidence in a few words, its threshold said once elsewhere (``SURE_WORDS``): ``CBM
-    sure, margin 25.3``; None for a method that does not verify."""
-    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False):
+    sure, margin 25.3`` (a track's answer: ``CBM over time, this frame's margin 4.5``); None for a
+    method that does not verify."""
+    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
         return None
-    sure = "CBM not sure" if getattr(result, "abstained", False) else "CBM sure"
     margin = getattr(result, "evidence_margin", math.nan)
-    return sure if margin != margin else f"{sure}, margin {'∞' if math.isinf(margin) else f'{margin:.1f}'}"
+    shown = "" if margin != margin else "∞" if math.isinf(margin) else f"{margin:.1f}"
+    if tracked(result):
+        return f"CBM over time, this frame's margin {shown}" if shown else "CBM over time"
+    sure = "CBM not sure" if getattr(result, "abstained", False) else "CBM sure"
+    return f"{sure}, margin {shown}" if shown else sure
 
 
 SURE_WORDS = f"CBM sure from evidence margin {SURE_FROM:g}"

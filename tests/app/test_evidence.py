@@ -13,7 +13,7 @@ from app.session.explorer import Explorer
 from app.session.presets import discover
 from app.session.settings import Settings
 from evaluation.diagnosis import Finding
-from evaluation.metrics import TrialMetrics
+from evaluation.metrics import TrialMetrics, is_success
 
 
 def _metrics(rte: float) -> TrialMetrics:
@@ -80,3 +80,41 @@ def test_the_shipped_scene_shows_cbms_confidence(explorer: Explorer):
     assert not outcome.result.abstained and outcome.result.hypotheses >= 1
     page = key_numbers_html(outcome)
     assert "<b>CBM is sure</b>: evidence margin" in page and "sure from 8" in page and WARNING_ID not in page
+
+
+def test_a_tracks_answer_is_the_tracks_not_a_sure_cbm_below_its_threshold():
+    """CBM over time's frame 8 under drift-heavy read "CBM was sure, and wrong: evidence margin 4.5,
+    sure from 8": the track stood by an answer whose frame alone CBM was not sure of."""
+    note = SimpleNamespace(event="accepted", pooled=9)
+    tracked = SimpleNamespace(abstained=False, reason="", evidence_margin=4.46, hypotheses=3, track=note)
+    assert verdict(tracked, False, WRONG) == ("CBM over time stood by it, and was wrong: a track of 9 frames; this "
+                                              "frame's own evidence margin 4.5, sure from 8; its 4 right pairs are "
+                                              "too few for the noise")
+    assert verdict(tracked, True).startswith("CBM over time stands by it: a track of 9 frames")
+    unmeasured = SimpleNamespace(abstained=False, evidence_margin=math.nan, hypotheses=0,
+                                 track=SimpleNamespace(event="no measurement", pooled=30))
+    assert verdict(unmeasured, True) == ("CBM over time stands by it: a track of 30 frames; this frame has no "
+                                         "evidence margin of its own")
+    page = key_numbers_html(_outcome(tracked, rte=3.7, findings=WRONG))
+    assert "<b>CBM over time stood by it, and was wrong</b>: a track of 9 frames" in page and WRONG_ID in page
+    per_frame = SimpleNamespace(abstained=False, reason="", evidence_margin=12.24, hypotheses=3,
+                                track=SimpleNamespace(event="per frame", pooled=0))
+    assert verdict(per_frame, True) == "CBM is sure: evidence margin 12.2, sure from 8"
+
+
+def test_cbm_over_time_never_calls_itself_sure_below_the_threshold(explorer: Explorer):
+    """Drift-heavy frames 0-40 over time: a line that says CBM is (or was) sure shows a margin of at
+    least 8; frame 14, which per-frame CBM gets right alone, says so."""
+    settings = dataclasses.replace(discover()[0]["drift-heavy"].apply(Settings()), method="cbm-time")
+    tracked = 0
+    for frame in range(41):
+        outcome = explorer.compute(dataclasses.replace(settings, frame=frame))
+        words = confidence_rows(outcome.result, is_success(outcome.metrics), outcome.findings)[0]
+        margin = outcome.result.evidence_margin
+        if "CBM is sure" in words or "CBM was sure" in words:
+            assert margin >= 8, (frame, words)
+        tracked += words.startswith("| confidence | CBM over time")
+        if frame == 14:
+            assert not is_success(outcome.metrics)
+            assert words.endswith("; per-frame CBM alone gets this frame right (0.73° / 0.16 m) |"), words
+    assert tracked > 20

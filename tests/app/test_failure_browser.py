@@ -5,7 +5,8 @@ the labels sit beside their boxes and never overprint, the pairs left out are li
 there) and marked at the canvas's edge; going back to a frame that succeeds zooms back in; method
 *none*, *side by side* and three CAVs are framed whole; a zoom-out by a person keeps the failure's
 labels; the key numbers say CBM was sure and wrong with the reason, the glossary is one click away,
-and a number box given text says so.
+a number box given text says so, and a failed frame of CBM over time says the track stood by it and
+what per-frame CBM found alone.
 
 The scene's state is what the server sent the browser (``support.scene_state``); the camera is the
 one the browser reports. With ``CBM_UPDATE_DOCS_IMG=1`` the test also saves what it checked as
@@ -157,6 +158,21 @@ def test_a_frame_sure_and_wrong_says_so_with_its_reason(browser, server) -> None
     glossary = page.locator("#cbm-glossary")
     glossary.wait_for(timeout=30_000)
     assert "co-visible" in glossary.inner_text() and "L_ij" in glossary.inner_text()
+    page.close()
+
+
+def test_a_tracks_failed_frame_says_the_track_stood_by_it_and_what_per_frame_cbm_found(browser, server) -> None:
+    page = ui.open_first_screen(browser, server)
+    tab = ui.session(server, 1)
+    ui.close_notifications(page)
+    ui.load_preset(page, "drift-heavy")
+    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 120)
+    ui.go_to_frame(page, tab, 14)
+    keys = page.locator("#cbm-key-numbers")
+    ui.wait_until(lambda: "CBM over time stood by it, and was wrong" in keys.inner_text(), 120)
+    assert "a track of 15 frames; this frame's own evidence margin" in keys.inner_text()
+    assert "per-frame CBM alone gets this frame right (0.73° / 0.16 m)" in keys.inner_text()
+    assert "CBM was sure" not in keys.inner_text()
     page.close()
 
 

@@ -1,7 +1,11 @@
 """Every failed frame has a diagnosis (issue 47, item 3): the rules any method's failure answers to,
 on constructed cases (the shipped scene's failed frames: ``tests/app/test_failure_picture.py``)."""
-import numpy as np
+import dataclasses
 
+import numpy as np
+import pytest
+
+from cbm import TrackNote, se2
 from cbm.hypotheses import EVIDENCE_MARGIN
 from cbm.methods import METHODS
 from evaluation.diagnosis import SURE_FROM, diagnose_failure, least_squares_on
@@ -19,9 +23,18 @@ def given(trial, pairs):
     return METHODS["oracle"](trial.ego_boxes, trial.cav_boxes, trial.init, true_pairs=np.asarray(pairs).reshape(-1, 2))
 
 
-def findings(trial, result):
+def findings(trial, result, alone=None):
     oracle = least_squares_on(trial, trial.gt_pairs)
-    return diagnose_failure(result, trial, evaluate(result, trial), oracle)
+    return diagnose_failure(result, trial, evaluate(result, trial), oracle, alone=alone)
+
+
+def tracked(trial, event, measured):
+    """CBM over time's answer on ``trial``, 3 degrees off the truth, reached by ``event`` from the
+    frame's own ``measured`` transform."""
+    right = given(trial, trial.gt_pairs)
+    off = se2.make(0.0, 0.0, np.radians(3.0)) @ trial.T_true
+    note = TrackNote(event=event, persists=True, since_s=0.0, pooled=12, predicted=off, measured=measured, answer=off)
+    return dataclasses.replace(right, transform=off, track=note)
 
 
 def test_the_sure_threshold_is_cbms_own():
@@ -63,3 +76,31 @@ def test_nothing_paired_and_no_estimate_are_findings_too():
     trial = trial_of(street_scene(30, np.random.default_rng(4)), eta=0.6, seed=1)
     none = METHODS["none"](trial.ego_boxes, trial.cav_boxes, trial.init)
     assert [f.code for f in findings(trial, none)] == ["nothing_paired"]
+
+
+@pytest.mark.parametrize("event, says", [
+    ("accepted", "pooled with other frames by the track, the answer is off by 3.0"),
+    ("rejected", "was set aside by the track (rejected); the track's answer is off by 3.0")])
+def test_a_track_that_pulled_its_answer_off_a_right_measurement_says_so(event, says):
+    trial = trial_of(street_scene(40, np.random.default_rng(5)), eta=0.6, sigma_p=0.1, seed=3)
+    result = tracked(trial, event, measured=trial.T_true)
+    found = {f.code: f for f in findings(trial, result)}
+    assert says in found["track"].message and "this frame's own measurement" in found["track"].message
+    assert found["track"].brief.endswith("(0.00° / 0.00 m)")
+
+
+def test_a_track_whose_own_measurement_failed_too_has_no_track_finding():
+    trial = trial_of(street_scene(40, np.random.default_rng(5)), eta=0.6, sigma_p=0.1, seed=3)
+    wrong = se2.make(2.0, 0.0, 0.0) @ trial.T_true
+    assert "track" not in {f.code for f in findings(trial, tracked(trial, "accepted", measured=wrong))}
+    assert "track" not in {f.code for f in findings(trial, tracked(trial, "no measurement", measured=None))}
+
+
+def test_over_time_failing_where_per_frame_cbm_succeeds_says_so():
+    trial = trial_of(street_scene(40, np.random.default_rng(5)), eta=0.6, sigma_p=0.1, seed=3)
+    result = tracked(trial, "no measurement", measured=None)
+    alone = evaluate(given(trial, trial.gt_pairs), trial)
+    found = {f.code: f for f in findings(trial, result, alone)}
+    told = f"per-frame CBM on this frame alone is off by only {alone.rre:.2f}° / {alone.rte:.2f} m: over time"
+    assert found["over_time"].message.startswith(told) and found["over_time"].message.endswith("3.00° / 0.00 m")
+    assert "over_time" not in {f.code for f in findings(trial, result, evaluate(result, trial))}
