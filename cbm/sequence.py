@@ -307,7 +307,9 @@ def match_first_step(ego_boxes: np.ndarray, cav_boxes: np.ndarray, init: np.ndar
 
 
 SMOOTHING_GATE = 3.5
-"""Standard deviations (3 degrees of freedom) within which ``Smoother``'s two directions' answers are one."""
+"""Standard deviations (3 degrees of freedom) within which ``Smoother``'s two directions' answers are
+one: ``TrackingParams.gate``'s. On the scenes table (seeds 0-1) 3.0 changed no answer, 4.5 lost 0.0002
+of S@1 and 0.0006 of S@2 on average."""
 
 
 class Smoother:
