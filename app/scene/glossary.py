@@ -24,6 +24,9 @@ GLOSSARY = {
               f"runner-up's.",
     "abstain": f"CBM says it is not sure: fewer than 3 objects could be paired, or the evidence margin is under "
                f"{SURE_FROM:g}. Its pose is still shown and scored.",
+    "track": "CBM over time's estimate of the CAV's pose error, pooled from the frames whose own answer "
+             "agreed with it. While it holds, it answers every frame, even one CBM alone is not sure of (the "
+             "frame's own margin is then shown beside), and never abstains.",
     "oracle": "least squares on the true pairs: the pose a method would reach knowing which pairs are right, "
               "so its errors are the noise's share. A reference, not a bound (a robust fit can beat it).",
     "precision / recall": "the share of the pairs matched that are right / the share of the co-visible objects "

@@ -8,6 +8,7 @@ from types import SimpleNamespace
 from app.panels.keynumbers import WARNING_ID, WRONG_ID, key_numbers_html
 from app.scene.captions import caption_lines
 from app.scene.confidence import verdict
+from app.scene.glossary import GLOSSARY
 from app.scene.text import confidence_rows, metrics_markdown
 from app.session.explorer import Explorer
 from app.session.presets import discover
@@ -100,6 +101,7 @@ def test_a_tracks_answer_is_the_tracks_not_a_sure_cbm_below_its_threshold():
     per_frame = SimpleNamespace(abstained=False, reason="", evidence_margin=12.24, hypotheses=3,
                                 track=SimpleNamespace(event="per frame", pooled=0))
     assert verdict(per_frame, True) == "CBM is sure: evidence margin 12.2, sure from 8"
+    assert "never abstains" in GLOSSARY["track"], "the Words tab says what a track's answer is"
 
 
 def test_cbm_over_time_never_calls_itself_sure_below_the_threshold(explorer: Explorer):

@@ -163,10 +163,7 @@ def test_a_frame_sure_and_wrong_says_so_with_its_reason(browser, server) -> None
 
 def test_a_tracks_failed_frame_says_the_track_stood_by_it_and_what_per_frame_cbm_found(browser, server) -> None:
     page = ui.open_first_screen(browser, server)
-    tab = ui.session(server, 1)
-    ui.close_notifications(page)
-    ui.load_preset(page, "drift-heavy")
-    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 120)
+    tab = ui.over_time_tab(page, server)
     ui.go_to_frame(page, tab, 14)
     keys = page.locator("#cbm-key-numbers")
     ui.wait_until(lambda: "CBM over time stood by it, and was wrong" in keys.inner_text(), 120)

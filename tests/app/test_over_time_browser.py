@@ -35,10 +35,7 @@ def held_at_third(steps: list[int], release: threading.Event):
 
 def test_choosing_cbm_over_time_and_jumping_ahead_shows_the_frames_pooled(browser, server) -> None:
     page = ui.open_page(browser, server)
-    tab = ui.session(server, 1)
-    ui.close_notifications(page)
-    ui.load_preset(page, "drift-heavy")
-    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    tab = ui.over_time_tab(page, server)
     ui.go_to_frame(page, tab, 25)
     ui.wait_until(lambda: "answer from" in ui.metrics(page) or "this frame alone" in ui.metrics(page), 60)
     assert "over time" in ui.metrics(page) and "per-frame CBM (this frame)" in ui.metrics(page)
@@ -53,10 +50,7 @@ def test_the_stop_button_stops_a_jump_ahead_and_keeps_the_frames_done(browser, s
     clicked, steps = threading.Event(), []
     monkeypatch.setattr(Runs, "_step", held_at_third(steps, clicked))
     page = ui.open_page(browser, server)
-    tab = ui.session(server, 1)
-    ui.close_notifications(page)
-    ui.load_preset(page, "drift-heavy")
-    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    tab = ui.over_time_tab(page, server)
     steps.clear()
     ui.label(page, "frame").locator("xpath=ancestor::div[contains(@class, 'mantine-Flex-root')][1]") \
         .locator("input.mantine-NumberInput-input").fill("49")
@@ -83,10 +77,7 @@ def test_an_edit_deep_in_the_sequence_shows_per_frame_cbm_at_once_marked_until_t
     with per-frame CBM's answer, marked, so the preview is seen however busy the machine."""
     seen, steps = threading.Event(), []
     page = ui.open_page(browser, server)
-    tab = ui.session(server, 1)
-    ui.close_notifications(page)
-    ui.load_preset(page, "drift-heavy")
-    ui.wait_until(lambda: tab.last.settings.method == "cbm-time", 60)
+    tab = ui.over_time_tab(page, server)
     ui.go_to_frame(page, tab, 49)
     monkeypatch.setattr(Runs, "_step", held_at_third(steps, seen))
     page.get_by_role("tab", name="Scenario").click()

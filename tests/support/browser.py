@@ -140,6 +140,15 @@ def load_preset(page, name: str) -> None:
     page.get_by_role("button", name="load", exact=True).click()
 
 
+def over_time_tab(page, server):
+    """The page's tab session once the *drift-heavy* preset is loaded and CBM over time computes."""
+    tab = session(server, 1)
+    close_notifications(page)
+    load_preset(page, "drift-heavy")
+    wait_until(lambda: tab.last.settings.method == "cbm-time", 120)
+    return tab
+
+
 def close_notifications(page) -> None:
     for button in page.locator(".mantine-Notification-root button").all():
         button.click()
