@@ -271,24 +271,33 @@ def not_the_fit(result: MatchResult, trial: Trial) -> Finding | None:
                    "its pose is not the fit of its right pairs")
 
 
-def track_moved_it(result: MatchResult, trial: Trial, metrics: TrialMetrics) -> Finding | None:
-    """A method over time failed where the frame's own measurement, which its track was given,
-    succeeds: the frames pooled with it pulled the answer away (``accepted``), or the track set it
-    aside for its prediction (any other event)."""
+def track_answered(result: MatchResult, trial: Trial, metrics: TrialMetrics) -> Finding | None:
+    """A method over time failed with its track's answer: its prediction, where the frame gave it no
+    measurement or it set the frame's measurement aside; or pooled off the frame's own measurement,
+    which succeeds (``accepted``). None where the answer is the frame's own, or was pooled from a
+    measurement that fails too (the frame's own findings say why)."""
     note = getattr(result, "track", None)
-    if note is None or note.measured is None or np.allclose(note.measured, result.transform):
+    if note is None:
+        return None
+    if note.event == "no measurement":
+        return Finding("track", f"this frame gave the track no measurement of its own (CBM paired fewer than 3 "
+                                f"objects): the answer is the track's prediction from the other frames, off by "
+                                f"{errors(metrics)}", "the answer is the track's prediction: this frame gave it "
+                                                      "no measurement")
+    if note.measured is None or np.allclose(note.measured, result.transform):
         return None
     own_rre, own_rte = rre(note.measured, trial.T_true), rte(note.measured, trial.T_true)
-    if not (own_rre < LIMIT and own_rte < LIMIT):
-        return None
     own = f"{own_rre:.2f}° / {own_rte:.2f} m"
+    right = own_rre < LIMIT and own_rte < LIMIT
     if note.event == "accepted":
-        return Finding("track", f"this frame's own measurement is off by only {own}; pooled with other frames by "
-                                f"the track, the answer is off by {errors(metrics)}: the other frames pulled it away",
-                       f"the frames pooled with it pulled it off this frame's own measurement ({own})")
-    return Finding("track", f"this frame's own measurement, off by only {own}, was set aside by the track "
-                            f"({note.event}); the track's answer is off by {errors(metrics)}",
-                   f"the track set aside this frame's own measurement ({own})")
+        return None if not right else Finding(
+            "track", f"this frame's own measurement is off by only {own}; pooled with other frames by the track, "
+                     f"the answer is off by {errors(metrics)}: the other frames pulled it away",
+            f"the frames pooled with it pulled it off this frame's own measurement ({own})")
+    only = "only " if right else ""
+    return Finding("track", f"the track set aside this frame's own measurement, off by {only}{own} ({note.event}): "
+                            f"the answer is its prediction from the other frames, off by {errors(metrics)}",
+                   f"the track set aside this frame's own measurement ({own}) for its prediction")
 
 
 def per_frame_succeeds(metrics: TrialMetrics, alone: TrialMetrics | None) -> Finding | None:
@@ -311,7 +320,7 @@ def diagnose_failure(result: MatchResult, trial: Trial, metrics: TrialMetrics, o
     if is_success(metrics):
         return findings
     more = [no_estimate(result), nothing_paired(result), noise_limited(metrics, oracle), wrong_pairs(result, trial),
-            few_right_pairs(result, trial, oracle), not_the_fit(result, trial), track_moved_it(result, trial, metrics),
+            few_right_pairs(result, trial, oracle), not_the_fit(result, trial), track_answered(result, trial, metrics),
             per_frame_succeeds(metrics, alone)]
     known = {f.code for f in findings}
     findings += [f for f in more if f is not None and not (f.code == "no_estimate" and "single_pair" in known)]

@@ -80,20 +80,25 @@ def test_nothing_paired_and_no_estimate_are_findings_too():
 
 @pytest.mark.parametrize("event, says", [
     ("accepted", "pooled with other frames by the track, the answer is off by 3.0"),
-    ("rejected", "was set aside by the track (rejected); the track's answer is off by 3.0")])
+    ("rejected", "the track set aside this frame's own measurement, off by only 0.00° / 0.00 m (rejected): the "
+                 "answer is its prediction from the other frames, off by 3.0")])
 def test_a_track_that_pulled_its_answer_off_a_right_measurement_says_so(event, says):
     trial = trial_of(street_scene(40, np.random.default_rng(5)), eta=0.6, sigma_p=0.1, seed=3)
     result = tracked(trial, event, measured=trial.T_true)
     found = {f.code: f for f in findings(trial, result)}
     assert says in found["track"].message and "this frame's own measurement" in found["track"].message
-    assert found["track"].brief.endswith("(0.00° / 0.00 m)")
+    assert "(0.00° / 0.00 m)" in found["track"].brief
 
 
-def test_a_track_whose_own_measurement_failed_too_has_no_track_finding():
+def test_a_track_answer_is_blamed_where_it_was_the_prediction_not_where_it_pooled_a_wrong_measurement():
     trial = trial_of(street_scene(40, np.random.default_rng(5)), eta=0.6, sigma_p=0.1, seed=3)
     wrong = se2.make(2.0, 0.0, 0.0) @ trial.T_true
     assert "track" not in {f.code for f in findings(trial, tracked(trial, "accepted", measured=wrong))}
-    assert "track" not in {f.code for f in findings(trial, tracked(trial, "no measurement", measured=None))}
+    set_aside = {f.code: f for f in findings(trial, tracked(trial, "rejected", measured=wrong))}
+    assert set_aside["track"].brief == ("the track set aside this frame's own measurement (0.00° / 2.00 m) for its "
+                                        "prediction")
+    unmeasured = {f.code: f for f in findings(trial, tracked(trial, "no measurement", measured=None))}
+    assert unmeasured["track"].brief == "the answer is the track's prediction: this frame gave it no measurement"
 
 
 def test_over_time_failing_where_per_frame_cbm_succeeds_says_so():
