@@ -45,8 +45,9 @@ def tracked(result: object) -> bool:
 
 def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> str | None:
     """CBM's confidence against the truth, in words: sure or not (from the evidence margin, or its
-    reason for not being sure), and whether that was right; for a track's answer, that CBM over time
-    stands by it and this frame's own margin; None for a method that does not verify."""
+    reason for not being sure), and whether that was right; for a track's answer (CBM over time, and
+    the smoother's), that the track stands by it and this frame's own margin; None for a method that
+    does not verify."""
     if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
         return None
     margin = margin_words(result)
@@ -54,9 +55,9 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
     why = reason(findings)
     because = f"; {why}" if why and not success else ""
     if tracked(result):
-        head = "CBM over time stands by it" if success else "CBM over time stood by it, and was wrong"
+        head = "The track stands by it" if success else "The track stood by it, and was wrong"
         own = f"this frame's own {margin}" if margin else "this frame has no evidence margin of its own"
-        return f"{head}: a track of {result.track.pooled} frames; {own}{because}"
+        return f"{head}: {result.track.pooled} frames pooled; {own}{because}"
     if getattr(result, "abstained", False):
         doubt = getattr(result, "reason", "") if margin is None else ""
         head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"
@@ -68,14 +69,14 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
 
 def sure_words(result: object) -> str | None:
     """A CAV's confidence in a few words, its threshold said once elsewhere (``SURE_WORDS``): ``CBM
-    sure, margin 25.3`` (a track's answer: ``CBM over time, this frame's margin 4.5``); None for a
+    sure, margin 25.3`` (a track's answer: ``the track's answer, this frame's margin 4.5``); None for a
     method that does not verify."""
     if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
         return None
     margin = getattr(result, "evidence_margin", math.nan)
     shown = "" if margin != margin else "∞" if math.isinf(margin) else f"{margin:.1f}"
     if tracked(result):
-        return f"CBM over time, this frame's margin {shown}" if shown else "CBM over time"
+        return f"the track's answer, this frame's margin {shown}" if shown else "the track's answer"
     sure = "CBM not sure" if getattr(result, "abstained", False) else "CBM sure"
     return f"{sure}, margin {shown}" if shown else sure
 

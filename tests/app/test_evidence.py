@@ -88,16 +88,16 @@ def test_a_tracks_answer_is_the_tracks_not_a_sure_cbm_below_its_threshold():
     sure from 8": the track stood by an answer whose frame alone CBM was not sure of."""
     note = SimpleNamespace(event="accepted", pooled=9)
     tracked = SimpleNamespace(abstained=False, reason="", evidence_margin=4.46, hypotheses=3, track=note)
-    assert verdict(tracked, False, WRONG) == ("CBM over time stood by it, and was wrong: a track of 9 frames; this "
+    assert verdict(tracked, False, WRONG) == ("The track stood by it, and was wrong: 9 frames pooled; this "
                                               "frame's own evidence margin 4.5, sure from 8; its 4 right pairs are "
                                               "too few for the noise")
-    assert verdict(tracked, True).startswith("CBM over time stands by it: a track of 9 frames")
+    assert verdict(tracked, True).startswith("The track stands by it: 9 frames pooled")
     unmeasured = SimpleNamespace(abstained=False, evidence_margin=math.nan, hypotheses=0,
                                  track=SimpleNamespace(event="no measurement", pooled=30))
-    assert verdict(unmeasured, True) == ("CBM over time stands by it: a track of 30 frames; this frame has no "
+    assert verdict(unmeasured, True) == ("The track stands by it: 30 frames pooled; this frame has no "
                                          "evidence margin of its own")
     page = key_numbers_html(_outcome(tracked, rte=3.7, findings=WRONG))
-    assert "<b>CBM over time stood by it, and was wrong</b>: a track of 9 frames" in page and WRONG_ID in page
+    assert "<b>The track stood by it, and was wrong</b>: 9 frames pooled" in page and WRONG_ID in page
     per_frame = SimpleNamespace(abstained=False, reason="", evidence_margin=12.24, hypotheses=3,
                                 track=SimpleNamespace(event="per frame", pooled=0))
     assert verdict(per_frame, True) == "CBM is sure: evidence margin 12.2, sure from 8"
@@ -115,7 +115,7 @@ def test_cbm_over_time_never_calls_itself_sure_below_the_threshold(explorer: Exp
         margin = outcome.result.evidence_margin
         if "CBM is sure" in words or "CBM was sure" in words:
             assert margin >= 8, (frame, words)
-        tracked += words.startswith("| confidence | CBM over time")
+        tracked += words.startswith("| confidence | The track")
         if frame == 14:
             assert not is_success(outcome.metrics)
             assert words.endswith("; per-frame CBM alone gets this frame right (0.73° / 0.16 m) |"), words
