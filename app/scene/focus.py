@@ -14,6 +14,7 @@ import numpy as np
 from . import framing
 from .deciding import Mark, corners
 from .framing import Area, Canvas, Spot
+from .geometry import CAR_SIZE
 from .labelling import GAP_PX, Bounds, Laid, screen_bounds, size_px
 from .words import plural
 
@@ -50,10 +51,22 @@ def beside(drawing: Drawing, name: str, m: float) -> Spot:
     return Spot(x + height / 2 * m, y - across - GAP_PX * m, width, height)
 
 
+AGENT_REACH = math.hypot(*CAR_SIZE[:2]) / 2
+"""Metres from an agent's centre that a car of ``geometry.CAR_SIZE`` reaches, whatever its heading: the
+camera frames the square this far around it, so that a car at the edge of the view shows whole (the
+CAV of *drift-heavy*'s frame 14 showed cut by the canvas's edge when only its centre was framed)."""
+
+
+def agent_spots(drawing: Drawing) -> list[Spot]:
+    """The corners of the square ``AGENT_REACH`` around each agent (ego and CAV of every panel)."""
+    r = AGENT_REACH
+    return [Spot(x + dx, y + dy) for x, y in drawing.agents for dx in (-r, r) for dy in (-r, r)]
+
+
 def base_spots(drawing: Drawing, m: float) -> list[Spot]:
     """The agents and the labels that name no pair (the agents', the layout's titles), beside their things."""
     named = {label for mark in drawing.marks for label in mark.labels}
-    return [Spot(x, y) for x, y in drawing.agents] + \
+    return agent_spots(drawing) + \
         [beside(drawing, name, m) for name in drawing.labels if name not in named and name in drawing.kept]
 
 
@@ -109,7 +122,7 @@ def framed_spots(drawing: Drawing, shown: list[Mark], away: list[Mark], laid: La
     """What the camera frames once the labels are laid out: the agents, the shown pairs' boxes, and
     every label laid out but those of the pairs away."""
     gone = {label for mark in away for label in mark.labels}
-    spots = [Spot(x, y) for x, y in drawing.agents]
+    spots = agent_spots(drawing)
     spots += [Spot(float(x), float(y)) for mark in shown for x, y in mark.points]
     spots += [framing.label_spot(text, p[0], p[1], drawing.label_px) for name, (text, p) in laid.labels.items()
               if name not in gone]

@@ -26,7 +26,7 @@ from app.scene.view import LEADERS
 from app.session.explorer import Explorer
 from support import browser as ui
 from support import pixels
-from support.scene_state import box_pixels, floating_panels, label_boxes, meets, on_screen, overprinted, settled
+from support.scene_state import box_pixels, cars, floating_panels, label_boxes, meets, on_screen, overprinted, settled
 
 pytestmark = [pytest.mark.browser, ui.requires_chromium]
 HEAVY = (45, 34, 7, 22)
@@ -88,7 +88,7 @@ def assert_explains(page, tab, readable: bool = True) -> None:
     many edge markers and listed buttons as the pairs left out need."""
     settled(page, tab)
     assert metres_per_px(tab) <= focus.READABLE * 1.1 or not readable, "a car reads as a box"
-    assert on_screen(np.array(tab.last_drawing.agents), tab, page).all(), "the ego and every CAV"
+    assert on_screen(cars(tab.last_drawing), tab, page).all(), "the ego's and every CAV's whole car"
     away = {mark.key for mark in tab.stage.aim.away}
     shown = [mark for mark in tab.last_drawing.marks if mark.key not in away]
     assert shown and all(on_screen(mark.points, tab, page).all() for mark in shown)
@@ -170,6 +170,8 @@ def test_a_tracks_failed_frame_says_the_track_stood_by_it_and_what_per_frame_cbm
     assert "15 frames pooled; this frame's own evidence margin" in keys.inner_text()
     assert "per-frame CBM alone gets this frame right (0.73° / 0.16 m)" in keys.inner_text()
     assert "CBM was sure" not in keys.inner_text()
+    settled(page, tab)
+    assert on_screen(cars(tab.last_drawing), tab, page).all(), "the ego's and the CAV's whole car (the CAV's was cut)"
     page.close()
 
 

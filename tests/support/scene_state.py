@@ -55,14 +55,23 @@ def canvas_box(page) -> Box:
 
 
 def on_screen(points, tab, page) -> np.ndarray:
-    """(N,) whether each ground point (N, 2) shows on the canvas and under no floating panel."""
-    where = pixels.project(tab.client.camera, np.c_[np.asarray(points, float).reshape(-1, 2), np.zeros(len(points))])
+    """(N,) whether each ground point (N, 2), or point (N, 3), shows on the canvas and under no floating panel."""
+    points = np.asarray(points, float)
+    if not (points.ndim == 2 and points.shape[1] == 3):
+        points = np.c_[points.reshape(-1, 2), np.zeros(points.size // 2)]
+    where = pixels.project(tab.client.camera, points)
     left, top, right, bottom = canvas_box(page)
     shown = (where[:, 0] >= left) & (where[:, 0] <= right) & (where[:, 1] >= top) & (where[:, 1] <= bottom)
     for panel in floating_panels(page):
         shown &= ~((where[:, 0] > panel[0]) & (where[:, 0] < panel[2]) & (where[:, 1] > panel[1])
                    & (where[:, 1] < panel[3]))
     return shown
+
+
+def cars(drawing) -> np.ndarray:
+    """(N, 3) the corners of the ego's and every CAV's car as drawn (not the CAV before calibration)."""
+    return np.concatenate([mesh.vertices for key, mesh in drawing.meshes.items()
+                           if key == "ego_vehicle" or (key.startswith("cav_vehicle") and "before" not in key)])
 
 
 def box_pixels(tab, page) -> float:
