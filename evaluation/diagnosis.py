@@ -9,6 +9,7 @@ never by row index.
 """
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -17,7 +18,7 @@ import numpy as np
 from cbm import Explanation, MatchResult
 from cbm.methods import METHODS
 
-from .metrics import TrialMetrics, evaluate, is_success, rre, rte
+from .metrics import TrialMetrics, evaluate, is_success
 from .scenario import Trial
 
 SURE_FROM = 8.0
@@ -286,9 +287,8 @@ def track_answered(result: MatchResult, trial: Trial, metrics: TrialMetrics) -> 
                                                       "no measurement")
     if note.measured is None or np.allclose(note.measured, result.transform):
         return None
-    own_rre, own_rte = rre(note.measured, trial.T_true), rte(note.measured, trial.T_true)
-    own = f"{own_rre:.2f}° / {own_rte:.2f} m"
-    right = own_rre < LIMIT and own_rte < LIMIT
+    measured = evaluate(dataclasses.replace(result, transform=note.measured), trial)
+    own, right = errors(measured), is_success(measured)
     if note.event == "accepted":
         return None if not right else Finding(
             "track", f"this frame's own measurement is off by only {own}; pooled with other frames by the track, "
@@ -300,10 +300,10 @@ def track_answered(result: MatchResult, trial: Trial, metrics: TrialMetrics) -> 
                    f"the track set aside this frame's own measurement ({own}) for its prediction")
 
 
-def per_frame_succeeds(metrics: TrialMetrics, alone: TrialMetrics | None) -> Finding | None:
-    """A method over time failed on a frame that per-frame CBM (``alone``) gets right on its own: the
-    other frames made it worse (a track's prediction guided the matching, or its answer, away)."""
-    if alone is None or not is_success(alone):
+def per_frame_succeeds(metrics: TrialMetrics, trial: Trial, alone: MatchResult | None) -> Finding | None:
+    """A method over time failed on a frame that per-frame CBM (``alone``, its result) gets right on its
+    own: the other frames made it worse (a track's prediction guided the matching, or its answer, away)."""
+    if alone is None or not is_success(alone := evaluate(alone, trial)):
         return None
     return Finding("over_time", f"per-frame CBM on this frame alone is off by only {errors(alone)}: over time, "
                                 f"the other frames led the answer to {errors(metrics)}",
@@ -311,17 +311,17 @@ def per_frame_succeeds(metrics: TrialMetrics, alone: TrialMetrics | None) -> Fin
 
 
 def diagnose_failure(result: MatchResult, trial: Trial, metrics: TrialMetrics, oracle: TrialMetrics,
-                     explanation: Explanation | None = None, alone: TrialMetrics | None = None) -> list[Finding]:
+                     explanation: Explanation | None = None, alone: MatchResult | None = None) -> list[Finding]:
     """Every finding on a frame: CBM's rules when the run is explained (``diagnose``), then those any
     method's failure answers to (none for a frame that succeeded), and for a method over time those
-    that compare with the frame's own measurement and with per-frame CBM's metrics ``alone``. A
+    that compare with the frame's own measurement and with per-frame CBM's result ``alone``. A
     failed frame always has one."""
     findings = diagnose(result, trial, explanation) if explanation is not None else []
     if is_success(metrics):
         return findings
     more = [no_estimate(result), nothing_paired(result), noise_limited(metrics, oracle), wrong_pairs(result, trial),
             few_right_pairs(result, trial, oracle), not_the_fit(result, trial), track_answered(result, trial, metrics),
-            per_frame_succeeds(metrics, alone)]
+            per_frame_succeeds(metrics, trial, alone)]
     known = {f.code for f in findings}
     findings += [f for f in more if f is not None and not (f.code == "no_estimate" and "single_pair" in known)]
     if not findings:

@@ -43,12 +43,17 @@ def tracked(result: object) -> bool:
     return note is not None and note.event in TRACKED
 
 
+def has_confidence(result: object) -> bool:
+    """Whether the result has a confidence to show: CBM verified its pose or abstained, or a track answered."""
+    return bool(getattr(result, "hypotheses", 0) or getattr(result, "abstained", False) or tracked(result))
+
+
 def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> str | None:
     """CBM's confidence against the truth, in words: sure or not (from the evidence margin, or its
     reason for not being sure), and whether that was right; for a track's answer (CBM over time, and
     the smoother's), that the track stands by it and this frame's own margin; None for a method that
     does not verify."""
-    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
+    if not has_confidence(result):
         return None
     margin = margin_words(result)
     numbers = margin or f"no evidence margin, sure from {SURE_FROM:g}"
@@ -71,7 +76,7 @@ def sure_words(result: object) -> str | None:
     """A CAV's confidence in a few words, its threshold said once elsewhere (``SURE_WORDS``): ``CBM
     sure, margin 25.3`` (a track's answer: ``the track's answer, this frame's margin 4.5``); None for a
     method that does not verify."""
-    if not getattr(result, "hypotheses", 0) and not getattr(result, "abstained", False) and not tracked(result):
+    if not has_confidence(result):
         return None
     margin = getattr(result, "evidence_margin", math.nan)
     shown = "" if margin != margin else "∞" if math.isinf(margin) else f"{margin:.1f}"

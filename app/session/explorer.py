@@ -274,8 +274,7 @@ class Explorer:
         else:
             result = _run(settings, trial, inputs, [other.trial for other in others], self.reuse)
         metrics = evaluate(result, trial)
-        findings = diagnose_failure(result, trial, metrics, limit, result.explanation,
-                                    None if alone is None else evaluate(alone, trial))
+        findings = diagnose_failure(result, trial, metrics, limit, result.explanation, alone)
         world_to_ego = se2.inverse(trial.ego_pose)
         objects = inputs.trial
         return Outcome(settings=settings, frame_index=index, ego_id=objects.get("ego_id"), cav_id=objects.get("cav_id"),
