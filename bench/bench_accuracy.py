@@ -45,7 +45,7 @@ sys.path.insert(0, str(ROOT))
 
 import loaders  # noqa: E402
 from evaluation.cli import parse_frames  # noqa: E402
-from evaluation.conditions import CONDITIONS  # noqa: E402
+from evaluation.conditions import CONDITIONS, SPARSE_RANGE  # noqa: E402
 from evaluation.run import frame_inputs  # noqa: E402
 from evaluation.scenario import ScenarioParams  # noqa: E402
 from evaluation.sweep import Sweep, run, summarise  # noqa: E402
@@ -66,7 +66,6 @@ SCENES = {
     "synthetic": tuple((f"synthetic:120:seed={s}", "0:50") for s in range(3)),
 }
 """The scenes of ``--scenes``, each also sparse (``SPARSE_RANGE``)."""
-SPARSE_RANGE = 25.0
 SCENE_CONDITIONS = ("drift-heavy", "drift-clutter", "drift-bigloc", "range-50")
 SCENE_METHODS = {"cbm": "per frame", "oracle": "oracle", "cbm-time": "over time", "cbm-smooth": "smoothed"}
 REFERENCES = {"oracle": "oracle (least squares on the true pairs)"}

@@ -9,7 +9,8 @@ and is the one way to run CBM: ``reuse=`` keeps what a threshold edit does not c
 (``Cancelled``). ``cbm.SequenceCalibrator`` calibrates a sequence frame after frame; ``cbm.methods``
 holds every method, CBM's peers included. What this package offers anyone outside it is named here:
 
-- running: ``match``, ``CBMParams`` (``MOST``: the largest value of each field), ``MatchResult``,
+- running: ``match``, ``CBMParams`` (``MOST``: the largest value of each field), ``MatchResult``
+  (``MIN_SHARED``: the fewest pairs of a pose CBM stands by),
   ``Fit``, ``robust_fit``, ``Explanation``, ``AnchorDetail``, ``Reuse``, ``SequenceCalibrator``,
   ``TrackingParams``, ``TrackNote``, ``se2``;
 - stopping: ``stoppable`` (a block in which CBM asks whether to stop), ``Cancelled``;
@@ -25,6 +26,7 @@ from .engine.threads import Cancelled, stoppable
 from .engine.threads import trim_freed as return_memory
 from .estimate import robust_fit
 from .explain import AnchorDetail, Explanation
+from .hypotheses import MIN_SHARED
 from .params import MOST, CBMParams
 from .pipeline import match
 from .result import Fit, MatchResult, TrackNote
@@ -42,7 +44,7 @@ def __getattr__(name: str):
     raise AttributeError(f"module 'cbm' has no attribute {name!r}")
 
 
-__all__ = ["COMPILE_LOCK", "INTERPRETED_UP_TO", "MOST", "AnchorDetail", "CBMParams", "Cancelled", "CompileFailed",
-           "Explanation", "Fit", "MatchResult", "Reuse", "SequenceCalibrator", "TrackNote", "TrackingParams",
-           "compile_side_by_side", "guard_compiles", "interpreted", "kernels_cached", "load_kernels", "match",
-           "return_memory", "robust_fit", "se2", "stoppable", "warm_up"]
+__all__ = ["COMPILE_LOCK", "INTERPRETED_UP_TO", "MIN_SHARED", "MOST", "AnchorDetail", "CBMParams", "Cancelled",
+           "CompileFailed", "Explanation", "Fit", "MatchResult", "Reuse", "SequenceCalibrator", "TrackNote",
+           "TrackingParams", "compile_side_by_side", "guard_compiles", "interpreted", "kernels_cached",
+           "load_kernels", "match", "return_memory", "robust_fit", "se2", "stoppable", "warm_up"]

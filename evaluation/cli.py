@@ -27,8 +27,8 @@ Defaults are the app's: the shipped ``default`` preset's scenario (the range pro
 ``--preset`` starts from another preset instead, a shipped one by name or a file the app saved or
 exported (``evaluation.presets``); ``--condition NAME`` takes the scenario of a named test condition
 (``evaluation.conditions``: mild, hard, range-50, heavy-noise, prior-error, clutter, drift-heavy,
-drift-clutter, drift-bigloc) in place of the
-preset's; ``--protocol``, ``--seed`` and ``--grid`` change it further.
+drift-clutter, drift-bigloc, drift-sparse, no-prior, occluded, latency) in place of the preset's;
+``--protocol``, ``--seed`` and ``--grid`` change it further.
 
 Trials come from the trial builder the app uses (``evaluation.trials``): the dataset's ego and the
 sequence's steady CAV (the vehicle most often near ``--cav-distance`` metres from the ego; in a

@@ -8,6 +8,7 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 
+from cbm import MIN_SHARED
 from evaluation.diagnosis import SURE_FROM, Finding
 
 REASONS = ("track", "over_time", "noise", "wrong_pairs", "few_right_pairs", "wrong_anchor", "distance_limit",
@@ -16,10 +17,20 @@ REASONS = ("track", "over_time", "noise", "wrong_pairs", "few_right_pairs", "wro
 """The findings that say best why a frame failed, the most telling first (the key numbers give one)."""
 
 
+def own_margin(result: object) -> float:
+    """The evidence margin of the frame's own CBM; NaN where it was not verified or paired fewer than
+    ``MIN_SHARED`` objects (any pose fits two pairs exactly: no rival pose then reads as a margin of
+    ∞ that says nothing). An answer of CBM over time may carry other pairs than the frame's own:
+    whether the frame gave a measurement tells (``TrackNote.measured``)."""
+    note = getattr(result, "track", None)
+    measured = len(getattr(result, "pairs", ())) >= MIN_SHARED if note is None else note.measured is not None
+    return getattr(result, "evidence_margin", math.nan) if measured else math.nan
+
+
 def margin_words(result: object) -> str | None:
     """``evidence margin 12.2, sure from 8`` (``∞``: no different pose explains the scene at all);
-    None for a result with no verified margin."""
-    margin = getattr(result, "evidence_margin", math.nan)
+    None for a result with no margin that speaks (``own_margin``)."""
+    margin = own_margin(result)
     if margin != margin:
         return None
     shown = "∞" if math.isinf(margin) else f"{margin:.1f}"
@@ -78,7 +89,7 @@ def sure_words(result: object) -> str | None:
     method that does not verify."""
     if not has_confidence(result):
         return None
-    margin = getattr(result, "evidence_margin", math.nan)
+    margin = own_margin(result)
     shown = "" if margin != margin else "∞" if math.isinf(margin) else f"{margin:.1f}"
     if tracked(result):
         return f"the track's answer, this frame's margin {shown}" if shown else "the track's answer"

@@ -12,7 +12,7 @@ from app.session.settings import Settings, from_preset, to_preset
 from evaluation.conditions import condition
 from evaluation.scenario import ScenarioParams
 
-CONDITION_PRESETS = ("heavy-noise", "prior-error", "clutter", "drift-heavy", "occluded", "latency")
+CONDITION_PRESETS = ("heavy-noise", "prior-error", "clutter", "drift-heavy", "drift-sparse", "occluded", "latency")
 """The shipped presets of the hard named conditions (``evaluation.conditions``), one click in the app."""
 
 

@@ -1,4 +1,5 @@
 """Named test conditions and clutter: missed detections, false boxes, success at 1 / 2 / 3 and abstentions."""
+import dataclasses
 import importlib.util
 import json
 import math
@@ -10,7 +11,7 @@ import numpy as np
 import pytest
 
 from evaluation.clutter import false_box_count
-from evaluation.conditions import CONDITIONS, condition
+from evaluation.conditions import CONDITIONS, SPARSE_RANGE, condition
 from evaluation.metric_registry import aggregate
 from evaluation.metrics import evaluate
 from evaluation.scenario import ScenarioParams, make_trial
@@ -66,7 +67,7 @@ def test_bad_clutter_rates_name_the_field(field, value):
 
 def test_the_named_conditions_are_the_issue_settings():
     assert list(CONDITIONS) == ["mild", "hard", "range-50", "heavy-noise", "prior-error", "clutter", "drift-heavy",
-                                "drift-clutter", "drift-bigloc", "no-prior", "occluded", "latency"]
+                                "drift-clutter", "drift-bigloc", "drift-sparse", "no-prior", "occluded", "latency"]
     occluded, late = CONDITIONS["occluded"], CONDITIONS["latency"]
     assert (occluded.sight, occluded.sensor_range, occluded.sigma_p) == (True, 50.0, CONDITIONS["range-50"].sigma_p)
     assert (late.delay_ms - late.jitter_ms, late.delay_ms + late.jitter_ms, late.localization) == (100.0, 300.0,
@@ -74,6 +75,8 @@ def test_the_named_conditions_are_the_issue_settings():
     drift, bigloc = CONDITIONS["drift-heavy"], CONDITIONS["drift-bigloc"]
     assert (drift.localization, drift.sigma_p, drift.sigma_theta, drift.miss_rate) == ("drifting", 0.8, 15.0, 0.2)
     assert (bigloc.loc_x, bigloc.loc_yaw, bigloc.loc_tau) == (6.0, 15.0, 60.0)
+    sparse = dataclasses.replace(CONDITIONS["drift-sparse"], sensor_range=CONDITIONS["drift-clutter"].sensor_range)
+    assert sparse == CONDITIONS["drift-clutter"] and CONDITIONS["drift-sparse"].sensor_range == SPARSE_RANGE == 25.0
     heavy, clutter, prior = CONDITIONS["heavy-noise"], CONDITIONS["clutter"], CONDITIONS["prior-error"]
     assert (heavy.eta, heavy.sigma_p, heavy.sigma_theta, heavy.flip_prob) == (0.2, 0.8, 15.0, 0.5)
     assert (clutter.sensor_range, clutter.miss_rate, clutter.false_rate, clutter.sigma_p) == (50.0, 0.2, 0.3, 0.4)
