@@ -175,6 +175,21 @@ def test_a_tracks_failed_frame_says_the_track_stood_by_it_and_what_per_frame_cbm
     page.close()
 
 
+def test_on_a_quiet_street_a_frame_without_a_measurement_shows_no_margin(browser, server) -> None:
+    """drift-sparse's frame 124 pairs 2 boxes of no common object: it said "this frame's own evidence
+    margin ∞" beside the track's wrong answer."""
+    page = ui.open_first_screen(browser, server)
+    tab = ui.over_time_tab(page, server, "drift-sparse")
+    ui.go_to_frame(page, tab, 124)
+    keys = page.locator("#cbm-key-numbers")
+    ui.wait_until(lambda: "The track stood by it, and was wrong" in keys.inner_text(), 120)
+    assert "this frame has no evidence margin of its own" in keys.inner_text()
+    assert "∞" not in keys.inner_text()
+    settled(page, tab)
+    assert on_screen(cars(tab.last_drawing), tab, page).all(), "the ego's and the CAV's whole car"
+    page.close()
+
+
 @pytest.mark.parametrize("change", ["none", "side by side", "three CAVs"])
 def test_method_none_side_by_side_and_three_cavs_are_framed_whole(browser, server, change: str) -> None:
     page, tab, first = open_heavy(browser, server)

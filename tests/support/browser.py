@@ -140,11 +140,11 @@ def load_preset(page, name: str) -> None:
     page.get_by_role("button", name="load", exact=True).click()
 
 
-def over_time_tab(page, server):
-    """The page's tab session once the *drift-heavy* preset is loaded and CBM over time computes."""
+def over_time_tab(page, server, preset: str = "drift-heavy"):
+    """The page's tab session once ``preset`` (one with CBM over time) is loaded and CBM over time computes."""
     tab = session(server, 1)
     close_notifications(page)
-    load_preset(page, "drift-heavy")
+    load_preset(page, preset)
     wait_until(lambda: tab.last.settings.method == "cbm-time", 120)
     return tab
 
