@@ -65,3 +65,21 @@ def test_over_time_is_no_worse_than_per_frame_on_a_drifting_error():
     rows = run(SWEEP, frames(60))
     rate = {m: np.mean([r["success"] for r in rows if r["method"] == m]) for m in ("cbm", "cbm-time")}
     assert rate["cbm-time"] >= rate["cbm"]
+
+
+def test_a_frame_of_three_pairs_does_not_stand_against_a_settled_track():
+    """drift-sparse on the shipped log, seed 0: frame 116 pairs 3 boxes at a pose 67 degrees and 21 m
+    off. From so few boxes no rival pose forms, so CBM's margin is infinite, though its pairs' own
+    evidence is 3.8: it was the answer ("sure, not yet confirmed"). The settled track sets it aside."""
+    scenario = CONDITIONS["drift-sparse"]
+    inputs, _ = sequence_inputs(loaders.open("argoverse2"), range(117), "range", window_s=scenario.window_s)
+    calibrator = SequenceCalibrator(CBMParams())
+    for frame in inputs:
+        trial = frame.build(scenario, 0)
+        result = calibrator.step(trial.ego_boxes, trial.cav_boxes, trial.init, float(frame.times[frame.index]),
+                                 agent=frame.trial["cav_id"])
+    own = calibrator.measured[0]
+    assert len(own.pairs) == 3 and math.isinf(own.evidence_margin) and own.evidence < 16
+    assert not is_success(evaluate(own, trial), rte_max=2.0, rre_max=2.0)
+    assert result.track.event == "rejected" and result.track.pooled > 80
+    assert is_success(evaluate(result, trial), rte_max=2.0, rre_max=2.0)
