@@ -17,9 +17,9 @@ candidate sets, the eq. 13 winner always first) are each
 
 The best-scoring hypothesis is the answer (the eq. 13 winner's own refinement when it lands on
 the same pose, as it had the guided re-association; the pose keeps the best score); the best one
-whose pose differs from it (by more than
-``SAME_POSE_M`` or ``SAME_POSE_DEG``) is the runner-up, and the difference of their scores is the
-evidence margin (``verdict``).
+whose pose differs from it (by more than ``SAME_POSE_M`` or ``SAME_POSE_DEG``) is the runner-up,
+and the difference of their scores is the evidence margin (``verdict``). CBM stands by its answer
+when the margin, and its score itself (its margin over no pose at all), reach ``EVIDENCE_MARGIN``.
 """
 from __future__ import annotations
 
@@ -61,7 +61,10 @@ EVIDENCE_MARGIN = 8.0
 """Least log-likelihood-ratio margin (natural log) of the answer over a different answer to stand
 by it: the answer explains the scene at least e^8 = 3000 times better. Measured (docs/algorithm.md):
 under heavy noise the lowest margins of right answers were 6.2 and 9.1, of wrong ones 4.4 and 6.7;
-under hard noise and clutter every right answer's margin was above 20."""
+under hard noise and clutter every right answer's margin was above 20. The answer must explain the
+scene that much better than no pose at all too (its pairs' evidence, the null pose's being 0): a
+frame of a handful of boxes forms no rival pose, and on the scenes table's sparse rows (seeds 0-1)
+each of the 36 answers so left with a margin of ∞ but evidence under 8 was wrong."""
 
 
 @dataclass(frozen=True)
@@ -105,6 +108,9 @@ class Verdict:
         if self.margin < EVIDENCE_MARGIN:
             return (f"a different pose explains the scene almost as well "
                     f"(margin {self.margin:.1f} < {EVIDENCE_MARGIN:g})")
+        if self.best.score < EVIDENCE_MARGIN:
+            return (f"its pairs explain the scene hardly better than a coincidence "
+                    f"(evidence {self.best.score:.1f} < {EVIDENCE_MARGIN:g})")
         return ""
 
 

@@ -75,12 +75,20 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
         own = f"this frame's own {margin}" if margin else "this frame has no evidence margin of its own"
         return f"{head}: {result.track.pooled} frames pooled; {own}{because}"
     if getattr(result, "abstained", False):
-        doubt = getattr(result, "reason", "") if margin is None else ""
         head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"
-        return f"{head}: {doubt + '; ' if doubt else ''}{numbers}{because}"
+        return f"{head}: {doubt(result, margin, numbers)}{because}"
     if success:
         return f"CBM is sure: {numbers}"
     return f"CBM was sure, and wrong: {numbers}{because}"
+
+
+def doubt(result: object, margin: str | None, numbers: str) -> str:
+    """Why CBM abstained: its margin where that is why (under ``SURE_FROM``), else its reason (too
+    few pairs, or pairs hardly more likely than a coincidence), with "no evidence margin" where it
+    has none."""
+    if margin is None:
+        return f"{getattr(result, 'reason', '')}; {numbers}"
+    return numbers if own_margin(result) < SURE_FROM else getattr(result, "reason", "")
 
 
 def sure_words(result: object) -> str | None:
@@ -93,8 +101,9 @@ def sure_words(result: object) -> str | None:
     shown = "" if margin != margin else "∞" if math.isinf(margin) else f"{margin:.1f}"
     if tracked(result):
         return f"the track's answer, this frame's margin {shown}" if shown else "the track's answer"
-    sure = "CBM not sure" if getattr(result, "abstained", False) else "CBM sure"
-    return f"{sure}, margin {shown}" if shown else sure
+    if getattr(result, "abstained", False):
+        return f"CBM not sure, margin {shown}" if margin < SURE_FROM else "CBM not sure"
+    return f"CBM sure, margin {shown}" if shown else "CBM sure"
 
 
 SURE_WORDS = f"CBM sure from evidence margin {SURE_FROM:g}"

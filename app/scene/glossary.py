@@ -22,8 +22,10 @@ GLOSSARY = {
               f"as a natural-log likelihood ratio; CBM is sure from {SURE_FROM:g} (e^{SURE_FROM:g}, about 3000 "
               f"times likelier). The consensus vote counts pairs instead: the winning anchor's against the "
               f"runner-up's.",
-    "abstain": f"CBM says it is not sure: fewer than 3 objects could be paired, or the evidence margin is under "
-               f"{SURE_FROM:g}. Its pose is still shown and scored.",
+    "abstain": f"CBM says it is not sure: fewer than 3 objects could be paired, the evidence margin is under "
+               f"{SURE_FROM:g}, or its pairs explain the scene less than {SURE_FROM:g} better than a coincidence "
+               f"would (a handful of boxes forms no rival pose: a margin of ∞ then says nothing). Its pose is "
+               f"still shown and scored.",
     "track": "CBM over time's estimate of the CAV's pose error, pooled from the frames whose own answer "
              "agreed with it. While it holds, it answers every frame, even one CBM alone is not sure of (the "
              "frame's own margin is then shown beside), and never abstains.",

@@ -144,6 +144,14 @@ def test_a_margin_of_fewer_than_three_pairs_is_never_shown():
     assert sure_words(unmeasured) == "the track's answer"
 
 
+def test_an_abstention_beside_a_margin_of_infinity_says_its_reason():
+    weak = SimpleNamespace(abstained=True, evidence_margin=math.inf, hypotheses=1, pairs=FOUR[:3],
+                           reason="its pairs explain the scene hardly better than a coincidence (evidence 4.3 < 8)")
+    assert verdict(weak, False) == ("CBM was not sure, rightly: its pairs explain the scene hardly better than a "
+                                    "coincidence (evidence 4.3 < 8)")
+    assert sure_words(weak) == "CBM not sure"
+
+
 def test_on_a_quiet_street_a_line_says_sure_exactly_beside_a_sure_margin(explorer: Explorer):
     """drift-sparse, frames 100-130, per frame and over time: a line that shows a margin of 8 or more
     (∞ included) never says CBM was not sure, and one that says CBM is or was sure shows such a margin

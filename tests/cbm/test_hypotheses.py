@@ -82,6 +82,15 @@ def test_a_rival_pose_almost_as_good_is_not_enough_evidence_and_a_clear_winner_i
     assert "fewer than" in Verdict(_hypothesis(20.0, n_pairs=2), None, tried=1).reason
 
 
+def test_an_answer_no_rival_challenges_still_needs_its_own_evidence():
+    """A frame of a handful of boxes forms no rival pose: the margin of ∞ then says nothing, and the
+    answer must explain the scene better than no pose at all (evidence 0) by the same margin."""
+    weak = Verdict(_hypothesis(EVIDENCE_MARGIN / 2, n_pairs=3), None, tried=1)
+    assert weak.margin == math.inf and weak.reason == ("its pairs explain the scene hardly better than a "
+                                                       "coincidence (evidence 4.0 < 8)")
+    assert Verdict(_hypothesis(EVIDENCE_MARGIN, n_pairs=3), None, tried=1).reason == ""
+
+
 def test_the_scene_sigma_is_the_residuals_rms_with_the_fits_freedom_taken_out():
     r = np.array([0.3, 0.4, 0.5, 0.2])
     assert scene_sigma(r, 0.1) == pytest.approx(math.sqrt(np.sum(r ** 2) / 5))
