@@ -21,10 +21,10 @@ Each frame (the model and the filter: ``cbm.track``; equations: docs/algorithm.m
 4. **re-acquire** when ``reacquire_after`` rejected measurements in a row agree with one another
    (a real jump), or two when the first was sure against the null pose too (``_outweighs``): a
    wrong anchor can be sure too, so one frame never moves a settled track (such a frame answers its
-   own measurement meanwhile); and call
-   the track **lost** when its prediction grows too uncertain or ``lost_after`` frames in a row
-   brought a measurement, not abstained, that it rejected: that frame answers per-frame CBM, never
-   the stale prediction (abstained where CBM alone is not sure), and watching starts again.
+   own measurement meanwhile); and call the track **lost** when its prediction grows too uncertain
+   or ``lost_after`` frames in a row brought a measurement, not abstained, that it rejected: that
+   frame answers per-frame CBM, never the stale prediction (abstained where CBM alone is not sure),
+   and watching starts again.
 
 Every frame, before its measurement is taken, the CAV's message's age is followed and moving
 objects are moved back by it (``cbm.motion``): a late message's moving pairs pull the pose no more,
@@ -252,16 +252,13 @@ class SequenceCalibrator:
         return self._answer(ego, cav, init, result, init @ as_matrix(answer), found, event, predicted, spread)
 
     def _sure(self, found: Measurement) -> bool:
-        """Whether CBM stands firmly by the measurement: its answer explains the scene at least
-        ``sure_margin`` (log-likelihood) better than any other pose."""
+        """Whether its answer explains the scene ``sure_margin`` (log-likelihood) better than any other pose."""
         return not found.result.abstained and found.result.evidence_margin >= self.tracking.sure_margin
 
     def _outweighs(self, found: Measurement) -> bool:
-        """Whether the measurement is sure enough to stand against a settled track: sure (``_sure``),
-        and by as much against no pose at all -- its pairs' own evidence (their log-likelihood ratio
-        against coincidence) at least ``sure_margin``. In a frame of a handful of boxes no rival pose
-        forms, and the margin of ∞ says no more than its 3-4 pairs' evidence: on the scenes table's
-        sparse rows all 18 such answers of evidence under 16 were wrong, 18 of the 30 above it right."""
+        """Whether the measurement may stand against a settled track: sure (``_sure``), and by as much
+        against no pose at all (its pairs' own evidence): a handful of boxes forms no rival pose, and
+        its margin of ∞ says no more than its 3-4 pairs (``TrackingParams.sure_margin``)."""
         return self._sure(found) and found.result.evidence >= self.tracking.sure_margin
 
     def _settled(self) -> bool:

@@ -101,9 +101,10 @@ class TrackingParams:
     disagrees with a young track moves the track onto itself at once: under clutter and a big prior
     right answers' margins lie above 20, under heavy noise wrong ones below 8. Against a settled track
     its pairs' own evidence must reach it too (sure against the null pose: a frame of a handful of
-    boxes forms no rival, and its margin is infinite): on the scenes table that gained 0.001 / 0.003
-    of S@1 / S@2 over time on average (seeds 0-1, and 0.001 / 0.004 on seeds 2-5, which did not
-    choose it), no row lower. With that rule, 8, 12 and 24 lost 0.001 / 0.003, 0.001 / 0.000 and
+    boxes forms no rival, and its margin is infinite; on the sparse rows all 18 such frames of
+    evidence under 16 were wrong, 18 of the 30 above right): on the scenes table that gained 0.001 /
+    0.003 of S@1 / S@2 over time on average (seeds 0-1, and 0.001 / 0.004 on seeds 2-5, which did
+    not choose it), no row lower. With that rule, 8, 12 and 24 lost 0.001 / 0.003, 0.001 / 0.000 and
     0.000 / 0.001 on average."""
     max_gap_s: float = 5.0
     """Seconds between two frames past which the calibration starts over. No frame of the scenes table
