@@ -32,7 +32,8 @@ class TrackNote:
     event: str
     """``per frame`` (the error does not persist: per-frame CBM's answer), ``started``,
     ``accepted`` (the frame's measurement joined the track), ``rejected`` (it disagreed: the
-    prediction stands), ``no measurement``, ``re-acquired`` (after a real jump), ``sure, not yet
+    prediction stands), ``no measurement``, ``weak measurement`` (its pairs explain the frame hardly
+    better than a coincidence: set aside), ``re-acquired`` (after a real jump), ``sure, not yet
     confirmed`` (CBM was sure of a measurement the settled track rejected: the frame answers it, the
     track waits for the next frame to agree), ``lost`` (per-frame CBM's answer, abstained), or
     ``reset: ...`` (time went backwards, a gap, another CAV)."""

@@ -21,9 +21,13 @@ def own_margin(result: object) -> float:
     """The evidence margin of the frame's own CBM; NaN where it was not verified or paired fewer than
     ``MIN_SHARED`` objects (any pose fits two pairs exactly: no rival pose then reads as a margin of
     ∞ that says nothing). An answer of CBM over time may carry other pairs than the frame's own:
-    whether the frame gave a measurement tells (``TrackNote.measured``)."""
+    whether the frame gave a measurement tells (``TrackNote.measured``), and one set aside as weak
+    (its pairs hardly better than a coincidence) has none that speaks either."""
     note = getattr(result, "track", None)
-    measured = len(getattr(result, "pairs", ())) >= MIN_SHARED if note is None else note.measured is not None
+    if note is None:
+        measured = len(getattr(result, "pairs", ())) >= MIN_SHARED
+    else:
+        measured = note.measured is not None and note.event != "weak measurement"
     return getattr(result, "evidence_margin", math.nan) if measured else math.nan
 
 
@@ -43,7 +47,7 @@ def reason(findings: Sequence[Finding]) -> str:
     return ranked[0].brief if ranked else ""
 
 
-TRACKED = ("accepted", "rejected", "no measurement", "re-acquired")
+TRACKED = ("accepted", "rejected", "no measurement", "weak measurement", "re-acquired")
 """The events of CBM over time (``cbm.result.TrackNote``) whose answer is the track's: it stands by
 it whatever this frame's own evidence margin, which then speaks of the frame's measurement only."""
 
@@ -52,6 +56,11 @@ def tracked(result: object) -> bool:
     """Whether the answer is a track's (CBM over time), not one frame's."""
     note = getattr(result, "track", None)
     return note is not None and note.event in TRACKED
+
+
+UNMEASURED = {"weak measurement": "this frame's own pairs explain it hardly better than a coincidence",
+              "": "this frame has no evidence margin of its own"}
+"""What a track's answer says of the frame where the frame's own margin says nothing."""
 
 
 def has_confidence(result: object) -> bool:
@@ -72,7 +81,7 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
     because = f"; {why}" if why and not success else ""
     if tracked(result):
         head = "The track stands by it" if success else "The track stood by it, and was wrong"
-        own = f"this frame's own {margin}" if margin else "this frame has no evidence margin of its own"
+        own = f"this frame's own {margin}" if margin else UNMEASURED.get(result.track.event, UNMEASURED[""])
         return f"{head}: {result.track.pooled} frames pooled; {own}{because}"
     if getattr(result, "abstained", False):
         head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"

@@ -134,6 +134,8 @@ EVENT_WORDS = {
     "accepted": "this frame's own answer agreed with the track and joined it",
     "rejected": "this frame's own answer disagreed with the track and was set aside: the track's prediction stands",
     "no measurement": "CBM paired too few objects in this frame: the track's prediction stands",
+    "weak measurement": "this frame's pairs explain it hardly better than a coincidence: set aside, the track's "
+                        "prediction stands",
     "re-acquired": "the error jumped: the track moved onto this frame's answer",
     "sure, not yet confirmed": "CBM was sure of this frame's answer, which the settled track rejected: it is the "
                                "answer, and the track moves onto it only if the next frame agrees",

@@ -144,6 +144,14 @@ def test_a_margin_of_fewer_than_three_pairs_is_never_shown():
     assert sure_words(unmeasured) == "the track's answer"
 
 
+def test_a_weak_measurement_set_aside_by_the_track_says_so_not_its_margin():
+    note = SimpleNamespace(event="weak measurement", pooled=40, measured=np.eye(3))
+    weak = SimpleNamespace(abstained=False, reason="", evidence_margin=math.inf, hypotheses=1, pairs=FOUR, track=note)
+    assert verdict(weak, True) == ("The track stands by it: 40 frames pooled; this frame's own pairs explain it "
+                                   "hardly better than a coincidence")
+    assert sure_words(weak) == "the track's answer"
+
+
 def test_an_abstention_beside_a_margin_of_infinity_says_its_reason():
     weak = SimpleNamespace(abstained=True, evidence_margin=math.inf, hypotheses=1, pairs=FOUR[:3],
                            reason="its pairs explain the scene hardly better than a coincidence (evidence 4.3 < 8)")
