@@ -58,11 +58,6 @@ def tracked(result: object) -> bool:
     return note is not None and note.event in TRACKED
 
 
-UNMEASURED = {"weak measurement": "this frame's own pairs explain it hardly better than a coincidence",
-              "": "this frame has no evidence margin of its own"}
-"""What a track's answer says of the frame where the frame's own margin says nothing."""
-
-
 def has_confidence(result: object) -> bool:
     """Whether the result has a confidence to show: CBM verified its pose or abstained, or a track answered."""
     return bool(getattr(result, "hypotheses", 0) or getattr(result, "abstained", False) or tracked(result))
@@ -81,23 +76,26 @@ def verdict(result: object, success: bool, findings: Sequence[Finding] = ()) -> 
     because = f"; {why}" if why and not success else ""
     if tracked(result):
         head = "The track stands by it" if success else "The track stood by it, and was wrong"
-        own = f"this frame's own {margin}" if margin else UNMEASURED.get(result.track.event, UNMEASURED[""])
+        weak = result.track.event == "weak measurement"
+        own = (f"this frame's own {margin}" if margin else "this frame's own pairs explain it hardly better than a "
+               "coincidence" if weak else "this frame has no evidence margin of its own")
         return f"{head}: {result.track.pooled} frames pooled; {own}{because}"
     if getattr(result, "abstained", False):
         head = "CBM was not sure, rightly" if not success else "CBM was not sure, though the pose is right"
-        return f"{head}: {doubt(result, margin, numbers)}{because}"
+        return f"{head}: {doubt(result, numbers)}{because}"
     if success:
         return f"CBM is sure: {numbers}"
     return f"CBM was sure, and wrong: {numbers}{because}"
 
 
-def doubt(result: object, margin: str | None, numbers: str) -> str:
+def doubt(result: object, numbers: str) -> str:
     """Why CBM abstained: its margin where that is why (under ``SURE_FROM``), else its reason (too
     few pairs, or pairs hardly more likely than a coincidence), with "no evidence margin" where it
     has none."""
-    if margin is None:
-        return f"{getattr(result, 'reason', '')}; {numbers}"
-    return numbers if own_margin(result) < SURE_FROM else getattr(result, "reason", "")
+    margin, why = own_margin(result), getattr(result, "reason", "")
+    if margin != margin:
+        return f"{why}; {numbers}"
+    return numbers if margin < SURE_FROM else why
 
 
 def sure_words(result: object) -> str | None:
